@@ -1,0 +1,1 @@
+"""IceBridge bridge node: hardware links, real-time loop, render channels, CLI."""

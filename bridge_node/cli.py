@@ -1,0 +1,44 @@
+"""The ``icebridge`` command: argument parsing and user-facing errors.
+
+Each subcommand lives in its own module with ``add_arguments(parser)`` and ``run(args)``.
+A user's mistake (bad config, bad argument) prints one clear message and exits with status
+2; it never shows a traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from bridge_node import prefracture_command
+from bridge_node.errors import UserError
+
+COMMANDS = {
+    "prefracture": (prefracture_command, "build the pre-fractured tile templates (paper §2.1)"),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="icebridge", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, (module, help_text) in COMMANDS.items():
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        p.add_argument("--config", default=None, help="TOML config file (default: config/default.toml)")
+        module.add_arguments(p)
+        p.set_defaults(handler=module.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.handler(args) or 0)
+    except UserError as exc:
+        print(f"icebridge {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"icebridge {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

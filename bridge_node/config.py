@@ -1,0 +1,78 @@
+"""Node configuration: TOML files loaded into typed, validated parameter blocks.
+
+Every error names the file, the key, the bad value and what is allowed; the CLI prints it
+and exits non-zero, without a traceback.
+"""
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+from pydantic import Field, ValidationError
+
+from bridge_node.errors import UserError
+from sim_core.ice_field import IceFieldSettings
+from sim_core.ice_material import IceMaterial
+from sim_core.params import Params
+from sim_core.tile_template import FractureSettings
+
+DEFAULT_CONFIG = Path(__file__).resolve().parent.parent / "config" / "default.toml"
+
+
+class PathSettings(Params):
+    """Where the node keeps its files. Relative paths are relative to the config file."""
+
+    cache_dir: str = Field("~/.cache/icebridge", description="template library")
+
+
+class NodeConfig(Params):
+    """The whole node's configuration. ``ice_field`` is required; the rest have defaults."""
+
+    ice_material: IceMaterial = IceMaterial()
+    fracture: FractureSettings = FractureSettings()
+    ice_field: IceFieldSettings
+    paths: PathSettings = PathSettings()
+
+
+class ConfigError(UserError):
+    """A user's configuration mistake; the message is complete and meant to be printed."""
+
+
+def _describe(err: dict) -> str:
+    key = ".".join(str(p) for p in err["loc"]) or "(top level)"
+    kind = err["type"]
+    if kind == "missing":
+        return f"{key}: required key is missing"
+    if kind == "extra_forbidden":
+        return f"{key} = {err['input']!r}: unknown key (check the spelling)"
+    msg = err["msg"].removeprefix("Value error, ")
+    if kind == "value_error":
+        return f"{key}: {msg}"
+    return f"{key} = {err['input']!r}: {msg}"
+
+
+def load_config(path: str | Path | None = None) -> NodeConfig:
+    """Read and validate a TOML config (default: config/default.toml). Raises ConfigError."""
+    path = Path(path) if path is not None else DEFAULT_CONFIG
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: config file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot read config file: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    try:
+        return NodeConfig.model_validate(data)
+    except ValidationError as exc:
+        lines = "\n  ".join(_describe(e) for e in exc.errors())
+        raise ConfigError(f"{path}: invalid configuration:\n  {lines}") from None
+
+
+def resolve_path(config_path: str | Path | None, value: str) -> Path:
+    """A path from the config: ~ expanded, relative paths taken from the config's folder."""
+    p = Path(value).expanduser()
+    if p.is_absolute():
+        return p
+    base = Path(config_path).resolve().parent if config_path else DEFAULT_CONFIG.parent
+    return base / p

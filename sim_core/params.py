@@ -1,0 +1,12 @@
+"""Base class for static parameter blocks (the 'model' half of model/data).
+
+Parameter blocks are frozen pydantic models: validated once when built (from config or
+code), immutable afterwards, so one block can be shared by every step without copying.
+"""
+from pydantic import BaseModel, ConfigDict
+
+
+class Params(BaseModel):
+    """Frozen, validated parameter block; unknown keys are errors (catches config typos)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
