@@ -9,11 +9,12 @@ from __future__ import annotations
 import argparse
 import sys
 
-from bridge_node import prefracture_command
+from bridge_node import prefracture_command, trial_command
 from bridge_node.errors import UserError
 
 COMMANDS = {
     "prefracture": (prefracture_command, "build the pre-fractured tile templates (paper §2.1)"),
+    "trial": (trial_command, "run a standard manoeuvring trial (turning, zig-zag, crash stop)"),
 }
 
 

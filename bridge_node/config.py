@@ -14,6 +14,7 @@ from bridge_node.errors import UserError
 from sim_core.ice_field import IceFieldSettings
 from sim_core.ice_material import IceMaterial
 from sim_core.params import Params
+from sim_core.ship_particulars import ShipParticulars
 from sim_core.tile_template import FractureSettings
 
 DEFAULT_CONFIG = Path(__file__).resolve().parent.parent / "config" / "default.toml"
@@ -25,9 +26,24 @@ class PathSettings(Params):
     cache_dir: str = Field("~/.cache/icebridge", description="template library")
 
 
-class NodeConfig(Params):
-    """The whole node's configuration. ``ice_field`` is required; the rest have defaults."""
+class ShipChoice(Params):
+    """Which ship: ``config/ships/<name>.toml`` beside the config (or the built-in one)."""
 
+    name: str = Field(min_length=1)
+
+
+class ExerciseSettings(Params):
+    """Where the exercise takes place: the origin of the local north/east frame."""
+
+    origin_latitude_deg: float = Field(74.0, ge=-89.0, le=89.0)
+    origin_longitude_deg: float = Field(20.0, ge=-180.0, le=180.0)
+
+
+class NodeConfig(Params):
+    """The whole node's configuration. ``ice_field`` and ``ship`` are required."""
+
+    ship: ShipChoice
+    exercise: ExerciseSettings = ExerciseSettings()
     ice_material: IceMaterial = IceMaterial()
     fracture: FractureSettings = FractureSettings()
     ice_field: IceFieldSettings
@@ -53,7 +69,22 @@ def _describe(err: dict) -> str:
 
 def load_config(path: str | Path | None = None) -> NodeConfig:
     """Read and validate a TOML config (default: config/default.toml). Raises ConfigError."""
-    path = Path(path) if path is not None else DEFAULT_CONFIG
+    return _load_validated(Path(path) if path is not None else DEFAULT_CONFIG, NodeConfig)
+
+
+def load_ship(name: str, config_path: str | Path | None = None) -> ShipParticulars:
+    """Particulars of the named ship, from ``ships/<name>.toml`` beside the config file, or
+    from the built-in ``config/ships``. Raises ConfigError."""
+    folders = [resolve_path(config_path, "ships"), DEFAULT_CONFIG.parent / "ships"]
+    for folder in folders:
+        path = folder / f"{name}.toml"
+        if path.is_file():
+            return _load_validated(path, ShipParticulars)
+    known = sorted({p.stem for f in folders if f.is_dir() for p in f.glob("*.toml")})
+    raise ConfigError(f"unknown ship {name!r}; ships available: {', '.join(known) or 'none'}")
+
+
+def _load_validated(path: Path, schema: type[Params]) -> Params:
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
@@ -63,7 +94,7 @@ def load_config(path: str | Path | None = None) -> NodeConfig:
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML: {exc}") from None
     try:
-        return NodeConfig.model_validate(data)
+        return schema.model_validate(data)
     except ValidationError as exc:
         lines = "\n  ".join(_describe(e) for e in exc.errors())
         raise ConfigError(f"{path}: invalid configuration:\n  {lines}") from None
