@@ -3,7 +3,9 @@
 A mesh collider is the convex cell itself (its plan-view footprint for planar contact): it
 fits exactly, so neighbours share faces and a push travels far. A sphere collider sits on
 the cell centroid; the paper starts from an enclosing sphere and shrinks radii until no two
-spheres overlap, which leaves gaps between neighbours and damps the push.
+spheres overlap, which leaves gaps between neighbours and damps the push. In a hybrid tile a
+sphere is also kept clear of its mesh-collider neighbours (``clear_of_mesh_neighbours``), so
+that freeing a cell never starts from an overlap.
 
 Hybrid rules (which cells get a mesh collider, ``mesh_share`` of them):
 ``poor_fit``  the cells a sphere represents worst: lowest ratio of the sphere's cross-section
@@ -55,3 +57,24 @@ def assign_colliders(
     is_sphere = np.ones(n, dtype=bool)
     is_sphere[mesh_cells] = False
     return is_sphere
+
+
+def clear_of_mesh_neighbours(
+    radius: np.ndarray, is_sphere: np.ndarray, centroid: np.ndarray, seeds: np.ndarray,
+    adj_pairs: np.ndarray,
+) -> np.ndarray:
+    """Shrink sphere radii (m) so no sphere reaches into a neighbouring mesh-collider cell.
+
+    The face two Voronoi cells share lies on the bisector plane of their seeds, and cell j
+    lies wholly beyond it, so r_i <= distance(centroid_i, bisector(s_i, s_j)) suffices.
+    """
+    out = radius.copy()
+    for a, b in ((adj_pairs[:, 0], adj_pairs[:, 1]), (adj_pairs[:, 1], adj_pairs[:, 0])):
+        sel = is_sphere[a] & ~is_sphere[b]
+        i, j = a[sel], b[sel]
+        normal = seeds[j] - seeds[i]
+        normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+        mid = 0.5 * (seeds[i] + seeds[j])
+        dist = ((mid - centroid[i]) * normal).sum(axis=1)
+        np.minimum.at(out, i, dist)
+    return out

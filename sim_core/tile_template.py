@@ -13,7 +13,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from sim_core.colliders import assign_colliders, sphere_radii
+from sim_core.colliders import assign_colliders, clear_of_mesh_neighbours, sphere_radii
 from sim_core.fragment_count import seed_count_range
 from sim_core.ice_material import IceMaterial
 from sim_core.params import Params
@@ -29,7 +29,7 @@ class FractureSettings(Params):
     count_model: Literal["paper", "physical"] = "paper"
     cells: Literal["prism", "voronoi3d"] = "prism"
     colliders: Literal["mesh", "sphere", "hybrid"] = "hybrid"
-    mesh_share: float = Field(0.5, ge=0.0, le=1.0, description="hybrid: share of mesh colliders")
+    mesh_share: float = Field(0.3, ge=0.0, le=1.0, description="hybrid: share of mesh colliders")
     mesh_rule: Literal["poor_fit", "random"] = "poor_fit"
     variants: int = Field(2, ge=1, le=16, description="templates per thickness class")
     seed: int = Field(20231025, ge=0, description="base random seed")
@@ -103,6 +103,7 @@ def build_tile(
     is_sphere = assign_colliders(
         settings.colliders, plan_area, radius, settings.mesh_share, settings.mesh_rule, rng
     )
+    radius = clear_of_mesh_neighbours(radius, is_sphere, geometry.centroid, seeds, geometry.adj_pairs)
     return TileTemplate(
         side=side, thickness=h, mode=settings.cells, seed=seed, seeds=seeds, geometry=geometry,
         mass=geometry.volume * material.density, is_sphere=is_sphere, sphere_radius=radius,

@@ -22,7 +22,7 @@ CASES = [
     ({"thickness = 0.5 ": "# thickness removed "}, ["ice_field.thickness", "required key is missing"]),
     ({"tile_side = 100.0": 'tile_side = "big"'}, ["fracture.tile_side", "'big'", "valid number"]),
     ({'cells = "prism"': 'cells = "cubes"'}, ["fracture.cells", "'cubes'", "'prism' or 'voronoi3d'"]),
-    ({"mesh_share = 0.5": "mesh_shares = 0.5"}, ["fracture.mesh_shares", "unknown key"]),
+    ({"mesh_share = 0.3": "mesh_shares = 0.3"}, ["fracture.mesh_shares", "unknown key"]),
     ({'thickness_profile = "uniform"': 'thickness_profile = "gradient"'},
      ["ice_field", "thickness_end is required"]),
     ({"[paths]": "[paths"}, ["not valid TOML"]),

@@ -112,3 +112,17 @@ def test_unknown_collider_setup_rejected():
         assign_colliders("capsule", np.ones(3), np.ones(3))
     with pytest.raises(Exception):
         FractureSettings(cells="tetra")
+
+
+def test_hybrid_spheres_stay_clear_of_mesh_neighbours(prism_tile):
+    """No sphere collider reaches into a neighbouring cell that has a mesh collider."""
+    from shapely import Point, Polygon
+
+    g, t = prism_tile.geometry, prism_tile
+    assert t.is_sphere.any() and (~t.is_sphere).any()
+    for a, b in g.adj_pairs:
+        for i, j in ((a, b), (b, a)):
+            if t.is_sphere[i] and not t.is_sphere[j]:
+                disk = Point(*g.centroid[i, :2]).buffer(t.sphere_radius[i], quad_segs=64)
+                poly = Polygon(g.footprint[g.foot_start[j]:g.foot_start[j + 1]])
+                assert disk.intersection(poly).area < 1e-6 * poly.area

@@ -1,0 +1,144 @@
+"""Hull contact, conduction cracking and floating floes (paper §2.2, §3.1, §3.2)."""
+import math
+
+import numpy as np
+import pytest
+
+from sim_core.breaking_experiment import channel_and_band, run_breaking
+from sim_core.floe_state import BY_CONTACT, BY_HULL, FREE, INTACT
+from sim_core.hull_contour import CONTOUR_POINTS, waterline_contour
+from sim_core.ice_breaking import impact_constant
+from sim_core.ice_dynamics import HullMotion, ice_step, new_ice_data, place_tile
+from sim_core.ice_material import IceMaterial
+from sim_core.ice_model import compile_ice_model
+from sim_core.tile_template import FractureSettings, build_tile
+
+KN = 1852 / 3600
+SIDE = 50.0
+
+
+@pytest.fixture(scope="module")
+def runs():
+    """Shared experiment runs: 3 x 50 m tiles, the default ship's hull."""
+    out = {}
+    for setup in ("mesh", "hybrid", "sphere"):
+        out[(setup, 3)] = run_breaking(0.5, setup, 3 * KN, tile_side=SIDE, strip_tiles=3, seed=1)
+    out[("hybrid", 8)] = run_breaking(0.5, "hybrid", 8 * KN, tile_side=SIDE, strip_tiles=3, seed=1)
+    return out
+
+
+def test_hull_contour_has_the_papers_34_points():
+    c = waterline_contour(150.0, 24.0)
+    assert c.shape == (CONTOUR_POINTS, 2) == (34, 2)
+    assert c[:, 0].max() == 75.0 and c[:, 0].min() == -75.0 and np.abs(c[:, 1]).max() == 12.0
+
+
+def test_channel_opened_no_intact_cell_left_in_swept_path(runs):
+    r = runs[("sphere", 3)]
+    st, m = r.data.state, r.model
+    half_beam, centre = 12.0, SIDE / 2
+    for i in np.nonzero(st.status == INTACT)[0]:
+        g = st.gcell[i]
+        ring = m.outline[m.outline_start[g]:m.outline_start[g + 1]]
+        c, s = math.cos(st.yaw[i]), math.sin(st.yaw[i])
+        world = ring @ np.array([[c, s], [-s, c]]) + st.xy[i]
+        in_path = (np.abs(world[:, 0] - centre) < half_beam - 0.05) & (world[:, 1] > 0) & (world[:, 1] < 3 * SIDE)
+        assert not in_path.any(), f"intact cell {i} inside the hull's swept path"
+    assert np.any(st.cause == BY_HULL)
+
+
+def test_collider_setups_give_papers_ordering(runs):
+    mesh, hybrid, sphere = (runs[(s, 3)].band_width for s in ("mesh", "hybrid", "sphere"))
+    assert mesh > 3 * hybrid  # mesh: cracking spreads far too wide
+    assert hybrid > sphere  # hybrid conducts more than sphere
+    assert sphere < 1.0  # sphere barely conducts
+    assert runs[("mesh", 3)].channel_width > 1.5 * runs[("sphere", 3)].channel_width
+
+
+def test_faster_ship_breaks_wider_band(runs):
+    assert runs[("hybrid", 8)].band_width > runs[("hybrid", 3)].band_width
+
+
+def test_thicker_ice_needs_faster_impacts_to_crack():
+    mat = IceMaterial()
+    tiles = {h: build_tile(h, 1) for h in (0.2, 0.5, 1.0)}
+    critical = []
+    for h, t in tiles.items():
+        k = impact_constant(h, mat)
+        critical.append(math.sqrt(k / t.mass.mean()))  # v at which m v^2 = K for a typical floe
+    assert critical[0] < critical[1] < critical[2]
+    assert critical[0] == pytest.approx(0.3, abs=0.05) and critical[2] == pytest.approx(0.7, abs=0.1)
+
+
+def test_hull_load_opposes_the_motion(runs):
+    for r in runs.values():
+        assert r.mean_resistance > 0.0
+
+
+def test_broken_pieces_float_at_equilibrium_when_left_alone(runs):
+    r = runs[("hybrid", 3)]
+    far = HullMotion(np.array([SIDE / 2, -5000.0]), 0.5 * math.pi, np.zeros(2), 0.0)
+    for _ in range(int(40 / (1 / 30))):
+        ice_step(r.model, r.data, far, 1 / 30)
+    st = r.data.state
+    free = st.status == FREE
+    assert free.sum() > 100
+    assert np.allclose(st.heave[free], r.model.z_equilibrium[st.gcell[free]], atol=2e-3)
+    assert np.abs(st.roll[free]).max() < 2e-3 and np.abs(st.pitch[free]).max() < 2e-3
+    assert np.all(np.isfinite(st.xy[free]))
+
+
+def test_no_floe_accelerates_without_contact_and_energy_decays():
+    """Free floes far apart, given velocities: with no contact, every speed only decays."""
+    t = build_tile(0.5, 4, FractureSettings(tile_side=40.0, colliders="sphere"))
+    m = compile_ice_model([t])
+    data = new_ice_data(m, waterline_contour(150, 24), 0.1)
+    rows = np.arange(place_tile(m, data, 0, (0.0, 0.0)).stop)
+    keep = rows[::7]  # every 7th cell: free them, delete the rest so none touch
+    data.contacts.remove(np.setdiff1d(rows, keep))
+    data.state.status[np.setdiff1d(rows, keep)] = 3  # out of play
+    data.contacts.free(data.state, keep)
+    rng = np.random.default_rng(2)
+    for i in keep:
+        body = data.contacts._bodies[int(i)][0]
+        body.velocity = tuple(rng.uniform(-0.05, 0.05, 2))
+    far = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
+    speeds, energies = [], []
+    for _ in range(300):
+        rep = ice_step(m, data, far, 1 / 30)
+        assert len(rep.broken_by_contact) == 0
+        v = data.state.vel[keep]
+        speeds.append(np.linalg.norm(v, axis=1))
+        energies.append(0.5 * (m.mass[data.state.gcell[keep]] * (v**2).sum(axis=1)).sum())
+    speeds = np.array(speeds)
+    assert np.all(np.diff(speeds, axis=0) <= 1e-12)
+    assert np.all(np.diff(energies) < 0) and energies[-1] < 0.7 * energies[0]
+
+
+def test_band_measure_on_known_profiles():
+    y = np.arange(1.0, 40.0, 2.0)
+    broken = (y < 15).astype(float)
+    pushed = ((y > 12) & (y < 15)).astype(float)
+    channel, band = channel_and_band(np.column_stack([y, broken, pushed]), half_beam=12.0)
+    assert channel == pytest.approx(30.0, abs=2.0)
+    assert band == pytest.approx(2.0, abs=0.01)  # one 2 m bin (y = 13) fully pushed-broken beyond B/2
+
+
+def test_voronoi3d_templates_rejected_by_dynamics():
+    t = build_tile(1.0, 1, FractureSettings(cells="voronoi3d", tile_side=20.0))
+    with pytest.raises(ValueError, match="prism"):
+        compile_ice_model([t])
+
+
+def test_floes_pushed_under_the_hull_surface_and_right_themselves(runs):
+    r = runs[("sphere", 3)]
+    st = r.data.state
+    assert st.submerged.any()  # the stern still covers the end of the strip
+    onward = HullMotion(np.array([SIDE / 2, 400.0]), 0.5 * math.pi, np.array([0.0, 3 * KN]), 0.0)
+    for _ in range(int(30 / (1 / 30))):
+        ice_step(r.model, r.data, onward, 1 / 30)
+    assert not st.submerged.any()  # the hull has gone: everything surfaced
+    by_hull = (st.cause == BY_HULL) & (st.status == FREE)
+    g = st.gcell[by_hull]
+    assert np.allclose(st.heave[by_hull], r.model.z_equilibrium[g], atol=0.05)
+    assert np.abs(st.roll[by_hull]).max() < 0.25  # all were tilted 0.25 rad going under
