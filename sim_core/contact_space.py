@@ -45,10 +45,11 @@ class ContactSpace:
         self.space = pymunk.Space()
         self.space.iterations = s.solver_iterations
         self.space.collision_slop = s.collision_slop
-        self.space.sleep_time_threshold = s.sleep_time_s
-        # Chipmunk derives the idle speed from gravity when none is set; with no gravity in
-        # the plane that is zero and no floe would ever sleep.
-        self.space.idle_speed_threshold = s.idle_speed
+        # Sleeping stays off. With sleeping enabled (idle speed set, since with no gravity in
+        # the plane Chipmunk's default idle speed is zero), cpSpaceStep hung here for good after
+        # a few thousand steps of a mesh-collider run, with every state finite. This code
+        # switches static bodies to dynamic and changes shape filters, and that is the
+        # suspected trigger. Not investigated further.
         self.space.damping = math.exp(-1.0 / s.drag_time_s)  # per second: v *= damping ** dt
         self.hull = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         self.hull_shape = pymunk.Poly(self.hull, [tuple(p) for p in hull_outline])

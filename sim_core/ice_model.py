@@ -29,8 +29,6 @@ class IceDynamicsSettings(Params):
     ice_friction: float = Field(0.3, ge=0.0, le=1.0, description="ice-ice friction coefficient")
     wedge_coefficient: float = Field(WEDGE_COEFFICIENT, gt=0.0, le=2.0, description="C_w in F_s = C_w sigma_f h^2")
     solver_iterations: int = Field(10, ge=1, le=100)
-    sleep_time_s: float = Field(0.5, gt=0.0, le=60.0, description="idle time before a floe sleeps")
-    idle_speed: float = Field(0.02, gt=0.0, le=1.0, description="speed below which a floe counts as idle, m/s")
     collision_slop: float = Field(0.01, ge=0.0, le=0.5, description="allowed overlap, m")
 
 
