@@ -199,10 +199,9 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
         space.free(st, by_hull)
         st.cause[by_hull] = BY_HULL
         _update_submersion(model, data, hull, by_hull)
-    velocity_before = st.vel.copy()
     space.step(dt)
     con = space.read_contacts()
-    by_contact = _contact_breaks(model, st, con, velocity_before)
+    by_contact = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
     space.read_free(st)
     if len(by_contact):
         space.free(st, by_contact)
