@@ -83,7 +83,8 @@ def place_tile(model: IceModel, data: IceData, template: int, corner: tuple[floa
     home = np.column_stack([c * rel[:, 0] - s * rel[:, 1], s * rel[:, 0] + c * rel[:, 1]]) + 0.5 * t.side
     home += np.asarray(corner, dtype=float)
     st.gcell[rows] = np.arange(g0, g0 + t.n_cells)
-    st.tile[rows] = len(data.tiles.template)
+    tile = len(data.tiles.template)
+    st.tile[rows] = tile
     st.status[rows] = INTACT
     st.home[rows] = home
     st.xy[rows] = home
@@ -95,7 +96,7 @@ def place_tile(model: IceModel, data: IceData, template: int, corner: tuple[floa
     tp.quarter_turns.append(k)
     tp.row_start.append(rows.start)
     tp.row_count.append(t.n_cells)
-    data.contacts.add_intact(st, np.arange(rows.start, rows.stop))
+    data.contacts.add_tile(st, tile, np.arange(rows.start, rows.stop))
     return rows
 
 
@@ -106,11 +107,17 @@ def freeze_tile(data: IceData, tile: int) -> None:
     rows = np.arange(start, start + count)
     st = data.state
     live = rows[(st.status[rows] == INTACT) | (st.status[rows] == FREE)]
-    data.contacts.remove(live)
+    data.contacts.remove(st, live)
     free = rows[st.status[rows] == FREE]
     st.status[free] = FROZEN
     st.vel[free] = 0.0
     st.yaw_rate[free] = 0.0
+
+
+def break_cells(data: IceData, rows: np.ndarray, cause: int) -> None:
+    """Break intact rows free (cause BY_HULL or BY_CONTACT): they become free floes."""
+    data.contacts.free(data.state, rows)
+    data.state.cause[rows] = cause
 
 
 def _contact_breaks(model: IceModel, st: FloeState, con: dict, velocity: np.ndarray) -> np.ndarray:
@@ -196,16 +203,14 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
     space.set_hull(hull.xy, hull.angle, hull.velocity, hull.angular_velocity)
     by_hull = space.hull_touching(st)
     if len(by_hull):
-        space.free(st, by_hull)
-        st.cause[by_hull] = BY_HULL
+        break_cells(data, by_hull, BY_HULL)
         _update_submersion(model, data, hull, by_hull)
     space.step(dt)
-    con = space.read_contacts()
+    con = space.read_contacts(st)
     by_contact = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
     space.read_free(st)
     if len(by_contact):
-        space.free(st, by_contact)
-        st.cause[by_contact] = BY_CONTACT
+        break_cells(data, by_contact, BY_CONTACT)
     free = _unsettled(model, st, np.nonzero((st.status == FREE) & ~st.submerged)[0])
     if len(free):
         mat = model.material

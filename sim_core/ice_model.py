@@ -47,6 +47,7 @@ class IceModel:
     tri_start: np.ndarray  # (G + 1,)
     outline: np.ndarray  # (P, 2) plan-view outline about the centroid, m
     outline_start: np.ndarray  # (G + 1,)
+    seed_offset: np.ndarray  # (G, 2) the cell's Voronoi seed relative to its centroid, m
     mass: np.ndarray  # (G,) kg
     inertia: np.ndarray  # (G, 3) Ixx, Iyy, Izz about the centroid, kg m2
     is_sphere: np.ndarray  # (G,) bool
@@ -118,6 +119,7 @@ def compile_ice_model(templates: list[TileTemplate], material: IceMaterial | Non
         cell_template=np.repeat(np.arange(len(templates)), counts),
         cell_local=np.concatenate([np.arange(c) for c in counts]), centroid=centroid,
         tris=np.ascontiguousarray(tris), tri_start=tri_start, outline=outline, outline_start=outline_start,
+        seed_offset=np.vstack([t.seeds[:, :2] for t in templates]) - centroid[:, :2],
         mass=mass, inertia=inertia, is_sphere=np.concatenate([t.is_sphere for t in templates]),
         radius=np.concatenate([t.sphere_radius for t in templates]), thickness=thickness,
         z_equilibrium=0.5 * thickness - draft, stiffness=stiffness, damping=damping,

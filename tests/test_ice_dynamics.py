@@ -95,13 +95,11 @@ def test_no_floe_accelerates_without_contact_and_energy_decays():
     data = new_ice_data(m, waterline_contour(150, 24), 0.1)
     rows = np.arange(place_tile(m, data, 0, (0.0, 0.0)).stop)
     keep = rows[::7]  # every 7th cell: free them, delete the rest so none touch
-    data.contacts.remove(np.setdiff1d(rows, keep))
+    data.contacts.remove(data.state, np.setdiff1d(rows, keep))
     data.state.status[np.setdiff1d(rows, keep)] = 3  # out of play
     data.contacts.free(data.state, keep)
     rng = np.random.default_rng(2)
-    for i in keep:
-        body = data.contacts._bodies[int(i)][0]
-        body.velocity = tuple(rng.uniform(-0.05, 0.05, 2))
+    data.contacts.set_velocity(keep, rng.uniform(-0.05, 0.05, (len(keep), 2)), np.zeros(len(keep)))
     far = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
     speeds, energies = [], []
     for _ in range(300):
