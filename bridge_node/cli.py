@@ -15,7 +15,7 @@ from bridge_node.errors import UserError
 COMMANDS = {
     "prefracture": (prefracture_command, "build the pre-fractured tile templates (paper §2.1)"),
     "trial": (trial_command, "run a standard manoeuvring trial (turning, zig-zag, crash stop)"),
-    "experiment": (experiment_command, "run the paper's ice experiments (breaking)"),
+    "experiment": (experiment_command, "run the paper's ice experiments (breaking, transit)"),
 }
 
 

@@ -7,14 +7,17 @@ from __future__ import annotations
 
 import tomllib
 from pathlib import Path
+from typing import Literal
 
 from pydantic import Field, ValidationError
 
 from bridge_node.errors import UserError
 from sim_core.ice_field import IceFieldSettings
 from sim_core.ice_material import IceMaterial
+from sim_core.ice_model import IceDynamicsSettings
+from sim_core.ice_scene import SceneSettings
 from sim_core.params import Params
-from sim_core.ship_particulars import ShipParticulars
+from sim_core.ship_particulars import TELEGRAPH_POSITIONS, ShipParticulars
 from sim_core.tile_template import FractureSettings
 
 DEFAULT_CONFIG = Path(__file__).resolve().parent.parent / "config" / "default.toml"
@@ -33,10 +36,17 @@ class ShipChoice(Params):
 
 
 class ExerciseSettings(Params):
-    """Where the exercise takes place: the origin of the local north/east frame."""
+    """Where the exercise takes place and how the ship starts. The local north/east frame
+    has its origin at the ice field's south-west corner, at the given latitude/longitude.
+    Unset start positions put the ship one ship length south of the middle of the ice edge."""
 
     origin_latitude_deg: float = Field(74.0, ge=-89.0, le=89.0)
     origin_longitude_deg: float = Field(20.0, ge=-180.0, le=180.0)
+    start_north: float | None = Field(None, ge=-1.0e5, le=1.0e6, description="m from the field's south edge")
+    start_east: float | None = Field(None, ge=-1.0e5, le=1.0e6, description="m from the field's west edge")
+    start_heading_deg: float = Field(0.0, ge=0.0, lt=360.0, description="true heading, deg")
+    start_speed_kn: float = Field(6.0, ge=0.0, le=25.0, description="speed through the water, kn")
+    start_telegraph: Literal[TELEGRAPH_POSITIONS] | None = Field("full_ahead", description="engine order at the start")
 
 
 class NodeConfig(Params):
@@ -47,6 +57,8 @@ class NodeConfig(Params):
     ice_material: IceMaterial = IceMaterial()
     fracture: FractureSettings = FractureSettings()
     ice_field: IceFieldSettings
+    ice_dynamics: IceDynamicsSettings = IceDynamicsSettings()
+    scene: SceneSettings = SceneSettings()
     paths: PathSettings = PathSettings()
 
 

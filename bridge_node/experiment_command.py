@@ -1,4 +1,6 @@
-"""``icebridge experiment breaking``: the paper's breaking experiments as numbers.
+"""``icebridge experiment breaking|transit``: the paper's ice experiments as numbers.
+
+``transit`` lives in ``transit_report``. ``breaking``:
 
 Steams the ship straight through breakable ice for every combination of thickness, collider
 setup and speed; prints channel width, conduction-band width and broken cells per
@@ -16,6 +18,7 @@ from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
 
+from bridge_node import transit_report
 from bridge_node.config import load_config, load_ship
 from bridge_node.errors import UserError
 from bridge_node.ice_plots import draw_floes, save_figure
@@ -37,17 +40,22 @@ def _floats(text: str, name: str) -> list[float]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("kind", choices=("breaking",), help="which experiment")
+    p.add_argument("kind", choices=("breaking", "transit"), help="which experiment")
     p.add_argument("--thickness", default="0.2,0.5,1.0", help="ice thicknesses, m (comma-separated)")
     p.add_argument("--colliders", default="mesh,sphere,hybrid", help="collider setups (comma-separated)")
     p.add_argument("--speed", default="3,8", help="ship speeds, kn (comma-separated)")
     p.add_argument("--tile-side", type=float, default=None, help="tile side, m (default: config)")
     p.add_argument("--strip-tiles", type=int, default=2, help="tiles along the track (default 2)")
-    p.add_argument("--json", action="store_true", help="print the table as one JSON object")
+    p.add_argument("--distance", type=float, default=1500.0, help="transit: distance to travel, m (default 1500)")
+    p.add_argument("--no-reverse", action="store_true", help="transit: no reverse replacement (nothing frozen)")
+    p.add_argument("--dt", type=float, default=1 / 30, help="transit: world step, s (default 1/30)")
+    p.add_argument("--json", action="store_true", help="print the results as one JSON object")
     p.add_argument("--out", default="out", help="folder for the pictures (default: out)")
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.kind == "transit":
+        return transit_report.run(args)
     cfg = load_config(args.config)
     ship = load_ship(cfg.ship.name, args.config)
     thicknesses = _floats(args.thickness, "--thickness")

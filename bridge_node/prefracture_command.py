@@ -16,12 +16,12 @@ from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
 
-from bridge_node.config import NodeConfig, load_config, resolve_path
+from bridge_node.config import load_config, resolve_path
 from bridge_node.errors import UserError
 from bridge_node.gltf_export import export_glb
-from bridge_node.template_library import load_template, save_template, template_path
+from bridge_node.template_library import library_template
+from bridge_node.world_setup import field_tile_classes
 from sim_core.fragment_count import check_thickness
-from sim_core.ice_field import thickness_class, tile_thickness
 from sim_core.tile_template import TileTemplate, build_tile, plan_areas, template_seed
 
 
@@ -34,22 +34,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--cache-dir", help="template library folder (default: config paths.cache_dir)")
     p.add_argument("--rebuild", action="store_true", help="rebuild templates even if cached")
     p.add_argument("--out", default="out", help="folder for the plot (default: out)")
-
-
-def field_thickness_classes(cfg: NodeConfig, config_path: str | None) -> list[float]:
-    """The thickness classes the configured field needs, m."""
-    grid = None
-    if cfg.ice_field.thickness_profile == "grid":
-        grid_path = resolve_path(config_path, cfg.ice_field.thickness_grid)
-        try:
-            grid = np.loadtxt(grid_path, delimiter=",", ndmin=2)
-        except (OSError, ValueError) as exc:
-            raise UserError(f"{config_path}: ice_field.thickness_grid = {str(grid_path)!r}: {exc}") from None
-    try:
-        h = tile_thickness(cfg.ice_field, cfg.fracture.tile_side, grid)
-    except ValueError as exc:
-        raise UserError(f"{config_path}: ice_field.thickness_grid: {exc}") from None
-    return sorted(set(thickness_class(h, cfg.ice_field.class_step).ravel().tolist()))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -71,18 +55,13 @@ def run(args: argparse.Namespace) -> int:
             console.print(f"wrote {args.export} ({tile.n_cells} cells)")
     else:
         cache = Path(args.cache_dir) if args.cache_dir else resolve_path(args.config, cfg.paths.cache_dir)
-        jobs = [(h, v) for h in field_thickness_classes(cfg, args.config) for v in range(settings.variants)]
+        jobs = [(h, v) for h in field_tile_classes(cfg, args.config)[1].tolist() for v in range(settings.variants)]
         rows = []
         with Progress(console=console, transient=True) as progress:
             task = progress.add_task("pre-fracturing tiles", total=len(jobs))
             for h, v in jobs:
-                path = template_path(cache, h, v, settings, cfg.ice_material)
                 t0 = time.perf_counter()
-                if path.exists() and not args.rebuild:
-                    tile, source = load_template(path), "cache"
-                else:
-                    tile, source = build_tile(h, template_seed(settings.seed, h, v), settings, cfg.ice_material), "built"
-                    save_template(path, tile)
+                tile, source = library_template(cache, h, v, settings, cfg.ice_material, args.rebuild)
                 rows.append((tile, v, time.perf_counter() - t0, source))
                 progress.advance(task)
         console.print(f"template library: {cache}")

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from sim_core.ice_material import IceMaterial
-from sim_core.tile_template import FractureSettings, TileTemplate
+from sim_core.tile_template import FractureSettings, TileTemplate, build_tile, template_seed
 
 
 def template_path(
@@ -42,3 +42,15 @@ def load_template(path: Path) -> TileTemplate:
     """Read a template written by ``save_template``."""
     with np.load(path, allow_pickle=False) as data:
         return TileTemplate.from_arrays({k: data[k] for k in data.files})
+
+
+def library_template(cache_dir: Path, thickness: float, variant: int, settings: FractureSettings,
+                     material: IceMaterial, rebuild: bool = False) -> tuple[TileTemplate, str]:
+    """A template from the library, built and stored first if missing (or if rebuild).
+    Returns the template and where it came from: "cache" or "built"."""
+    path = template_path(cache_dir, thickness, variant, settings, material)
+    if path.exists() and not rebuild:
+        return load_template(path), "cache"
+    tile = build_tile(thickness, template_seed(settings.seed, thickness, variant), settings, material)
+    save_template(path, tile)
+    return tile, "built"

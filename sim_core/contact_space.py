@@ -84,43 +84,48 @@ class ContactSpace:
         self._buffer = pb.Buffer()
 
     # -- building -------------------------------------------------------------------------
-    def _collider(self, body: pymunk.Body, g: int, at: np.ndarray, angle: float) -> pymunk.Shape:
-        """The cell's collider on body, placed at (at, angle) in the body's frame."""
+    def _collider(self, body: pymunk.Body, g: int, centre: list[float], ring: list) -> pymunk.Shape:
+        """The cell's collider on body: a circle about centre or the polygon ring, both in
+        the body's frame."""
         m = self.model
-        if m.is_sphere[g]:
-            shape = pymunk.Circle(body, float(m.radius[g]), (float(at[0]), float(at[1])))
-        else:
-            shape = pymunk.Poly(body, self._ring(g, at, angle))
+        shape = pymunk.Circle(body, float(m.radius[g]), centre) if m.is_sphere[g] else pymunk.Poly(body, ring)
         shape.friction = m.settings.ice_friction
         shape.filter = _FLOE
         return shape
 
-    def _ring(self, g: int, at: np.ndarray, angle: float) -> list[tuple[float, float]]:
+    def _rings(self, g: np.ndarray, at: np.ndarray, angle: np.ndarray) -> list[list]:
+        """Outlines of cells g placed at (at, angle), as lists of (x, y) for pymunk; one
+        numpy transform for all of them."""
         m = self.model
-        ring = m.outline[m.outline_start[g]:m.outline_start[g + 1]]
-        return [tuple(p) for p in _rotate(ring, np.full(len(ring), angle)) + at]
+        start, stop = m.outline_start[g], m.outline_start[g + 1]
+        counts = stop - start
+        owner = np.repeat(np.arange(len(g)), counts)
+        idx = np.repeat(start - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+        pts = (_rotate(m.outline[idx], angle[owner]) + at[owner]).tolist()
+        ends = np.cumsum(counts).tolist()
+        return [pts[a:b] for a, b in zip([0] + ends[:-1], ends)]
 
     def add_tile(self, state: FloeState, tile: int, rows: np.ndarray) -> None:
         """Add a tile's intact rows, at their current pose, as shapes of one static body."""
         m = self.model
         body = pymunk.Body(body_type=pymunk.Body.STATIC)
+        g, xy, yaw = state.gcell[rows], state.xy[rows], state.yaw[rows]
+        rings, centres, sphere = self._rings(g, xy, yaw), xy.tolist(), m.is_sphere[g].tolist()
         shapes = []
-        for i in rows:
-            g, at, angle = state.gcell[i], state.xy[i], float(state.yaw[i])
-            shape = self._collider(body, g, at, angle)
+        for i, gi, centre, ring, is_sphere in zip(rows.tolist(), g.tolist(), centres, rings, sphere):
+            shape = self._collider(body, gi, centre, ring)
             shapes.append(shape)
-            self._shape[int(i)] = shape
-            self._row_of_shape[shape] = int(i)
-            if m.is_sphere[g]:
-                sensor = pymunk.Poly(body, self._ring(g, at, angle))
+            self._shape[i] = shape
+            self._row_of_shape[shape] = i
+            if is_sphere:
+                sensor = pymunk.Poly(body, ring)
                 sensor.sensor = True
                 sensor.filter = _OUTLINE
                 shapes.append(sensor)
-                self._sensor[int(i)] = sensor
-                self._row_of_shape[sensor] = int(i)
+                self._sensor[i] = sensor
+                self._row_of_shape[sensor] = i
         self.space.add(body, *shapes)
-        g = state.gcell[rows]
-        seeds = state.xy[rows] + _rotate(m.seed_offset[g], state.yaw[rows])
+        seeds = xy + _rotate(m.seed_offset[g], yaw)
         self._tile_body[tile] = body
         self._tile_rows[tile] = (np.asarray(rows), cKDTree(seeds))
         self._tile_of_id[body.id] = tile
@@ -137,15 +142,22 @@ class ContactSpace:
 
     def free(self, state: FloeState, rows: np.ndarray) -> None:
         """Turn intact rows into free floes: each leaves its tile body for a dynamic body."""
-        m = self.model
         for i in rows:
-            i = int(i)
-            self._drop_intact_shapes(i)
-            g = state.gcell[i]
-            body = pymunk.Body(float(m.mass[g]), float(m.inertia[g, 2]))
+            self._drop_intact_shapes(int(i))
+        self.add_floes(state, rows)
+
+    def add_floes(self, state: FloeState, rows: np.ndarray) -> None:
+        """Add rows as free floes, each a dynamic body at its current pose and velocity."""
+        m = self.model
+        g = state.gcell[rows]
+        rings = self._rings(g, np.zeros((len(rows), 2)), np.zeros(len(rows)))
+        for i, gi, ring in zip(rows.tolist(), g.tolist(), rings):
+            body = pymunk.Body(float(m.mass[gi]), float(m.inertia[gi, 2]))
             body.position = tuple(state.xy[i])
             body.angle = float(state.yaw[i])
-            shape = self._collider(body, g, np.zeros(2), 0.0)
+            body.velocity = tuple(state.vel[i])
+            body.angular_velocity = float(state.yaw_rate[i])
+            shape = self._collider(body, gi, [0.0, 0.0], ring)
             self.space.add(body, shape)
             self._floe_body[i] = body
             self._shape[i] = shape

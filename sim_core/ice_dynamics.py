@@ -100,18 +100,36 @@ def place_tile(model: IceModel, data: IceData, template: int, corner: tuple[floa
     return rows
 
 
+def tile_rows(data: IceData, tile: int) -> np.ndarray:
+    """Rows of a placed tile."""
+    start = data.tiles.row_start[tile]
+    return np.arange(start, start + data.tiles.row_count[tile])
+
+
 def freeze_tile(data: IceData, tile: int) -> None:
     """Stop simulating a tile: its bodies leave the contact space, free floes keep their
-    last pose as FROZEN, intact cells stay INTACT (drawn, never simulated again)."""
-    start, count = data.tiles.row_start[tile], data.tiles.row_count[tile]
-    rows = np.arange(start, start + count)
+    last pose as FROZEN, intact cells stay INTACT (drawn, not simulated)."""
+    rows = tile_rows(data, tile)
     st = data.state
+    submerged = rows[st.submerged[rows]]
+    st.submerged[submerged] = False  # a frozen floe keeps its pose; it surfaces if thawed
     live = rows[(st.status[rows] == INTACT) | (st.status[rows] == FREE)]
     data.contacts.remove(st, live)
     free = rows[st.status[rows] == FREE]
     st.status[free] = FROZEN
     st.vel[free] = 0.0
     st.yaw_rate[free] = 0.0
+
+
+def thaw_tile(data: IceData, tile: int) -> None:
+    """Simulate a frozen tile again: intact cells rejoin as a tile body, frozen floes as
+    free floes at rest."""
+    rows = tile_rows(data, tile)
+    st = data.state
+    intact = rows[st.status[rows] == INTACT]
+    if len(intact):
+        data.contacts.add_tile(st, tile, intact)
+    data.contacts.add_floes(st, rows[st.status[rows] == FROZEN])
 
 
 def break_cells(data: IceData, rows: np.ndarray, cause: int) -> None:

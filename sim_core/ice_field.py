@@ -60,3 +60,21 @@ def tile_thickness(
 def thickness_class(h: np.ndarray | float, step: float) -> np.ndarray:
     """Round thickness to its class (multiples of step, at least one step, at most 1.5 m)."""
     return np.clip(np.round(np.asarray(h) / step) * step, step, MAX_THICKNESS).round(6)
+
+
+def tile_classes(field: IceFieldSettings, tile_side: float,
+                 grid: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Thickness class of every tile: (class index (ny, nx) uint8, row 0 at the south edge;
+    class thicknesses (k,) m). Uniform and gradient fields are built a row at a time, so a
+    640 km field costs one byte per tile."""
+    nx, ny = tile_counts(field, tile_side)
+    if field.thickness_profile == "grid":
+        classes = thickness_class(tile_thickness(field, tile_side, grid), field.class_step)
+    else:
+        column = tile_thickness(field.model_copy(update={"width": tile_side}), tile_side)[:, 0]
+        classes = thickness_class(column, field.class_step)[:, None]
+    values, index = np.unique(classes, return_inverse=True)
+    if len(values) > 256:
+        raise ValueError(f"{len(values)} thickness classes; at most 256 (raise class_step)")
+    index = index.reshape(classes.shape).astype(np.uint8)
+    return np.ascontiguousarray(np.broadcast_to(index, (ny, nx))), values

@@ -1,0 +1,112 @@
+"""Benchmark: scene management per step, tile swaps, and the whole world step.
+
+1. Scene management (quadtree query from the 34 contour points, swap decisions, reverse
+   replacement) per step for 6.4 km, 64 km and 640 km square fields of 100 m tiles, the ship
+   zig-zagging at 4 m/s with 60 Hz steps. Targets: <= 0.1 ms at 6.4 km, at most 2x growth per
+   10x field side. Baseline in the same process: the brute-force scan of every tile centre.
+2. Swap cost in the ice world: placing a breakable tile, freezing it, thawing it.
+3. The default exercise's world step (live floes, swaps) on a straight transit: median and
+   p99, and a plot of live fragments and step time against distance (paper Fig. 18, 19).
+Run: .venv/bin/python benchmarks/bench_scene.py [--distance M]
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+from rich.progress import Progress
+
+from bridge_node.config import load_config
+from bridge_node.transit_report import plot_series
+from bridge_node.world_setup import build_world, start_world
+from sim_core.hull_contour import ship_to_world, waterline_contour
+from sim_core.ice_dynamics import freeze_tile, new_ice_data, place_tile, thaw_tile
+from sim_core.ice_scene import SceneSettings, compile_scene, new_scene_data, update_scene
+from sim_core.tile_quadtree import tiles_near_brute_force
+from sim_core.transit_experiment import run_transit
+
+B, L = 100.0, 150.0
+CONTOUR = waterline_contour(L, 24.0)
+
+
+def scene_cost(n: int, steps: int = 3000) -> tuple[np.ndarray, np.ndarray]:
+    """Per-step update_scene times (ms) on an n x n tile field, and brute-force scan times."""
+    model = compile_scene(SceneSettings(), np.zeros((n, n), np.uint8), np.array([0.5]), [np.array([0])], B, L)
+    data = new_scene_data(model)
+    north, east = 0.5 * n * B - 2000.0, 0.5 * n * B
+    times, brute = [], []
+    for k in range(steps):
+        psi = 0.6 * math.sin(k / 600.0)
+        north += 4.0 / 60 * math.cos(psi)
+        east += 4.0 / 60 * math.sin(psi)
+        pts = ship_to_world(CONTOUR, north, east, psi)
+        t0 = time.perf_counter()
+        update_scene(model, data, pts, np.array([east, north]))
+        times.append(time.perf_counter() - t0)
+        if k % 300 == 0 and n <= 640:
+            t0 = time.perf_counter()
+            tiles_near_brute_force(pts, model.radius, n, n, B)
+            brute.append(time.perf_counter() - t0)
+    return np.array(times[100:]) * 1e3, np.array(brute) * 1e3
+
+
+def swap_cost(world) -> dict:
+    """Place, freeze and thaw one 100 m tile of the default exercise, ms (median of 5)."""
+    out = {"place": [], "freeze": [], "thaw": []}
+    for k in range(5):
+        data = new_ice_data(world.ice, world.contour, 0.1)
+        t0 = time.perf_counter()
+        place_tile(world.ice, data, k % len(world.ice.templates), (0.0, 0.0), k)
+        t1 = time.perf_counter()
+        freeze_tile(data, 0)
+        t2 = time.perf_counter()
+        thaw_tile(data, 0)
+        t3 = time.perf_counter()
+        out["place"].append(t1 - t0)
+        out["freeze"].append(t2 - t1)
+        out["thaw"].append(t3 - t2)
+    return {k: float(np.median(v) * 1e3) for k, v in out.items()}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--distance", type=float, default=1500.0, help="transit distance, m")
+    ap.add_argument("--out", default="out", help="folder for the plot")
+    args = ap.parse_args()
+    print(f"scene benchmark, {os.cpu_count()} cores, 100 m tiles, 150 m ship, 60 Hz steps")
+    rows = []
+    for n in (64, 640, 6400):
+        ms, brute = scene_cost(n)
+        rows.append((n, ms, brute))
+    base = np.median(rows[0][1])
+    for n, ms, brute in rows:
+        line = (f"scene update, {n * B / 1000:6.1f} km field ({n * n:>9d} tiles): median {np.median(ms) * 1e3:6.1f} us, "
+                f"p99 {np.percentile(ms, 99) * 1e3:6.1f} us, {np.median(ms) / base:4.2f}x the 6.4 km cost")
+        if len(brute):
+            line += f"; brute-force scan {np.median(brute):8.2f} ms ({np.median(brute) / np.median(ms):7.0f}x slower)"
+        print(line)
+    cfg = load_config()
+    world = build_world(cfg, None)
+    cost = swap_cost(world)
+    cells = world.ice.templates[0].n_cells
+    print(f"tile swap in the ice world ({cells} cells): place {cost['place']:.1f} ms, "
+          f"freeze {cost['freeze']:.1f} ms, thaw {cost['thaw']:.1f} ms")
+    data = start_world(world, cfg)
+    with Progress(transient=True) as progress:
+        task = progress.add_task("default exercise transit", total=args.distance)
+        series = run_transit(world, data, args.distance, 1 / 60, lambda d: progress.update(task, completed=d))
+    s = series.summary(True)
+    print(f"world step, default exercise, {s['distance_m']} m at 60 Hz: median {s['step_ms_median']} ms, "
+          f"p99 {s['step_ms_p99']} ms; live fragments max {s['max_live']}, plateau "
+          f"{s['plateau_live_min']}..{s['plateau_live_max']}, frozen {s['final_frozen']}")
+    plot = Path(args.out) / "bench_transit.png"
+    plot_series(series, True, plot)
+    print(f"plot: {plot}")
+
+
+if __name__ == "__main__":
+    main()
