@@ -9,13 +9,14 @@ from __future__ import annotations
 import argparse
 import sys
 
-from bridge_node import experiment_command, prefracture_command, trial_command
+from bridge_node import experiment_command, links_command, prefracture_command, trial_command
 from bridge_node.errors import UserError
 
 COMMANDS = {
     "prefracture": (prefracture_command, "build the pre-fractured tile templates (paper §2.1)"),
     "trial": (trial_command, "run a standard manoeuvring trial (turning, zig-zag, crash stop)"),
     "experiment": (experiment_command, "run the paper's ice experiments (breaking, transit)"),
+    "links": (links_command, "commission the console links: show orders and health, publish a ship"),
 }
 
 

@@ -9,9 +9,10 @@ import tomllib
 from pathlib import Path
 from typing import Literal
 
-from pydantic import Field, ValidationError
+from pydantic import Field, ValidationError, model_validator
 
 from bridge_node.errors import UserError
+from bridge_node.links.link_settings import ArbitrationSettings, LinkSettings
 from sim_core.ice_field import IceFieldSettings
 from sim_core.ice_material import IceMaterial
 from sim_core.ice_model import IceDynamicsSettings
@@ -27,6 +28,7 @@ class PathSettings(Params):
     """Where the node keeps its files. Relative paths are relative to the config file."""
 
     cache_dir: str = Field("~/.cache/icebridge", description="template library")
+    session_dir: str = Field("~/.cache/icebridge/sessions", description="session records of link traffic")
 
 
 class ShipChoice(Params):
@@ -38,7 +40,8 @@ class ShipChoice(Params):
 class ExerciseSettings(Params):
     """Where the exercise takes place and how the ship starts. The local north/east frame
     has its origin at the ice field's south-west corner, at the given latitude/longitude.
-    Unset start positions put the ship one ship length south of the middle of the ice edge."""
+    Unset start positions put the ship one ship length south of the ice edge, on the centre
+    line of the middle tile column."""
 
     origin_latitude_deg: float = Field(74.0, ge=-89.0, le=89.0)
     origin_longitude_deg: float = Field(20.0, ge=-180.0, le=180.0)
@@ -59,7 +62,21 @@ class NodeConfig(Params):
     ice_field: IceFieldSettings
     ice_dynamics: IceDynamicsSettings = IceDynamicsSettings()
     scene: SceneSettings = SceneSettings()
+    links: list[LinkSettings] = Field(default_factory=list)
+    arbitration: ArbitrationSettings = ArbitrationSettings()
     paths: PathSettings = PathSettings()
+
+    @model_validator(mode="after")
+    def _link_names(self) -> "NodeConfig":
+        names = [link.name for link in self.links]
+        doubled = sorted({n for n in names if names.count(n) > 1})
+        if doubled:
+            raise ValueError(f"links: names must be unique, repeated: {doubled}")
+        for order in ("rudder", "engine"):
+            unknown = [n for n in getattr(self.arbitration, order) if n not in names]
+            if unknown:
+                raise ValueError(f"arbitration.{order}: unknown link(s) {unknown}; links: {names}")
+        return self
 
 
 class ConfigError(UserError):

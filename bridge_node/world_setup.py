@@ -63,10 +63,10 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
 
 
 def start_world(model: WorldModel, cfg: NodeConfig) -> WorldData:
-    """World data at the configured start: by default one ship length south of the middle
-    of the field's south edge, heading north."""
-    ex, length = cfg.exercise, model.ship.particulars.length
+    """World data at the configured start: by default one ship length south of the ice
+    edge, on the centre line of the middle tile column, heading north."""
+    ex, length, scene = cfg.exercise, model.ship.particulars.length, model.scene
     north = ex.start_north if ex.start_north is not None else -length
-    east = ex.start_east if ex.start_east is not None else 0.5 * cfg.ice_field.width
+    east = ex.start_east if ex.start_east is not None else (scene.nx // 2 + 0.5) * scene.side
     return new_world_data(model, north, east, math.radians(ex.start_heading_deg), ex.start_speed_kn * KNOT,
                           ex.start_telegraph)

@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-SYSTEM_PACKAGES=()
+SYSTEM_PACKAGES=(socat)  # socat: pty pairs for the serial and Modbus RTU link tests
 
 missing=()
 for pkg in "${SYSTEM_PACKAGES[@]}"; do

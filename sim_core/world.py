@@ -96,15 +96,15 @@ def new_world_data(model: WorldModel, north: float, east: float, heading: float,
     return WorldData(ship, ice, new_scene_data(model.scene))
 
 
-def apply_controls(model: WorldModel, data: WorldData, controls: Controls) -> list[str]:
+def apply_controls(ship: ShipModel, data: ShipData, controls: Controls) -> list[str]:
     """Give the orders to the ship; returns the reasons of clamped or refused orders."""
     out = []
     if controls.rudder is not None:
-        out.append(ship_model.order_rudder(model.ship, data.ship, controls.rudder))
+        out.append(ship_model.order_rudder(ship, data, controls.rudder))
     if controls.telegraph is not None:
-        out.append(ship_model.order_telegraph(model.ship, data.ship, controls.telegraph))
+        out.append(ship_model.order_telegraph(ship, data, controls.telegraph))
     if controls.lever is not None:
-        out.append(ship_model.order_lever(model.ship, data.ship, controls.lever))
+        out.append(ship_model.order_lever(ship, data, controls.lever))
     return [r for r in out if r]
 
 
@@ -144,7 +144,7 @@ def _ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple
 
 def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | None = None) -> WorldEvents:
     """Advance the world by dt seconds."""
-    rejected = apply_controls(model, data, controls) if controls is not None else []
+    rejected = apply_controls(model.ship, data.ship, controls) if controls is not None else []
     ship = data.ship
     contour, _ = hull_world(model, ship)
     ship.ice_h, ship.ice_condition = _ice_condition(model, data, contour[0])  # contour[0] is the stem

@@ -1,0 +1,1 @@
+"""Hardware links of the bridge console: one ``Link`` interface, one module per protocol."""

@@ -1,0 +1,236 @@
+"""CAN link (python-can): console frames in (decoded with the user's DBC), NMEA 2000 PGN
+127245 rudder orders in as a helm source, and the ship's state out as NMEA 2000 PGNs
+127245, 127488, 127489 (fast packet), 127250, 127251, 129025, 129026 at their rates."""
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import can
+import cantools
+
+from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, ControlInput, Link, RateSchedule
+from bridge_node.links.link_settings import CanLinkSettings
+from bridge_node.links.n2k_frames import fast_packet_frames, identifier, parse_identifier
+from bridge_node.links.nmea0183 import ETL_POSITIONS
+from bridge_node.links.reconnect import Backoff
+from bridge_node.links.session_record import SessionRecord
+from sim_core.ship_outputs import ShipOutputs
+
+N2K_DBC = Path(__file__).resolve().parents[2] / "config" / "nmea2000.dbc"
+ID_MASK = 0x03FFFF00  # match any priority and source
+MAX_FRAMES_PER_POLL = 1000
+RUDDER_PGN = 127245
+# output name -> (DBC message, PGN, priority)
+OUTPUTS = {"rudder": ("Rudder", 127245, 2), "engine_rapid": ("EngineRapid", 127488, 2),
+           "engine_dynamic": ("EngineDynamic", 127489, 3), "heading": ("VesselHeading", 127250, 2),
+           "rate_of_turn": ("RateOfTurn", 127251, 2), "position": ("PositionRapid", 129025, 2),
+           "cog_sog": ("CogSogRapid", 129026, 2)}
+DIRECTION_TO_STBD, DIRECTION_TO_PORT = 1, 2
+
+
+def load_dbc(path: Path) -> cantools.database.can.Database:
+    return cantools.database.load_file(str(path), frame_id_mask=ID_MASK, strict=False)
+
+
+def _n2k_fields(name: str, s: ShipOutputs, sid: int) -> dict:
+    """Physical field values (DBC units) of one output PGN; not-available fields all ones."""
+    if name == "rudder":
+        return {"Instance": 0, "DirectionOrder": 0, "Reserved1": 31, "AngleOrder": 3.2767,
+                "Position": s.rudder_angle, "Reserved2": 65535}
+    if name == "engine_rapid":
+        return {"Instance": 0, "Speed": abs(s.shaft_rps) * 60.0, "BoostPressure": 6553500, "TiltTrim": 127,
+                "Reserved": 65535}
+    if name == "engine_dynamic":  # status fields explicitly 0: all ones would read as every alarm on
+        return {"Instance": 0, "OilPressure": 6553500, "OilTemperature": 6553.5, "Temperature": 655.35,
+                "AlternatorPotential": 327.67, "FuelRate": 3276.7, "TotalEngineHours": 4294967295,
+                "CoolantPressure": 6553500, "FuelPressure": 65535000, "Reserved": 255, "Status1": 0,
+                "Status2": 0, "Load": 127, "Torque": 127}
+    if name == "heading":
+        return {"SID": sid, "Heading": s.heading, "Deviation": 3.2767, "Variation": 3.2767, "Reference": 0,
+                "Reserved": 63}
+    if name == "rate_of_turn":
+        return {"SID": sid, "Rate": s.rate_of_turn, "Reserved": 16777215}
+    if name == "position":
+        return {"Latitude": math.degrees(s.latitude), "Longitude": math.degrees(s.longitude)}
+    return {"SID": sid, "CogReference": 0, "Reserved1": 63, "Cog": s.course_over_ground,
+            "Sog": s.speed_over_ground, "Reserved2": 65535}
+
+
+class CanLink(Link):
+    """Any python-can interface; the console's DBC from config."""
+
+    def __init__(self, settings: CanLinkSettings, dbc_path: Path, record: SessionRecord | None = None) -> None:
+        super().__init__(settings.name)
+        self.settings = settings
+        self.record = record
+        self.console = load_dbc(dbc_path)
+        self.n2k = load_dbc(N2K_DBC)
+        self._bus: can.BusABC | None = None
+        self._schedule = RateSchedule(settings.output_rates())
+        self._allowed = frozenset(settings.allowed_sources)
+        self._sid = 0
+        self._fast_seq: dict[int, int] = {}
+        self._backoff = Backoff()
+
+    def open(self) -> None:
+        self._connect(time.monotonic())
+
+    def _connect(self, now: float) -> None:
+        s = self.settings
+        try:
+            self._bus = can.Bus(interface=s.interface, channel=s.channel, bitrate=s.bitrate)
+            self._health.connected = True
+            self._backoff.succeeded()
+        except (can.CanError, OSError, ValueError, ImportError):
+            self._bus = None
+            self._health.connected = False
+            self._count_error("open_failed")
+            self._backoff.failed(now)
+
+    def _lost(self, now: float) -> None:
+        self._count_error("bus_lost")
+        try:
+            self._bus.shutdown()
+        except (can.CanError, OSError):
+            pass
+        self._bus = None
+        self._health.connected = False
+        self._backoff.failed(now)
+
+    def poll(self, now: float) -> list[ControlInput]:
+        if self._bus is None:
+            if self._backoff.ready(now):
+                self._health.reconnects += 1
+                self._connect(now)
+            return []
+        out = []
+        for _ in range(MAX_FRAMES_PER_POLL):
+            try:
+                msg = self._bus.recv(timeout=0.0)
+            except (can.CanError, OSError):
+                self._lost(now)
+                break
+            if msg is None:
+                break
+            if self.record:
+                self.record.can_frame(msg)
+            out.extend(self._decode(msg, now))
+        return self._received(out, now)
+
+    def _decode(self, msg: can.Message, now: float) -> list[ControlInput]:
+        """Orders in one frame; errors counted, never raised."""
+        if msg.is_error_frame:
+            self._count_error("error_frame")
+            return []
+        if not msg.is_extended_id:
+            self._count_error("unknown_frame")
+            return []
+        _, pgn, source = parse_identifier(msg.arbitration_id)
+        if self._allowed and source not in self._allowed:
+            self._count_error("source_not_allowed")
+            return []
+        try:
+            spec = self.console.get_message_by_frame_id(msg.arbitration_id)
+        except KeyError:
+            spec = None
+        try:
+            if spec is not None:
+                return self._console_orders(spec, msg, now)
+            if pgn == RUDDER_PGN and self.settings.rudder_order_pgn:
+                return self._rudder_pgn(msg, now)
+        except cantools.database.errors.DecodeError:
+            self._count_error("bad_frame")
+            return []
+        self._count_error("unknown_frame")
+        return []
+
+    def _in_range(self, spec, values: dict) -> bool:
+        for sig in spec.signals:
+            v = values.get(sig.name)
+            if v is None or not math.isfinite(v) or (sig.minimum is not None and v < sig.minimum - 1e-9) or \
+                    (sig.maximum is not None and v > sig.maximum + 1e-9):
+                self._count_error("out_of_range")
+                return False
+        return True
+
+    def _console_orders(self, spec, msg: can.Message, now: float) -> list[ControlInput]:
+        if msg.dlc < spec.length:
+            self._count_error("wrong_dlc")
+            return []
+        values = spec.decode(bytes(msg.data), decode_choices=False)
+        if not self._in_range(spec, values):
+            return []
+        if spec.name == "HelmOrder":
+            if values["Status"] != 1:
+                self._count_error("invalid_status")
+                return []
+            return [ControlInput(now, self.name, RUDDER, math.radians(values["RudderOrder"]))]
+        if spec.name == "EngineOrder":
+            engine = int(values["Engine"])
+            if values["Mode"] == 1:
+                code = f"{int(values['TelegraphPosition']):02d}"
+                if code not in ETL_POSITIONS:
+                    self._count_error("out_of_range")
+                    return []
+                return [ControlInput(now, self.name, TELEGRAPH, ETL_POSITIONS[code], engine)]
+            return [ControlInput(now, self.name, LEVER, float(values["Lever"]), engine)]
+        self._count_error("unknown_frame")
+        return []
+
+    def _rudder_pgn(self, msg: can.Message, now: float) -> list[ControlInput]:
+        spec = self.n2k.get_message_by_name("Rudder")
+        if msg.dlc != spec.length:
+            self._count_error("wrong_dlc")
+            return []
+        raw = spec.decode(bytes(msg.data), decode_choices=False, scaling=False)
+        if raw["AngleOrder"] == 0x7FFF:
+            self._count_error("not_available")
+            return []
+        angle = raw["AngleOrder"] * 1e-4
+        if abs(angle) > math.pi / 2:
+            self._count_error("out_of_range")
+            return []
+        return [ControlInput(now, self.name, RUDDER, angle)]
+
+    def publish(self, state: ShipOutputs, now: float) -> None:
+        if self._bus is None:
+            return
+        due = self._schedule.due(now)
+        if not due:
+            return
+        self._sid = (self._sid + 1) % 253
+        for name in due:
+            message, pgn, priority = OUTPUTS[name]
+            spec = self.n2k.get_message_by_name(message)
+            payload = spec.encode(_n2k_fields(name, state, self._sid), strict=False)
+            can_id = identifier(priority, pgn, self.settings.source_address)
+            if len(payload) > 8:
+                seq = self._fast_seq.get(pgn, -1) + 1
+                self._fast_seq[pgn] = seq % 8
+                frames = fast_packet_frames(payload, seq)
+            else:
+                frames = [payload]
+            for data in frames:
+                self._send(can.Message(timestamp=time.time(), arbitration_id=can_id, data=data,
+                                       is_extended_id=True, is_rx=False), now)
+
+    def _send(self, msg: can.Message, now: float) -> None:
+        try:
+            self._bus.send(msg, timeout=0.0)
+        except can.CanOperationError:
+            self._count_error("send_failed")  # transmit buffer full: drop, the next cycle follows
+            return
+        except (can.CanError, OSError):
+            self._lost(now)
+            return
+        self._health.outputs += 1
+        if self.record:
+            self.record.can_frame(msg)
+
+    def close(self) -> None:
+        if self._bus is not None:
+            self._bus.shutdown()
+            self._bus = None
+        self._health.connected = False

@@ -1,0 +1,153 @@
+"""Configuration of the links (``[[links]]`` tables, told apart by ``type``) and of the
+order arbitration (``[arbitration]``). Validated by pydantic: every error names the key."""
+from __future__ import annotations
+
+import ipaddress
+from typing import Annotated, Literal
+
+from pydantic import Field, field_validator, model_validator
+
+from bridge_node.links.nmea0183 import DEFAULT_RATES, DEFAULT_TALKERS, TYPICAL_LENGTH
+from sim_core.params import Params
+
+Name = Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9_\-]+$")]
+BAUD_RATES = (4800, 9600, 19200, 38400, 57600, 115200)
+BAUD_BUDGET_SHARE = 0.8  # outputs may use this share of a serial line's characters per second
+
+
+class _LinkBase(Params):
+    name: Name
+    timeout_s: float = Field(1.0, gt=0.05, le=60.0, description="a source silent this long is stale, s")
+
+
+def _loopback_unless(host: str, allowed: bool, key: str) -> str:
+    try:
+        ip = ipaddress.ip_address(host)
+    except ValueError:
+        raise ValueError(f"{key} must be an IP address, got {host!r}") from None
+    if not ip.is_loopback and not allowed:
+        raise ValueError(f"{key} = {host!r} is not a loopback address; set allow_network = true to use a network")
+    return host
+
+
+class NmeaLinkSettings(_LinkBase):
+    """Serial NMEA 0183 console and instruments, with a UDP mirror of the outputs."""
+
+    type: Literal["nmea0183"]
+    port: str | None = Field(None, description="serial port or pyserial URL; unset: UDP output only")
+    baudrate: Literal[BAUD_RATES] = 38400
+    talkers: dict[str, Annotated[str, Field(pattern=r"^[A-Z]{2}$")]] = Field(default_factory=dict)
+    rates: dict[str, Annotated[float, Field(ge=0.0, le=20.0)]] = Field(default_factory=dict, description="Hz")
+    udp_host: str = "127.0.0.1"
+    udp_port: int | None = Field(10110, ge=1, le=65535, description="unset: no UDP output")
+    allow_network: bool = False
+    allowed_talkers: list[Annotated[str, Field(pattern=r"^[A-Z]{2}$")]] = Field(default_factory=list)
+
+    @field_validator("talkers", "rates")
+    @classmethod
+    def _known_sentences(cls, v: dict) -> dict:
+        unknown = sorted(set(v) - set(DEFAULT_TALKERS))
+        if unknown:
+            raise ValueError(f"unknown sentence(s) {unknown}; allowed: {', '.join(sorted(DEFAULT_TALKERS))}")
+        return v
+
+    @model_validator(mode="after")
+    def _checks(self) -> "NmeaLinkSettings":
+        _loopback_unless(self.udp_host, self.allow_network, "udp_host")
+        if self.port:
+            need = sum(r * TYPICAL_LENGTH[k] for k, r in self.output_rates().items())
+            budget = BAUD_BUDGET_SHARE * self.baudrate / 10.0
+            if need > budget:
+                raise ValueError(f"output rates need about {need:.0f} characters/s, more than {budget:.0f} "
+                                 f"({BAUD_BUDGET_SHARE:.0%} of {self.baudrate} baud); lower rates or raise baudrate")
+        return self
+
+    def output_rates(self) -> dict[str, float]:
+        return DEFAULT_RATES | self.rates
+
+
+N2K_OUTPUTS = {"rudder": 10.0, "engine_rapid": 10.0, "engine_dynamic": 2.0, "heading": 10.0,
+               "rate_of_turn": 10.0, "position": 10.0, "cog_sog": 4.0}  # standard rates, Hz
+
+
+class CanLinkSettings(_LinkBase):
+    """A CAN bus through python-can: console frames decoded with a DBC, NMEA 2000 in and out."""
+
+    type: Literal["can"]
+    interface: str = Field("virtual", description="python-can interface: socketcan, pcan, kvaser, slcan, virtual, ...")
+    channel: str = "icebridge"
+    bitrate: int = Field(250_000, ge=10_000, le=1_000_000)
+    dbc: str = Field("console.dbc", description="console frames (relative to the config file's folder)")
+    source_address: int = Field(0x23, ge=0, le=251, description="this node's NMEA 2000 source address")
+    allowed_sources: list[Annotated[int, Field(ge=0, le=253)]] = Field(default_factory=list)
+    rudder_order_pgn: bool = Field(True, description="take PGN 127245 rudder angle orders as a helm source")
+    rates: dict[str, Annotated[float, Field(ge=0.0, le=50.0)]] = Field(default_factory=dict, description="Hz")
+
+    @field_validator("rates")
+    @classmethod
+    def _known_outputs(cls, v: dict) -> dict:
+        unknown = sorted(set(v) - set(N2K_OUTPUTS))
+        if unknown:
+            raise ValueError(f"unknown output(s) {unknown}; allowed: {', '.join(N2K_OUTPUTS)}")
+        return v
+
+    def output_rates(self) -> dict[str, float]:
+        return N2K_OUTPUTS | self.rates
+
+
+class RegisterSpec(Params):
+    """One console input register: an order, its scaling and type."""
+
+    order: Literal["rudder", "lever", "telegraph"]
+    table: Literal["holding", "input"] = "holding"
+    address: int = Field(ge=0, le=65535)
+    type: Literal["int16", "uint16"] = "int16"
+    scale: float = Field(1.0, description="engineering value = raw x scale (rudder deg, lever %, ETL code)")
+    engine: int = Field(0, ge=0, le=9)
+
+
+class WriteSpec(Params):
+    """One indicator value written to a holding register after each poll."""
+
+    value: Literal["rudder_angle", "shaft_rpm", "heading", "speed"]
+    address: int = Field(ge=0, le=65535)
+    type: Literal["int16", "uint16"] = "int16"
+    scale: float = Field(0.1, description="raw = value / scale (deg, rpm, deg, kn)")
+
+
+class ModbusLinkSettings(_LinkBase):
+    """The console's I/O polled as a Modbus TCP client or RTU master (pymodbus)."""
+
+    type: Literal["modbus"]
+    transport: Literal["tcp", "rtu"] = "tcp"
+    host: str = "127.0.0.1"
+    port: int = Field(502, ge=1, le=65535)
+    allow_network: bool = False
+    serial_port: str | None = None
+    baudrate: Literal[BAUD_RATES] = 19200
+    device_id: int = Field(1, ge=0, le=247)
+    poll_hz: float = Field(20.0, gt=0.0, le=100.0)
+    request_timeout_s: float = Field(0.2, gt=0.01, le=5.0)
+    registers: list[RegisterSpec] = Field(min_length=1)
+    writes: list[WriteSpec] = Field(default_factory=list)
+
+    @model_validator(mode="after")
+    def _checks(self) -> "ModbusLinkSettings":
+        if self.transport == "tcp":
+            _loopback_unless(self.host, self.allow_network, "host")
+        elif not self.serial_port:
+            raise ValueError("serial_port is required when transport = 'rtu'")
+        return self
+
+
+LinkSettings = Annotated[NmeaLinkSettings | CanLinkSettings | ModbusLinkSettings, Field(discriminator="type")]
+
+
+class ArbitrationSettings(Params):
+    """Which link's orders win (first fresh source in each list), and what happens when
+    every source of an order has gone stale."""
+
+    rudder: list[Name] = Field(default_factory=list, description="rudder order sources by priority")
+    engine: list[Name] = Field(default_factory=list, description="engine order sources by priority")
+    fail_safe: Literal["hold", "midships_stop"] = "midships_stop"
+    fail_safe_after_s: float = Field(3.0, ge=0.0, le=600.0, description="after every source is stale, s")

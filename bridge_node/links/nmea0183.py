@@ -1,0 +1,183 @@
+"""NMEA 0183 sentences: console orders in (ROR, ETL, PRC), ship state and alarms out.
+
+pynmea2 parses and renders the standard sentences. It has no ROR, ETL, PRC or ALR, so
+those are registered here as ``pynmea2.TalkerSentence`` subclasses (parse and render both
+work from the ``fields`` tuple). Checksums are required and verified on input, and written
+on output. Angles in degrees and speeds in knots only here, at the edge.
+"""
+from __future__ import annotations
+
+import datetime as dt
+import math
+
+import pynmea2
+
+from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, Alarm, ControlInput
+from sim_core.ship_outputs import ShipOutputs
+
+KNOT = 1852.0 / 3600.0
+MAX_LENGTH = 82  # characters including $ and CR LF
+RUDDER_ORDER_LIMIT_DEG = 90.0  # beyond this an ROR field is nonsense, not an order to clamp
+# ETL position codes (IEC 61162-1) -> telegraph positions of the ship model
+ETL_POSITIONS = {
+    "00": "stop", "01": "dead_slow_ahead", "02": "slow_ahead", "03": "half_ahead", "04": "full_ahead",
+    "05": "navigation_full_ahead", "11": "dead_slow_astern", "12": "slow_astern", "13": "half_astern",
+    "14": "full_astern", "15": "crash_astern",
+}
+# sentence -> default talker, as a real installation would send them
+DEFAULT_TALKERS = {"RMC": "GP", "GGA": "GP", "VTG": "GP", "ZDA": "GP", "HDT": "HE", "ROT": "HE", "RSA": "II",
+                   "RPM": "II", "VBW": "II", "XDR": "II", "ALR": "II"}
+DEFAULT_RATES = {"RMC": 1.0, "GGA": 1.0, "VTG": 1.0, "ZDA": 1.0, "HDT": 10.0, "ROT": 5.0, "RSA": 5.0,
+                 "RPM": 2.0, "VBW": 1.0, "XDR": 1.0}  # Hz
+TYPICAL_LENGTH = {"RMC": 72, "GGA": 74, "VTG": 40, "ZDA": 36, "HDT": 18, "ROT": 18, "RSA": 22, "RPM": 28,
+                  "VBW": 44, "XDR": 34}  # characters with CR LF, to budget a line's baud rate
+
+
+class ROR(pynmea2.TalkerSentence):
+    """Rudder order: starboard (or single) and port order, deg (- to port), statuses, source."""
+
+    fields = (("Starboard order", "stbd", float), ("Starboard status", "stbd_status"),
+              ("Port order", "port", float), ("Port status", "port_status"), ("Command source", "source"))
+
+
+class ETL(pynmea2.TalkerSentence):
+    """Engine telegraph: time, O order / A answer-back, position code, sub-telegraph,
+    location, engine number."""
+
+    fields = (("Time", "time"), ("Message type", "message_type"), ("Position", "position"),
+              ("Sub-telegraph", "sub_telegraph"), ("Location", "location"), ("Engine", "engine"))
+
+
+class PRC(pynmea2.TalkerSentence):
+    """Propulsion remote control: lever %, status, RPM demand, mode, pitch demand, mode,
+    location, engine number."""
+
+    fields = (("Lever", "lever", float), ("Lever status", "lever_status"), ("RPM demand", "rpm"),
+              ("RPM mode", "rpm_mode"), ("Pitch demand", "pitch"), ("Pitch mode", "pitch_mode"),
+              ("Location", "location"), ("Engine", "engine"))
+
+
+class ALR(pynmea2.TalkerSentence):
+    """Alarm: time, alarm number, condition (A threshold exceeded, V not), acknowledged
+    (A / V), text."""
+
+    fields = (("Time", "time"), ("Number", "number"), ("Condition", "condition"),
+              ("Acknowledged", "acknowledged"), ("Text", "text"))
+
+
+class SentenceError(ValueError):
+    """A sentence that is not a usable order; ``kind`` names the error for the counters."""
+
+    def __init__(self, kind: str, detail: str) -> None:
+        super().__init__(f"{kind}: {detail}")
+        self.kind = kind
+
+
+def _engine(text: str) -> int:
+    try:
+        n = int(text) if text else 0
+    except ValueError:
+        raise SentenceError("bad_field", f"engine number {text!r}") from None
+    if not 0 <= n <= 9:
+        raise SentenceError("out_of_range", f"engine number {n}")
+    return n
+
+
+def _finite(value, what: str, limit: float) -> float:
+    if value is None or not math.isfinite(value):
+        raise SentenceError("bad_field", f"{what} {value!r}")
+    if abs(value) > limit:
+        raise SentenceError("out_of_range", f"{what} {value} beyond +-{limit}")
+    return float(value)
+
+
+def parse_order(line: str, now: float, source: str, allowed_talkers: frozenset[str] = frozenset()) -> list[ControlInput]:
+    """The orders in one console sentence. Raises SentenceError (with a kind for the
+    counters) for anything malformed, unchecked, out of range or not an order."""
+    line = line.strip()
+    if not line.startswith("$") or len(line) + 2 > MAX_LENGTH:
+        raise SentenceError("malformed", "not a sentence, or longer than 82 characters")
+    if "*" not in line:
+        raise SentenceError("no_checksum", "checksum missing")
+    try:
+        msg = pynmea2.parse(line, check=True)
+    except pynmea2.ChecksumError:
+        raise SentenceError("bad_checksum", "checksum does not match") from None
+    except (pynmea2.ParseError, ValueError, TypeError, AttributeError):
+        raise SentenceError("malformed", "cannot parse") from None
+    if allowed_talkers and getattr(msg, "talker", "") not in allowed_talkers:
+        raise SentenceError("talker_not_allowed", f"talker {getattr(msg, 'talker', '')!r}")
+    try:
+        return _orders(msg, now, source)
+    except (ValueError, TypeError) as exc:
+        if isinstance(exc, SentenceError):
+            raise
+        raise SentenceError("bad_field", str(exc)) from None
+
+
+def _orders(msg, now: float, source: str) -> list[ControlInput]:
+    if isinstance(msg, ROR):
+        if msg.stbd_status != "A":
+            raise SentenceError("invalid_status", "ROR status is not A")
+        deg = _finite(msg.stbd, "rudder order", RUDDER_ORDER_LIMIT_DEG)
+        return [ControlInput(now, source, RUDDER, math.radians(deg))]
+    if isinstance(msg, ETL):
+        if msg.message_type != "O":
+            raise SentenceError("not_an_order", "ETL answer-back")
+        if msg.position not in ETL_POSITIONS:
+            raise SentenceError("out_of_range", f"ETL position {msg.position!r}")
+        return [ControlInput(now, source, TELEGRAPH, ETL_POSITIONS[msg.position], _engine(msg.engine))]
+    if isinstance(msg, PRC):
+        if msg.lever_status != "A":
+            raise SentenceError("invalid_status", "PRC lever status is not A")
+        return [ControlInput(now, source, LEVER, _finite(msg.lever, "lever", 100.0), _engine(msg.engine))]
+    raise SentenceError("not_an_order", f"{type(msg).__name__} is not a console order")
+
+
+def _lat(rad: float) -> tuple[str, str]:
+    deg = abs(math.degrees(rad))
+    d = int(deg)
+    return f"{d:02d}{(deg - d) * 60:07.4f}", "N" if rad >= 0 else "S"
+
+
+def _lon(rad: float) -> tuple[str, str]:
+    deg = abs(math.degrees(rad))
+    d = int(deg)
+    return f"{d:03d}{(deg - d) * 60:07.4f}", "E" if rad >= 0 else "W"
+
+
+def render_outputs(names: list[str], s: ShipOutputs, utc: dt.datetime, talkers: dict[str, str]) -> list[str]:
+    """The named output sentences for a ship state, with checksums (no CR LF)."""
+    hms = utc.strftime("%H%M%S.") + f"{utc.microsecond // 10000:02d}"
+    lat, ns = _lat(s.latitude)
+    lon, ew = _lon(s.longitude)
+    sog_kn, cog = s.speed_over_ground / KNOT, math.degrees(s.course_over_ground)
+    rudder = f"{math.degrees(s.rudder_angle):.1f}"
+    build = {
+        # mode A (autonomous): chart plotters ignore S (simulator) fixes; nav status S (safe)
+        "RMC": lambda: ("RMC", (hms, "A", lat, ns, lon, ew, f"{sog_kn:.1f}", f"{cog:.1f}", utc.strftime("%d%m%y"),
+                                "", "", "A", "S")),
+        "GGA": lambda: ("GGA", (hms, lat, ns, lon, ew, "1", "12", "0.8", "15.0", "M", "25.0", "M", "", "")),
+        "VTG": lambda: ("VTG", (f"{cog:.1f}", "T", "", "M", f"{sog_kn:.1f}", "N", f"{s.speed_over_ground * 3.6:.1f}",
+                                "K", "A")),
+        "ZDA": lambda: ("ZDA", (hms, f"{utc.day:02d}", f"{utc.month:02d}", f"{utc.year:04d}", "00", "00")),
+        "HDT": lambda: ("HDT", (f"{math.degrees(s.heading):.1f}", "T")),
+        "ROT": lambda: ("ROT", (f"{math.degrees(s.rate_of_turn) * 60.0:.1f}", "A")),
+        "RSA": lambda: ("RSA", (rudder, "A", "", "V")),
+        "RPM": lambda: ("RPM", ("S", "0", f"{s.shaft_rps * 60.0:.1f}", "", "A")),
+        "VBW": lambda: ("VBW", (f"{s.speed_longitudinal / KNOT:.2f}", f"{s.speed_transverse / KNOT:.2f}", "A",
+                                "", "", "V")),
+        "XDR": lambda: ("XDR", ("F", f"{s.ice_resistance:.0f}", "N", "ICE_RES")),
+    }
+    out = []
+    for name in names:
+        kind, fields = build[name]()
+        out.append(str(getattr(pynmea2.types.talker, kind)(talkers.get(name, DEFAULT_TALKERS[name]), kind, fields)))
+    return out
+
+
+def render_alarm(alarm: Alarm, utc: dt.datetime, talker: str = "II") -> str:
+    """ALR sentence for an alarm (text cut to fit 82 characters, no commas or asterisks)."""
+    hms = utc.strftime("%H%M%S.") + f"{utc.microsecond // 10000:02d}"
+    text = alarm.text.replace(",", ";").replace("*", "").replace("$", "")[:40]
+    return str(ALR(talker, "ALR", (hms, f"{alarm.number:03d}", "A" if alarm.active else "V", "V", text)))

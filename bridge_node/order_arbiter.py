@@ -1,0 +1,106 @@
+"""Order arbitration: several links may give the same order; the first fresh source in the
+configured priority list wins.
+
+Two orders are arbitrated: the rudder, and the engine (telegraph position or lever,
+whichever the winning source sent last). A source is fresh while its last order of that
+kind is younger than its link's timeout. When the winning source goes stale the next fresh
+one takes over and an alarm is raised; when every source is stale, the configured fail-safe
+applies after ``fail_safe_after_s`` (hold the last order, or midships and stop) and a
+second alarm is raised. Alarms clear when a source is fresh again.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, Alarm, ControlInput
+from bridge_node.links.link_settings import ArbitrationSettings
+from sim_core.world import Controls
+
+CHANNELS = {"rudder": (RUDDER,), "engine": (TELEGRAPH, LEVER)}
+ALARM_NUMBERS = {"rudder": (101, 111), "engine": (102, 112)}  # (source stale, fail-safe applied)
+
+
+@dataclass
+class _Channel:
+    sources: list[str]
+    latest: dict = field(default_factory=dict)  # source -> last ControlInput of this channel
+    active: str | None = None
+    applied: float = -math.inf  # time of the last order passed on
+    all_stale_since: float | None = None
+    fail_safe_applied: bool = False
+
+
+@dataclass
+class Decision:
+    """One tick's outcome: orders to give the ship, alarm changes, and the active sources."""
+
+    controls: Controls
+    alarms: list[Alarm]
+    active: dict[str, str | None]
+
+
+class OrderArbiter:
+    """Keeps the latest order of every source and decides which one the ship obeys."""
+
+    def __init__(self, settings: ArbitrationSettings, timeouts: dict[str, float]) -> None:
+        self.settings = settings
+        self.timeouts = timeouts
+        self.channels = {name: _Channel(list(getattr(settings, name))) for name in CHANNELS}
+        self.counts: dict[str, int] = {}
+
+    def feed(self, inputs: list[ControlInput]) -> None:
+        for order in inputs:
+            self.counts[order.source] = self.counts.get(order.source, 0) + 1
+            for name, kinds in CHANNELS.items():
+                ch = self.channels[name]
+                if order.kind in kinds and order.source in ch.sources:
+                    ch.latest[order.source] = order
+
+    def _fresh(self, ch: _Channel, now: float) -> str | None:
+        for source in ch.sources:
+            order = ch.latest.get(source)
+            if order is not None and now - order.time <= self.timeouts[source]:
+                return source
+        return None
+
+    def decide(self, now: float) -> Decision:
+        controls, alarms = Controls(), []
+        for name, ch in self.channels.items():
+            stale_no, fail_no = ALARM_NUMBERS[name]
+            source = self._fresh(ch, now)
+            if source != ch.active:
+                if ch.active is not None and source is not None:
+                    alarms.append(Alarm(stale_no, f"{name} source {ch.active} stale; using {source}", True))
+                elif source is not None:  # back from none: clear both alarms
+                    alarms.append(Alarm(stale_no, f"{name} source {source} in use", False))
+                    if ch.fail_safe_applied:
+                        alarms.append(Alarm(fail_no, f"{name} fail-safe cleared", False))
+                else:
+                    alarms.append(Alarm(stale_no, f"{name} source {ch.active} stale; no other source", True))
+                ch.active = source
+                ch.applied = -math.inf
+            if source is None:
+                ch.all_stale_since = now if ch.all_stale_since is None else ch.all_stale_since
+                waited = now - ch.all_stale_since
+                if ch.sources and not ch.fail_safe_applied and waited >= self.settings.fail_safe_after_s:
+                    ch.fail_safe_applied = True
+                    alarms.append(Alarm(fail_no, f"{name} fail-safe: {self.settings.fail_safe}", True))
+                    if self.settings.fail_safe == "midships_stop":
+                        if name == "rudder":
+                            controls.rudder = 0.0
+                        else:
+                            controls.telegraph = "stop"
+                continue
+            ch.all_stale_since = None
+            ch.fail_safe_applied = False
+            order = ch.latest[source]
+            if order.time > ch.applied:
+                ch.applied = order.time
+                if order.kind == RUDDER:
+                    controls.rudder = float(order.value)
+                elif order.kind == TELEGRAPH:
+                    controls.telegraph = str(order.value)
+                else:
+                    controls.lever = float(order.value)
+        return Decision(controls, alarms, {n: c.active for n, c in self.channels.items()})

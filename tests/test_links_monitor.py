@@ -1,0 +1,109 @@
+"""``icebridge links monitor`` as a user runs it, and the session record surviving a kill."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import serial
+
+from bridge_node.links.nmea0183 import PRC, ROR
+from conftest import REPO, run_cli
+from links_helpers import pty_pair
+
+
+def write_config(tmp_path, port: str, udp_port: int | None = None) -> str:
+    cfg = tmp_path / "node.toml"
+    cfg.write_text(
+        '[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n'
+        f'[[links]]\nname = "console"\ntype = "nmea0183"\nport = "{port}"\nbaudrate = 38400\n'
+        f'udp_port = {udp_port or 10110}\n'
+        '[arbitration]\nrudder = ["console"]\nengine = ["console"]\nfail_safe_after_s = 1.0\n'
+    )
+    return str(cfg)
+
+
+def start_monitor(cfg: str, record, *extra) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "bridge_node", "links", "monitor", "--config", cfg,
+                             "--record", str(record), *extra], cwd=REPO, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def wait_ready(record, proc, timeout: float = 30.0) -> None:
+    """The node has opened its links once its session record exists."""
+    t0 = time.monotonic()
+    while not (record / "nmea.log").exists():
+        assert proc.poll() is None, proc.stderr.read()
+        assert time.monotonic() - t0 < timeout
+        time.sleep(0.05)
+
+
+def test_monitor_json_summary(tmp_path):
+    with pty_pair(tmp_path) as (node_end, console_end):
+        record = tmp_path / "rec"
+        proc = start_monitor(write_config(tmp_path, node_end), record, "--duration", "6", "--json")
+        wait_ready(record, proc)
+        port = serial.Serial(console_end, 38400, timeout=0)
+        for _ in range(30):  # 3 s of orders, then silence: stale after 1 s, fail-safe 1 s later
+            port.write((str(ROR("RC", "ROR", ("20.0", "A", "", "V", "B"))) + "\r\n").encode())
+            port.write((str(PRC("RC", "PRC", ("50.0", "A", "", "V", "", "V", "B", "0"))) + "\r\n").encode())
+            port.write(b"$RCROR,20.0,A,,V,B*00\r\n")
+            time.sleep(0.1)
+        out, err = proc.communicate(timeout=30)
+        port.close()
+    assert proc.returncode == 0, err
+    s = json.loads(out)
+    assert s["orders"]["console/rudder/0"]["count"] == 30
+    assert abs(s["orders"]["console/rudder/0"]["last"] - 0.349066) < 1e-5
+    assert s["orders"]["console/lever/0"]["last"] == 50.0
+    assert s["errors"] == {"bad_checksum": 30}
+    assert s["outputs"]["console"] > 20
+    # the open-water ship obeyed the console, and is turning back to midships since the fail-safe
+    assert 10.0 < s["ship"]["rudder_deg"] < 20.0
+    assert any(a["number"] == 111 and a["active"] for a in s["alarms"])  # console went silent: fail-safe
+
+
+def test_session_record_readable_after_kill(tmp_path):
+    with pty_pair(tmp_path) as (node_end, console_end):
+        record = tmp_path / "rec"
+        proc = start_monitor(write_config(tmp_path, node_end), record)
+        wait_ready(record, proc)
+        port = serial.Serial(console_end, 38400, timeout=0)
+        t_end = time.time() + 3.0
+        sent = 0
+        while time.time() < t_end:
+            port.write((str(ROR("RC", "ROR", (f"{sent % 30}.0", "A", "", "V", "B"))) + "\r\n").encode())
+            sent += 1
+            time.sleep(0.05)
+        killed_at = time.time()
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(10)
+        port.close()
+    lines = (record / "nmea.log").read_text().splitlines()
+    rx = [line for line in lines if " rx " in line]
+    assert all(len(line.split(" ", 3)) == 4 for line in lines)  # every line whole
+    assert rx and float(rx[-1].split()[0]) > killed_at - 1.0  # at most a second lost
+    assert len(rx) > 0.5 * sent
+
+
+def test_monitor_without_links_is_a_clear_error():
+    r = run_cli("links", "monitor", "--duration", "1")
+    assert r.returncode == 2 and "no [[links]] configured" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_link_config_errors_name_the_key(tmp_path):
+    cfg = tmp_path / "bad.toml"
+    cfg.write_text('[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n'
+                   '[[links]]\nname = "a"\ntype = "carrier_pigeon"\n')
+    r = run_cli("links", "monitor", "--config", str(cfg), "--duration", "1")
+    assert r.returncode == 2 and str(cfg) in r.stderr and "links.0" in r.stderr and "carrier_pigeon" in r.stderr
+    cfg.write_text('[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n'
+                   '[[links]]\nname = "a"\ntype = "can"\nbitrate = 5\n[arbitration]\nrudder = ["b"]\n')
+    r = run_cli("links", "monitor", "--config", str(cfg), "--duration", "1")
+    assert r.returncode == 2 and "links.0.can.bitrate = 5" in r.stderr
+    cfg.write_text('[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n'
+                   '[[links]]\nname = "a"\ntype = "can"\n[arbitration]\nrudder = ["b"]\n')
+    r = run_cli("links", "monitor", "--config", str(cfg), "--duration", "1")
+    assert r.returncode == 2 and "arbitration.rudder: unknown link(s) ['b']" in r.stderr
+    assert "Traceback" not in r.stderr

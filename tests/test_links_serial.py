@@ -1,0 +1,118 @@
+"""Serial NMEA 0183 link over a real pty pair (socat): console sentences in at real baud
+pacing, instrument sentences out (parsed back with pynmea2), and the UDP mirror on loopback."""
+import math
+import socket
+import time
+
+import pynmea2
+import pytest
+import serial
+
+from bridge_node.link_hub import LinkHub
+from bridge_node.links.nmea0183 import ETL, PRC, ROR
+from links_helpers import node_config, paced_write, pty_pair, wait_for
+from test_links_can import STATE
+
+KNOT = 1852 / 3600
+
+
+def udp_listener() -> socket.socket:
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.bind(("127.0.0.1", 0))
+    s.settimeout(0.5)
+    return s
+
+
+@pytest.mark.parametrize("baud", [4800, 38400])
+def test_console_orders_and_instrument_outputs_over_a_pty(tmp_path, baud):
+    udp = udp_listener()
+    with pty_pair(tmp_path) as (node_end, console_end):
+        cfg = node_config([{"type": "nmea0183", "name": "nmea", "port": node_end, "baudrate": baud,
+                            "udp_port": udp.getsockname()[1], "rates": {"RMC": 1, "GGA": 1, "VTG": 0, "ZDA": 0,
+                            "HDT": 5, "ROT": 1, "RSA": 1, "RPM": 1, "VBW": 0, "XDR": 0}}],
+                          rudder=["nmea"], engine=["nmea"])
+        hub = LinkHub(cfg, None)
+        hub.open()
+        console = serial.Serial(console_end, baud, timeout=0)
+        try:
+            paced_write(console, [str(ROR("RC", "ROR", ("-22.0", "A", "", "V", "B"))),
+                                  str(ETL("RC", "ETL", ("120000.00", "O", "02", "30", "B", "0")))], baud)
+            got = {}
+
+            def tick():
+                c = hub.tick(STATE, time.monotonic()).controls
+                got.update({k: v for k, v in vars(c).items() if v is not None})
+            wait_for(lambda: "rudder" in got and "telegraph" in got, poll=tick)
+            assert got["rudder"] == pytest.approx(math.radians(-22.0))
+            assert got["telegraph"] == "slow_ahead"
+            paced_write(console, [str(PRC("RC", "PRC", ("-45.0", "A", "", "V", "", "V", "B", "0")))], baud)
+            wait_for(lambda: "lever" in got, poll=tick)
+            assert got["lever"] == -45.0
+            # instrument sentences on the line: parse every one with pynmea2 (checksums checked)
+            text = b""
+            deadline = time.monotonic() + 1.5
+            while time.monotonic() < deadline:
+                hub.tick(STATE, time.monotonic())
+                text += console.read(4096)
+                time.sleep(0.02)
+        finally:
+            console.close()
+            hub.close()
+    msgs = {}
+    for line in text.decode().split("\r\n"):
+        if line:
+            m = pynmea2.parse(line, check=True)
+            msgs[m.sentence_type] = m
+            assert m.talker == {"RMC": "GP", "GGA": "GP", "HDT": "HE", "ROT": "HE"}.get(m.sentence_type, "II")
+    assert float(msgs["HDT"].heading) == pytest.approx(123.4, abs=0.05)
+    assert float(msgs["RSA"].rsa_starboard) == pytest.approx(-12.3, abs=0.05)
+    assert float(msgs["RPM"].speed) == pytest.approx(STATE.shaft_rps * 60, abs=0.05)
+    assert float(msgs["ROT"].rate_of_turn) == pytest.approx(0.35 * 60, abs=0.05)
+    assert msgs["GGA"].latitude == pytest.approx(74.0012345, abs=1e-5)
+    assert msgs["GGA"].longitude == pytest.approx(20.0054321, abs=1e-5)
+    assert msgs["RMC"].spd_over_grnd == pytest.approx(STATE.speed_over_ground / KNOT, abs=0.05)
+    # the same stream on UDP, on loopback
+    datagrams = set()
+    try:
+        while True:
+            datagrams.add(pynmea2.parse(udp.recv(200).decode().strip(), check=True).sentence_type)
+    except socket.timeout:
+        pass
+    udp.close()
+    assert {"RMC", "GGA", "HDT", "ROT", "RSA", "RPM"} <= datagrams
+
+
+def test_bad_sentences_on_the_line_are_counted_not_fatal(tmp_path):
+    with pty_pair(tmp_path) as (node_end, console_end):
+        cfg = node_config([{"type": "nmea0183", "name": "nmea", "port": node_end, "udp_port": None,
+                            "allowed_talkers": ["RC"]}], rudder=["nmea"])
+        hub = LinkHub(cfg, None)
+        hub.open()
+        console = serial.Serial(console_end, 38400, timeout=0)
+        try:
+            good = str(ROR("RC", "ROR", ("5.0", "A", "", "V", "B")))
+            console.write(b"\x00\xff garbage\r\n$RCROR,5.0,A,,V,B*00\r\n$RCROR,5.0,A\r\n"
+                          + str(ROR("XX", "ROR", ("5.0", "A", "", "V", "B"))).encode() + b"\r\n"
+                          + str(ROR("RC", "ROR", ("nan", "A", "", "V", "B"))).encode() + b"\r\n"
+                          + str(ROR("RC", "ROR", ("500", "A", "", "V", "B"))).encode() + b"\r\n"
+                          + good.encode() + b"\r\n")
+            got = []
+            wait_for(lambda: got, poll=lambda: got.extend(
+                [r for r in [hub.tick(STATE, time.monotonic()).controls.rudder] if r is not None]))
+        finally:
+            console.close()
+            hub.close()
+    assert got == [pytest.approx(math.radians(5.0))]
+    e = hub.links[0].health().errors
+    assert e["malformed"] == 1 and e["bad_checksum"] == 1 and e["no_checksum"] == 1
+    assert e["talker_not_allowed"] == 1 and e["bad_field"] == 1 and e["out_of_range"] == 1
+
+
+def test_output_rates_beyond_the_baud_budget_are_a_config_error():
+    from pydantic import ValidationError
+
+    with pytest.raises(ValidationError, match="more than 384"):
+        node_config([{"type": "nmea0183", "name": "nmea", "port": "/dev/null", "baudrate": 4800,
+                      "rates": {"HDT": 20, "GGA": 5}}])
+    with pytest.raises(ValidationError, match="not a loopback address"):
+        node_config([{"type": "nmea0183", "name": "nmea", "udp_host": "192.168.1.20"}])
