@@ -9,10 +9,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from bridge_node import experiment_command, links_command, prefracture_command, trial_command
+from bridge_node import experiment_command, links_command, prefracture_command, run_command, trial_command
 from bridge_node.errors import UserError
 
 COMMANDS = {
+    "run": (run_command, "run the node in real time: console links, ship, ice world, instrument outputs"),
     "prefracture": (prefracture_command, "build the pre-fractured tile templates (paper §2.1)"),
     "trial": (trial_command, "run a standard manoeuvring trial (turning, zig-zag, crash stop)"),
     "experiment": (experiment_command, "run the paper's ice experiments (breaking, transit)"),

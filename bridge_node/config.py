@@ -52,6 +52,12 @@ class ExerciseSettings(Params):
     start_telegraph: Literal[TELEGRAPH_POSITIONS] | None = Field("full_ahead", description="engine order at the start")
 
 
+class RealtimeSettings(Params):
+    """The real-time loop."""
+
+    rate_hz: float = Field(30.0, ge=5.0, le=120.0, description="world steps per second")
+
+
 class NodeConfig(Params):
     """The whole node's configuration. ``ice_field`` and ``ship`` are required."""
 
@@ -62,6 +68,7 @@ class NodeConfig(Params):
     ice_field: IceFieldSettings
     ice_dynamics: IceDynamicsSettings = IceDynamicsSettings()
     scene: SceneSettings = SceneSettings()
+    realtime: RealtimeSettings = RealtimeSettings()
     links: list[LinkSettings] = Field(default_factory=list)
     arbitration: ArbitrationSettings = ArbitrationSettings()
     paths: PathSettings = PathSettings()

@@ -5,7 +5,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-SYSTEM_PACKAGES=(socat)  # socat: pty pairs for the serial and Modbus RTU link tests
+# socat: pty pairs for the serial and Modbus RTU link tests; EGL + Mesa: headless rendering
+SYSTEM_PACKAGES=(socat libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri)
 
 missing=()
 for pkg in "${SYSTEM_PACKAGES[@]}"; do

@@ -107,3 +107,11 @@ def test_link_config_errors_name_the_key(tmp_path):
     r = run_cli("links", "monitor", "--config", str(cfg), "--duration", "1")
     assert r.returncode == 2 and "arbitration.rudder: unknown link(s) ['b']" in r.stderr
     assert "Traceback" not in r.stderr
+
+
+def test_shipped_console_example_config_is_valid():
+    from bridge_node.config import DEFAULT_CONFIG, load_config
+
+    cfg = load_config(DEFAULT_CONFIG.parent / "bridge_console.toml")
+    assert [link.type for link in cfg.links] == ["can", "nmea0183", "modbus"]
+    assert cfg.arbitration.rudder == ["console_can", "console_nmea", "wing_io"]
