@@ -9,7 +9,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from bridge_node import experiment_command, links_command, prefracture_command, run_command, trial_command
+from bridge_node import (experiment_command, links_command, prefracture_command, render_snapshot_command, run_command,
+                         trial_command)
 from bridge_node.errors import UserError
 
 COMMANDS = {
@@ -17,6 +18,7 @@ COMMANDS = {
     "prefracture": (prefracture_command, "build the pre-fractured tile templates (paper §2.1)"),
     "trial": (trial_command, "run a standard manoeuvring trial (turning, zig-zag, crash stop)"),
     "experiment": (experiment_command, "run the paper's ice experiments (breaking, transit)"),
+    "render-snapshot": (render_snapshot_command, "render the projector channels of the exercise to PNGs"),
     "links": (links_command, "commission the console links: show orders and health, publish a ship"),
 }
 

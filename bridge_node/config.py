@@ -13,6 +13,7 @@ from pydantic import Field, ValidationError, model_validator
 
 from bridge_node.errors import UserError
 from bridge_node.links.link_settings import ArbitrationSettings, LinkSettings
+from bridge_node.render.render_settings import RenderSettings
 from sim_core.ice_field import IceFieldSettings
 from sim_core.ice_material import IceMaterial
 from sim_core.ice_model import IceDynamicsSettings
@@ -69,6 +70,7 @@ class NodeConfig(Params):
     ice_dynamics: IceDynamicsSettings = IceDynamicsSettings()
     scene: SceneSettings = SceneSettings()
     realtime: RealtimeSettings = RealtimeSettings()
+    render: RenderSettings = RenderSettings()
     links: list[LinkSettings] = Field(default_factory=list)
     arbitration: ArbitrationSettings = ArbitrationSettings()
     paths: PathSettings = PathSettings()

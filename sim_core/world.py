@@ -24,7 +24,7 @@ from sim_core.hull_contour import ship_to_world, waterline_contour, world_headin
 from sim_core.ice_dynamics import HullMotion, IceData, freeze_tile, ice_step, new_ice_data, place_tile, thaw_tile
 from sim_core.ice_model import IceModel
 from sim_core.ice_resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
-from sim_core.ice_scene import (BREAKABLE, FROZEN, SceneData, SceneModel, new_scene_data, tile_corner,
+from sim_core.ice_scene import (BREAKABLE, FROZEN, SceneData, SceneModel, SceneUpdate, new_scene_data, tile_corner,
                                 tile_layout, update_scene)
 from sim_core.ship_model import ShipData, ShipModel
 from sim_core.tile_quadtree import tile_under
@@ -118,7 +118,8 @@ def hull_world(model: WorldModel, ship: ShipData) -> tuple[np.ndarray, HullMotio
             HullMotion(np.array([east, north]), world_heading(psi), velocity, -r))
 
 
-def _apply_swaps(model: WorldModel, data: WorldData, update) -> None:
+def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate) -> None:
+    """Carry out a scene update in the ice world: place, thaw and freeze tiles."""
     scene, placement = model.scene, data.scene.placement
     for tile in update.place:
         template, turns = tile_layout(scene, tile)
@@ -151,7 +152,7 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
     ship_model.step(model.ship, ship, dt)
     contour, hull = hull_world(model, ship)
     update = update_scene(model.scene, data.scene, contour, hull.xy)
-    _apply_swaps(model, data, update)
+    apply_swaps(model, data, update)
     report = ice_step(model.ice, data.ice, hull, dt)
     psi = ship.eta[5]
     fx, fy = report.hull_force

@@ -1,0 +1,70 @@
+"""Channels of the projection system and the look of the scene (``[render]`` in the config).
+
+A channel is one projector: its view direction relative to the ship's head (yaw, + to
+starboard; pitch, + up), its field of view, resolution, eye point on the bridge (ship
+frame: x forward, y to starboard, z up from the waterline, m), edge-blend bands (degrees at
+its left and right edges, where it overlaps its neighbours), and its output: PNG frames
+offscreen, or ``none`` (render only, for timing).
+"""
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from sim_core.params import Params
+
+
+class ChannelSettings(Params):
+    name: Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9_\-]+$")]
+    yaw_deg: float = Field(0.0, ge=-180.0, le=180.0, description="view direction from the bow, + starboard")
+    pitch_deg: float = Field(0.0, ge=-60.0, le=60.0, description="+ up")
+    hfov_deg: float = Field(60.0, gt=1.0, lt=170.0, description="horizontal field of view")
+    vfov_deg: float | None = Field(None, gt=1.0, lt=170.0, description="unset: from hfov and the aspect ratio")
+    width: int = Field(1280, ge=16, le=8192)
+    height: int = Field(720, ge=16, le=8192)
+    eye: tuple[float, float, float] = Field((10.0, 0.0, 25.0), description="ship frame, m")
+    blend_left_deg: float = Field(0.0, ge=0.0, le=30.0)
+    blend_right_deg: float = Field(0.0, ge=0.0, le=30.0)
+    gamma: float = Field(2.2, ge=1.0, le=3.0, description="projector gamma for the blend ramps")
+    output: Literal["png", "none"] = "png"
+
+    @model_validator(mode="after")
+    def _blend_fits(self) -> "ChannelSettings":
+        if self.blend_left_deg + self.blend_right_deg >= self.hfov_deg:
+            raise ValueError(f"blend bands ({self.blend_left_deg} + {self.blend_right_deg} deg) must be "
+                             f"narrower than hfov_deg = {self.hfov_deg}")
+        return self
+
+    def vfov(self) -> float:
+        """Vertical field of view, rad."""
+        if self.vfov_deg is not None:
+            return math.radians(self.vfov_deg)
+        return 2.0 * math.atan(math.tan(math.radians(self.hfov_deg) / 2.0) * self.height / self.width)
+
+
+def _front_channels() -> list[ChannelSettings]:
+    return [ChannelSettings(name="port", yaw_deg=-55.0, blend_right_deg=5.0),
+            ChannelSettings(name="centre", yaw_deg=0.0, blend_left_deg=5.0, blend_right_deg=5.0),
+            ChannelSettings(name="starboard", yaw_deg=55.0, blend_left_deg=5.0),
+            ChannelSettings(name="astern", yaw_deg=180.0, eye=(-60.0, 0.0, 25.0))]
+
+
+class RenderSettings(Params):
+    """The projection system and the environment's look."""
+
+    channels: list[ChannelSettings] = Field(default_factory=_front_channels, min_length=1)
+    visibility_m: float = Field(8000.0, ge=50.0, le=100_000.0, description="meteorological visibility")
+    far_m: float = Field(20_000.0, ge=500.0, le=200_000.0, description="far clip distance")
+    sun_elevation_deg: float = Field(25.0, ge=-10.0, le=90.0)
+    sun_azimuth_deg: float = Field(150.0, ge=0.0, lt=360.0)
+    freeboard_m: float = Field(9.0, ge=0.5, le=40.0, description="own ship's deck height above the waterline")
+
+    @model_validator(mode="after")
+    def _unique_names(self) -> "RenderSettings":
+        names = [c.name for c in self.channels]
+        doubled = sorted({n for n in names if names.count(n) > 1})
+        if doubled:
+            raise ValueError(f"channel names must be unique, repeated: {doubled}")
+        return self

@@ -1,0 +1,172 @@
+"""Projector channels rendered offscreen through EGL (Mesa llvmpipe here): what each channel
+shows, where its horizon sits, blending between neighbours, and floe poses in the pixels."""
+import math
+
+import numpy as np
+import pytest
+
+from bridge_node.config import load_config
+from bridge_node.render.channel_output import ChannelSet, blend_ramp, create_context
+from bridge_node.render.render_settings import ChannelSettings, RenderSettings
+from bridge_node.render.scene_renderer import SceneRenderer
+from bridge_node.world_setup import build_world, start_world
+from conftest import run_cli
+from sim_core.floe_state import FREE
+from sim_core.world import step
+
+W, H = 192, 108
+
+
+def channel(name="c", **kw) -> ChannelSettings:
+    return ChannelSettings(name=name, width=W, height=H, **kw)
+
+
+@pytest.fixture(scope="module")
+def exercise(tmp_path_factory):
+    """A 400 m x 600 m field of 0.5 m ice, B = 50 m; the ship has steamed 70 s into it."""
+    base = load_config()
+    cfg = base.model_copy(update={
+        "fracture": base.fracture.model_copy(update={"tile_side": 50.0}),
+        "ice_field": base.ice_field.model_copy(update={"width": 400.0, "height": 600.0}),
+        "paths": base.paths.model_copy(update={"cache_dir": str(tmp_path_factory.getbasetemp() / "tiles")}),
+        "exercise": base.exercise.model_copy(update={"start_north": -60.0}),
+    })
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    for _ in range(700):
+        step(model, data, 0.1)
+    return model, data
+
+
+@pytest.fixture(scope="module")
+def ctx():
+    return create_context()
+
+
+def render(ctx, model, data, channels, visibility=8000.0, blended=True):
+    settings = RenderSettings(channels=channels, visibility_m=visibility)
+    cs = ChannelSet(SceneRenderer(ctx, model, settings), channels)
+    cs.render(data)
+    return [t.image(blended) for t in cs.targets]
+
+
+def is_sky(px):
+    return (px[..., 2].astype(int) - px[..., 0] > 25) & (px.mean(axis=-1) > 120)
+
+
+def is_water(px):
+    return px.mean(axis=-1) < 90
+
+
+def is_ice(px):
+    return (px.mean(axis=-1) > 170) & (np.abs(px[..., 2].astype(int) - px[..., 0]) < 30)
+
+
+def test_open_water_view_shows_sky_and_water(ctx, exercise):
+    model, data = exercise
+    north = data.ship.eta[0]
+    data.ship.eta[0] = -3000.0  # 3 km south of the field, looking south: open water
+    try:
+        img, = render(ctx, model, data, [channel(yaw_deg=180.0)])
+    finally:
+        data.ship.eta[0] = north
+    assert is_sky(img[: H // 3]).mean() > 0.95
+    assert is_water(img[-H // 4:]).mean() > 0.95
+
+
+def test_ice_field_ahead_and_the_other_side(ctx, exercise):
+    model, data = exercise
+    ahead, behind = render(ctx, model, data, [channel("ahead", pitch_deg=-20.0, eye=(80.0, 0.0, 20.0)),
+                                              channel("behind", yaw_deg=180.0, pitch_deg=-20.0, eye=(80.0, 0.0, 20.0))])
+    rows = slice(H // 2, None)  # below the horizon, near the ship
+    assert is_ice(ahead[rows]).mean() > 0.6  # level ice ahead of the bow
+    # the ship's own channel astern: broken floes and open water, darker than level ice
+    assert behind[rows][:, W // 3: 2 * W // 3].mean() < ahead[rows][:, W // 3: 2 * W // 3].mean() - 40
+    assert not np.array_equal(ahead, behind)
+
+
+@pytest.mark.parametrize("pitch", [-10.0, 0.0, 12.0])
+def test_horizon_sits_where_pitch_and_fov_put_it(ctx, exercise, pitch):
+    model, data = exercise
+    c = channel(yaw_deg=180.0, pitch_deg=pitch, eye=(-80.0, 0.0, 20.0))
+    img, = render(ctx, model, data, [c], visibility=100_000.0)
+    column = img[:, W // 2].astype(float).mean(axis=1)
+    first_dark = int(np.argmax(column < 0.5 * (column[0] + column[-1])))
+    # horizon (elevation ~0: the sea edge at 20 km lies 0.06 deg below it) in NDC: -tan(pitch)/tan(vfov/2)
+    y_ndc = -math.tan(math.radians(pitch)) / math.tan(c.vfov() / 2)
+    expected = (1 - y_ndc) / 2 * H
+    assert abs(first_dark - expected) <= 1.5
+
+
+def neighbours():
+    return [channel("left", yaw_deg=-27.5, blend_right_deg=5.0, pitch_deg=-15.0, eye=(-70.0, 0.0, 20.0)),
+            channel("right", yaw_deg=27.5, blend_left_deg=5.0, pitch_deg=-15.0, eye=(-70.0, 0.0, 20.0))]
+
+
+def column_at(c: ChannelSettings, azimuth_deg: float) -> int:
+    """Pixel column showing the azimuth (deg from the channel's centre)."""
+    t = math.tan(math.radians(azimuth_deg)) / math.tan(math.radians(c.hfov_deg) / 2)
+    return int(round((t + 1) / 2 * c.width - 0.5))
+
+
+def test_neighbouring_channels_agree_in_their_overlap(ctx, exercise):
+    model, data = exercise
+    left, right = neighbours()
+    a, b = render(ctx, model, data, [left, right], blended=False)
+    for world_az in (-1.5, 0.0, 1.5):  # inside the 5 deg overlap centred on the bow
+        ca, cb = column_at(left, world_az + 27.5), column_at(right, world_az - 27.5)
+        # rows differ slightly off-centre (the frusta are rotated): compare the lower half
+        diff = np.abs(a[H // 2:, ca].astype(int) - b[H // 2:, cb].astype(int)).mean()
+        assert diff < 12
+
+
+def test_blend_ramps_sum_to_one_across_the_overlap(ctx, exercise):
+    left, right = neighbours()
+    world = np.radians(np.linspace(-2.5, 2.5, 101))
+    total = blend_ramp(left, world + math.radians(27.5)) + blend_ramp(right, world - math.radians(27.5))
+    np.testing.assert_allclose(total, 1.0, atol=1e-12)
+    # and in the rendered pixels: in linear light the two blended images add up to the scene
+    model, data = exercise
+    (sa, sb), (ba, bb) = (render(ctx, model, data, [left, right], blended=flag) for flag in (False, True))
+    for world_az in (-2.0, -1.0, 0.0, 1.0, 2.0):
+        ca, cb = column_at(left, world_az + 27.5), column_at(right, world_az - 27.5)
+        lin = lambda px: (px[H // 2:].astype(float) / 255.0) ** 2.2  # noqa: E731
+        summed = lin(ba[:, ca]) + lin(bb[:, cb])
+        scene = 0.5 * (lin(sa[:, ca]) + lin(sb[:, cb]))
+        assert np.abs(summed - scene).mean() < 0.03
+
+
+def test_floe_heave_roll_and_pitch_change_its_pixels(ctx, exercise):
+    model, data = exercise
+    st = data.ice.state
+    c = channel(yaw_deg=180.0, pitch_deg=-35.0, eye=(-75.0, 0.0, 20.0))
+    # the free floe nearest the spot this channel looks at
+    psi = data.ship.eta[5]
+    stern = np.array([data.ship.eta[1] - 75 * math.sin(psi), data.ship.eta[0] - 75 * math.cos(psi)])
+    spot = stern - 20.0 / math.tan(math.radians(35.0)) * np.array([math.sin(psi), math.cos(psi)])
+    free = np.nonzero(st.status == FREE)[0]
+    row = free[np.argmin(np.linalg.norm(st.xy[free] - spot, axis=1))]
+    before, = render(ctx, model, data, [c])
+    saved = st.heave[row], st.roll[row], st.pitch[row]
+    changed = []
+    for field, value in (("heave", saved[0] + 0.4), ("roll", 0.35), ("pitch", 0.35)):
+        getattr(st, field)[row] = value
+        after, = render(ctx, model, data, [c])
+        getattr(st, field)[row] = saved[("heave", "roll", "pitch").index(field)]
+        changed.append(int((np.abs(after.astype(int) - before.astype(int)).sum(axis=-1) > 30).sum()))
+    assert min(changed) >= 3, changed
+
+
+def test_bad_channel_config_is_a_clear_error(tmp_path):
+    cfg = tmp_path / "bad.toml"
+    base = '[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n'
+    cases = {
+        '[[render.channels]]\nname = "a"\nhfov_deg = 0.0\n': "render.channels.0.hfov_deg = 0.0",
+        '[[render.channels]]\nname = "a"\n[[render.channels]]\nname = "a"\n': "channel names must be unique",
+        '[[render.channels]]\nname = "a"\noutput = "hologram"\n': "render.channels.0.output = 'hologram'",
+    }
+    for text, message in cases.items():
+        cfg.write_text(base + text)
+        r = run_cli("render-snapshot", "--config", str(cfg), "--time", "0")
+        assert r.returncode == 2 and message in r.stderr and str(cfg) in r.stderr, r.stderr
+        assert "Traceback" not in r.stderr
