@@ -22,6 +22,7 @@ from bridge_node.render.render_settings import ChannelSettings, RenderSettings
 from sim_core.ice_scene import BREAKABLE
 from sim_core.world import WorldData, WorldModel
 
+GL_CLIP_DISTANCE0 = 0x3000
 POSE_WIDTH = 2048  # texels per line of the pose textures
 NEAR = 0.5  # m
 SKY_HORIZON, SKY_ZENITH = (0.78, 0.84, 0.90), (0.38, 0.55, 0.78)
@@ -70,15 +71,21 @@ def channel_camera(channel: ChannelSettings, north: float, east: float, psi: flo
 
 
 def _template_vertices(model: WorldModel, template: int) -> np.ndarray:
-    """Interleaved (position 3f, normal 3f, cell index i4) of every triangle of a template."""
+    """Interleaved (position 3f, normal 3f, cell index i4) of the triangles of a template
+    that can be seen from above the water: bottom faces are left out. Triangles are wound
+    counter-clockwise seen from outside, so back faces can be culled."""
     ice = model.ice
     g0, g1 = ice.template_start[template], ice.template_start[template + 1]
     t0, t1 = ice.tri_start[g0], ice.tri_start[g1]
-    tris = ice.tris[t0:t1]
+    tris = ice.tris[t0:t1].copy()
     cell = np.repeat(np.arange(g1 - g0), np.diff(ice.tri_start[g0:g1 + 1]))
     n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
-    n *= np.where((n * tris.mean(axis=1)).sum(axis=1) < 0.0, -1.0, 1.0)[:, None]  # outward from the centroid
+    inward = (n * tris.mean(axis=1)).sum(axis=1) < 0.0  # the centroid is the origin
+    n[inward] *= -1.0
+    tris[inward] = tris[inward][:, ::-1]
+    keep = n[:, 2] > -0.5
+    tris, n, cell = tris[keep], n[keep], cell[keep]
     out = np.zeros(len(tris) * 3, dtype=[("p", "f4", 3), ("n", "f4", 3), ("c", "i4")])
     out["p"] = tris.reshape(-1, 3)
     out["n"] = np.repeat(n, 3, axis=0)
@@ -111,19 +118,12 @@ class SceneRenderer:
     def __init__(self, ctx: moderngl.Context, model: WorldModel, settings: RenderSettings) -> None:
         self.ctx, self.model, self.settings = ctx, model, settings
         scene = model.scene
-        self.sky = ctx.program(vertex_shader=shaders.SKY_VS, fragment_shader=shaders.SKY_FS)
-        self.sea = ctx.program(vertex_shader=shaders.PLANE_VS, fragment_shader=shaders.SEA_FS)
-        self.slab = ctx.program(vertex_shader=shaders.PLANE_VS, fragment_shader=shaders.SLAB_FS)
+        self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=shaders.ENV_FS)
         self.floe = ctx.program(vertex_shader=shaders.FLOE_VS, fragment_shader=shaders.FLOE_FS)
         self.ship = ctx.program(vertex_shader=shaders.SHIP_VS, fragment_shader=shaders.SHIP_FS)
         tri = ctx.buffer(np.array([[-1, -1], [3, -1], [-1, 3]], dtype="f4").tobytes())
-        self.sky_vao = ctx.vertex_array(self.sky, [(tri, "2f", "in_ndc")])
+        self.env_vao = ctx.vertex_array(self.env, [(tri, "2f", "in_ndc")])
         self.quad = ctx.buffer(np.array([[-1, -1], [1, -1], [1, 1], [-1, -1], [1, 1], [-1, 1]], dtype="f4").tobytes())
-        self.plane_buf = ctx.buffer(reserve=6 * 2 * 4)
-        self.sea_vao = ctx.vertex_array(self.sea, [(self.plane_buf, "2f", "in_xy")])
-        field = np.array([[0, 0], [1, 0], [1, 1], [0, 0], [1, 1], [0, 1]], dtype="f4") * [scene.nx * scene.side,
-                                                                                       scene.ny * scene.side]
-        self.slab_vao = ctx.vertex_array(self.slab, [(ctx.buffer(field.astype("f4").tobytes()), "2f", "in_xy")])
         self.tile_state = ctx.texture((scene.nx, scene.ny), 1, dtype="u1")
         self.tile_state.filter = moderngl.NEAREST, moderngl.NEAREST
         self._tile_state = np.full(scene.nx * scene.ny, 255, dtype=np.uint8)  # forces the first upload
@@ -219,31 +219,27 @@ class SceneRenderer:
         vp = cam.view_proj
         ctx.clear(*FOG, depth=1.0)
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
-        self.sky["inv_view_proj"].write(_mat(np.linalg.inv(vp)))
-        self.sky["horizon_colour"].value, self.sky["zenith_colour"].value = SKY_HORIZON, SKY_ZENITH
-        self.sky["fog_colour"].value = FOG
-        self.sky_vao.render()
         fog = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "fog_colour": FOG}
-        half = s.far_m
-        sea = np.array([[-1, -1], [1, -1], [1, 1], [-1, -1], [1, 1], [-1, 1]], dtype="f4") * half + cam.eye[:2]
-        self.plane_buf.write(sea.astype("f4").tobytes())
-        self._set(self.sea, view_proj=vp, z=0.0, water_colour=WATER, **fog)
-        self.sea_vao.render()
-        ctx.enable(moderngl.DEPTH_TEST)
-        self.tile_state.use(0)
         scene = self.model.scene
-        self._set(self.slab, view_proj=vp, z=self.slab_z, tile_state=0, field_size=(scene.nx * scene.side,
-                  scene.ny * scene.side), tile_side=scene.side, ice_colour=ICE_INTACT,
-                  light=0.7 + 0.3 * max(self.sun[2], 0.0), **fog)
-        self.slab_vao.render()
+        self.tile_state.use(0)
+        ice = tuple(c * (0.7 + 0.3 * max(self.sun[2], 0.0)) for c in ICE_INTACT)
+        self._set(self.env, inv_view_proj=np.linalg.inv(vp), horizon_colour=SKY_HORIZON, zenith_colour=SKY_ZENITH,
+                  water_colour=WATER, ice_colour=ice, slab_z=self.slab_z, far=s.far_m, tile_state=0,
+                  field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **fog)
+        self.env_vao.render()
+        ctx.enable(moderngl.DEPTH_TEST)
+        ctx.enable_direct(GL_CLIP_DISTANCE0)
         if self.pose_a is not None:
             self.pose_a.use(1)
             self.pose_b.use(2)
             self._set(self.floe, view_proj=vp, pose_a=1, pose_b=2, pose_width=POSE_WIDTH, sun=self.sun,
                       intact_colour=ICE_INTACT, broken_colour=ICE_BROKEN, edge_colour=ICE_EDGE, **fog)
+            ctx.enable(moderngl.CULL_FACE)
             for t in self.templates:
                 if t["instances"]:
                     t["vao"].render(instances=t["instances"])
+            ctx.disable(moderngl.CULL_FACE)  # the ship matrix mirrors (starboard-handed frame)
+        ctx.disable_direct(GL_CLIP_DISTANCE0)
         self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), sun=self.sun, **fog)
         self.ship_vao.render()
         return cam

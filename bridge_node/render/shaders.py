@@ -12,57 +12,45 @@ vec3 fogged(vec3 colour, vec3 world) {
 }
 """
 
-SKY_VS = """
+ENV_VS = """
 #version 330
 in vec2 in_ndc;
 out vec2 ndc;
 void main() { ndc = in_ndc; gl_Position = vec4(in_ndc, 0.9999, 1.0); }
 """
-SKY_FS = """
-#version 330
+# One full-screen pass draws sky, sea and the unbreakable ice slab: each pixel's view ray
+# is intersected with the water plane (and the slab's top), so far ice neither z-fights
+# with the water nor costs three full-screen passes on a software rasteriser.
+ENV_FS = "#version 330\n" + _FOG + """
 uniform mat4 inv_view_proj;
 uniform vec3 horizon_colour;
 uniform vec3 zenith_colour;
-uniform vec3 fog_colour;
+uniform vec3 water_colour;
+uniform vec3 ice_colour;
+uniform float slab_z;
+uniform float far;
+uniform usampler2D tile_state;   // 0: unbreakable slab; else the tile's cells are drawn
+uniform vec2 field_size;         // m
+uniform float tile_side;
 in vec2 ndc;
 out vec4 colour;
 void main() {
     vec4 a = inv_view_proj * vec4(ndc, -1.0, 1.0);
     vec4 b = inv_view_proj * vec4(ndc, 1.0, 1.0);
     vec3 ray = normalize(b.xyz / b.w - a.xyz / a.w);
-    float up = clamp(ray.z, 0.0, 1.0);
-    vec3 sky = mix(horizon_colour, zenith_colour, pow(up, 0.6));
-    colour = vec4(ray.z < 0.0 ? fog_colour : sky, 1.0);
-}
-"""
-
-PLANE_VS = """
-#version 330
-uniform mat4 view_proj;
-uniform float z;
-in vec2 in_xy;
-out vec3 world;
-void main() { world = vec3(in_xy, z); gl_Position = view_proj * vec4(world, 1.0); }
-"""
-SEA_FS = "#version 330\n" + _FOG + """
-uniform vec3 water_colour;
-in vec3 world;
-out vec4 colour;
-void main() { colour = vec4(fogged(water_colour, world), 1.0); }
-"""
-SLAB_FS = "#version 330\n" + _FOG + """
-uniform usampler2D tile_state;   // 0: unbreakable slab; else the tile's cells are drawn
-uniform vec2 field_size;         // m
-uniform float tile_side;
-uniform vec3 ice_colour;
-uniform float light;
-in vec3 world;
-out vec4 colour;
-void main() {
-    if (world.x < 0.0 || world.y < 0.0 || world.x >= field_size.x || world.y >= field_size.y) discard;
-    ivec2 tile = ivec2(floor(world.xy / tile_side));
-    if (texelFetch(tile_state, tile, 0).r != 0u) discard;
-    colour = vec4(fogged(ice_colour * light, world), 1.0);
+    if (ray.z >= 0.0) {
+        colour = vec4(mix(horizon_colour, zenith_colour, pow(ray.z, 0.6)), 1.0);
+        return;
+    }
+    float t_sea = -eye.z / ray.z;
+    if (t_sea > far) { colour = vec4(fog_colour, 1.0); return; }
+    vec3 hit = eye + ray * ((slab_z - eye.z) / ray.z);
+    bool on_field = hit.x >= 0.0 && hit.y >= 0.0 && hit.x < field_size.x && hit.y < field_size.y;
+    if (on_field && texelFetch(tile_state, ivec2(floor(hit.xy / tile_side)), 0).r == 0u) {
+        colour = vec4(fogged(ice_colour, hit), 1.0);
+    } else {
+        colour = vec4(fogged(water_colour, eye + ray * t_sea), 1.0);
+    }
 }
 """
 
@@ -92,6 +80,7 @@ void main() {
     world = r * in_pos + vec3(a.x, a.y, a.z);
     normal = r * in_normal;
     status = b.z;
+    gl_ClipDistance[0] = world.z;                       // opaque water hides what is under it
     gl_Position = view_proj * vec4(world, 1.0);
 }
 """
@@ -105,7 +94,6 @@ in vec3 normal;
 flat in float status;
 out vec4 colour;
 void main() {
-    if (world.z < 0.0) discard;                        // opaque water hides what is under it
     vec3 n = normalize(normal);
     vec3 base = abs(n.z) > 0.5 ? (status > 0.5 ? broken_colour : intact_colour) : edge_colour;
     float light = 0.7 + 0.3 * max(dot(n, sun), 0.0);

@@ -1,0 +1,94 @@
+"""Benchmark: frames per second of the projector channels.
+
+1, 3 and 5 channels at 1280x720 and 1920x1080 with 3000 and 10000 live floes, offscreen on
+EGL (here Mesa llvmpipe on the CPU; on a GPU machine, the GPU). A frame = upload of what
+changed (poses of the live tiles) + every channel drawn and edge-blended + glFinish; no
+readback (a projector shows the framebuffer). Baseline in the same process: the same
+frames when every floe row is uploaded each frame instead of only the live tiles' rows.
+Targets: llvmpipe, 3 channels at 1280x720 with 3000 floes >= 15 FPS; GPU, 5 channels at
+1920x1080 with 10000 floes >= 60 FPS.
+Run: .venv/bin/python benchmarks/bench_render.py [--frames N]
+"""
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from bridge_node.config import load_config
+from bridge_node.render.channel_output import ChannelSet, create_context
+from bridge_node.render.render_settings import ChannelSettings, RenderSettings
+from bridge_node.render.scene_renderer import SceneRenderer
+from bridge_node.world_setup import build_world, start_world
+from sim_core.floe_state import BY_HULL, FREE, INTACT
+from sim_core.hull_contour import ship_to_world
+from sim_core.ice_dynamics import break_cells
+from sim_core.ice_scene import update_scene
+from sim_core.world import apply_swaps
+
+
+def world_with_floes(target: int):
+    """The default exercise with a broken channel of ``target`` free floes north of the
+    ship, which looks up it from its start."""
+    cfg = load_config()
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    east, north = data.ship.eta[1], 0.0
+    st = data.ice.state
+    while st.count(FREE) < target:
+        pts = ship_to_world(model.contour, north, east, 0.0)
+        apply_swaps(model, data, update_scene(model.scene, data.scene, pts, np.array([east, north])))
+        rows = np.nonzero((st.status == INTACT) & (np.abs(st.home[:, 0] - east) < 18.0)
+                          & (st.home[:, 1] < north + 50.0))[0]
+        break_cells(data.ice, rows[: target - st.count(FREE)], BY_HULL)
+        north += 50.0
+    data.ship.eta[0] = -80.0
+    return model, data
+
+
+def channels(n: int, width: int, height: int) -> list[ChannelSettings]:
+    yaws = {1: [0.0], 3: [-55.0, 0.0, 55.0], 5: [-110.0, -55.0, 0.0, 55.0, 110.0]}[n]
+    return [ChannelSettings(name=f"ch{k}", yaw_deg=y, width=width, height=height, output="none",
+                            blend_left_deg=5.0 if k > 0 else 0.0, blend_right_deg=5.0 if k < n - 1 else 0.0)
+            for k, y in enumerate(yaws)]
+
+
+def fps(cs: ChannelSet, data, frames: int, full_upload: bool = False) -> tuple[float, float]:
+    cs.render(data)  # warm-up: compile shaders, first upload
+    times = []
+    for _ in range(frames):
+        data.ship.eta[5] += 1e-4  # the view moves a little every frame
+        if full_upload:
+            cs.renderer._uploaded_rows = 0
+        t0 = time.perf_counter()
+        cs.render(data)
+        times.append(time.perf_counter() - t0)
+    ms = np.array(times) * 1e3
+    return 1e3 / float(np.median(ms)), float(np.percentile(ms, 99))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--frames", type=int, default=20)
+    args = ap.parse_args()
+    ctx = create_context()
+    print(f"render benchmark on {ctx.info['GL_RENDERER']} ({ctx.info['GL_VERSION']})")
+    for target in (3000, 10000):
+        model, data = world_with_floes(target)
+        print(f"{data.ice.state.count(FREE)} live floes, {data.ice.state.n} cells placed")
+        for width, height in ((1280, 720), (1920, 1080)):
+            for n in (1, 3, 5):
+                chans = channels(n, width, height)
+                cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=chans)), chans)
+                f, p99 = fps(cs, data, args.frames)
+                line = f"  {n} channel(s) {width}x{height}: {f:6.1f} FPS (p99 frame {p99:6.1f} ms)"
+                if n == 3 and width == 1280:
+                    base, _ = fps(cs, data, args.frames, full_upload=True)
+                    line += f"; baseline uploading every row each frame {base:6.1f} FPS ({f / base:4.2f}x)"
+                print(line)
+    print(f"(median of {args.frames} frames per setup)")
+
+
+if __name__ == "__main__":
+    main()
