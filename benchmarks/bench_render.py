@@ -30,8 +30,9 @@ from sim_core.world import apply_swaps
 
 def world_with_floes(target: int):
     """The default exercise with a broken channel of ``target`` free floes north of the
-    ship, which looks up it from its start."""
+    ship, which looks up it from its start (no reverse replacement: all of it stays live)."""
     cfg = load_config()
+    cfg = cfg.model_copy(update={"scene": cfg.scene.model_copy(update={"reverse_replacement": False})})
     model = build_world(cfg, None)
     data = start_world(model, cfg)
     east, north = data.ship.eta[1], 0.0

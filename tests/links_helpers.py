@@ -55,3 +55,13 @@ def wait_for(predicate, timeout: float = 3.0, poll=None):
         time.sleep(0.005)
     return time.monotonic() - t0
 
+
+
+def order_collector(hub, state):
+    """(orders seen so far by kind, a function ticking the hub once and adding its orders)."""
+    got = {}
+
+    def tick() -> None:
+        controls = hub.tick(state, time.monotonic()).controls
+        got.update({k: v for k, v in vars(controls).items() if v is not None})
+    return got, tick

@@ -8,7 +8,7 @@ import pytest
 
 from bridge_node.link_hub import LINK_DOWN_ALARM, LinkHub
 from bridge_node.order_arbiter import ALARM_NUMBERS
-from links_helpers import node_config, pty_pair, wait_for
+from links_helpers import node_config, order_collector, pty_pair, wait_for
 from modbus_console import ModbusConsole
 from test_links_can import STATE
 
@@ -41,11 +41,7 @@ def modbus_setup(stack: ExitStack, transport: str, tmp_path):
 def test_console_registers_read_and_indicators_written(tmp_path, transport):
     with ExitStack() as stack:
         console, hub = modbus_setup(stack, transport, tmp_path)
-        got = {}
-
-        def tick():
-            c = hub.tick(STATE, time.monotonic()).controls
-            got.update({k: v for k, v in vars(c).items() if v is not None})
+        got, tick = order_collector(hub, STATE)
         wait_for(lambda: "rudder" in got and "telegraph" in got, poll=tick)
         assert got["rudder"] == pytest.approx(math.radians(-15.5))
         assert got["telegraph"] == "full_ahead"

@@ -10,7 +10,7 @@ import serial
 
 from bridge_node.link_hub import LinkHub
 from bridge_node.links.nmea0183 import ETL, PRC, ROR
-from links_helpers import node_config, paced_write, pty_pair, wait_for
+from links_helpers import node_config, order_collector, paced_write, pty_pair, wait_for
 from test_links_can import STATE
 
 KNOT = 1852 / 3600
@@ -37,11 +37,7 @@ def test_console_orders_and_instrument_outputs_over_a_pty(tmp_path, baud):
         try:
             paced_write(console, [str(ROR("RC", "ROR", ("-22.0", "A", "", "V", "B"))),
                                   str(ETL("RC", "ETL", ("120000.00", "O", "02", "30", "B", "0")))], baud)
-            got = {}
-
-            def tick():
-                c = hub.tick(STATE, time.monotonic()).controls
-                got.update({k: v for k, v in vars(c).items() if v is not None})
+            got, tick = order_collector(hub, STATE)
             wait_for(lambda: "rudder" in got and "telegraph" in got, poll=tick)
             assert got["rudder"] == pytest.approx(math.radians(-22.0))
             assert got["telegraph"] == "slow_ahead"

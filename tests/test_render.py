@@ -44,10 +44,13 @@ def ctx():
 
 
 def render(ctx, model, data, channels, visibility=8000.0, blended=True):
+    """Images of the channels; unblended: the same channels with their blend bands off."""
+    if not blended:
+        channels = [c.model_copy(update={"blend_left_deg": 0.0, "blend_right_deg": 0.0}) for c in channels]
     settings = RenderSettings(channels=channels, visibility_m=visibility)
     cs = ChannelSet(SceneRenderer(ctx, model, settings), channels)
     cs.render(data)
-    return [t.image(blended) for t in cs.targets]
+    return [t.image() for t in cs.targets]
 
 
 def is_sky(px):

@@ -13,6 +13,7 @@ from abc import ABC, abstractmethod
 from collections import Counter
 from dataclasses import dataclass, field
 
+from bridge_node.links.reconnect import Backoff
 from sim_core.ship_outputs import ShipOutputs
 
 RUDDER, TELEGRAPH, LEVER = "rudder", "telegraph", "lever"
@@ -62,6 +63,7 @@ class Link(ABC):
     def __init__(self, name: str) -> None:
         self.name = name
         self._health = LinkHealth(name)
+        self._backoff = Backoff()
 
     @abstractmethod
     def open(self) -> None:
@@ -88,6 +90,23 @@ class Link(ABC):
 
     def _count_error(self, kind: str) -> None:
         self._health.errors[kind] += 1
+
+    def _up(self) -> None:
+        self._health.connected = True
+        self._backoff.succeeded()
+
+    def _down(self, now: float, kind: str) -> None:
+        """The port or bus failed (kind counted): retry after the back-off."""
+        self._health.connected = False
+        self._count_error(kind)
+        self._backoff.failed(now)
+
+    def _retry_due(self, now: float) -> bool:
+        """Whether a link that is down should try to reconnect now (counted as a reconnect)."""
+        if self._backoff.ready(now):
+            self._health.reconnects += 1
+            return True
+        return False
 
     def _received(self, inputs: list[ControlInput], now: float) -> list[ControlInput]:
         if inputs:

@@ -14,7 +14,6 @@ from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, ControlInput, Link,
 from bridge_node.links.link_settings import CanLinkSettings
 from bridge_node.links.n2k_frames import fast_packet_frames, identifier, parse_identifier
 from bridge_node.links.nmea0183 import ETL_POSITIONS
-from bridge_node.links.reconnect import Backoff
 from bridge_node.links.session_record import SessionRecord
 from sim_core.ship_outputs import ShipOutputs
 
@@ -72,7 +71,6 @@ class CanLink(Link):
         self._allowed = frozenset(settings.allowed_sources)
         self._sid = 0
         self._fast_seq: dict[int, int] = {}
-        self._backoff = Backoff()
 
     def open(self) -> None:
         self._connect(time.monotonic())
@@ -81,28 +79,22 @@ class CanLink(Link):
         s = self.settings
         try:
             self._bus = can.Bus(interface=s.interface, channel=s.channel, bitrate=s.bitrate)
-            self._health.connected = True
-            self._backoff.succeeded()
+            self._up()
         except (can.CanError, OSError, ValueError, ImportError):
             self._bus = None
-            self._health.connected = False
-            self._count_error("open_failed")
-            self._backoff.failed(now)
+            self._down(now, "open_failed")
 
     def _lost(self, now: float) -> None:
-        self._count_error("bus_lost")
         try:
             self._bus.shutdown()
         except (can.CanError, OSError):
             pass
         self._bus = None
-        self._health.connected = False
-        self._backoff.failed(now)
+        self._down(now, "bus_lost")
 
     def poll(self, now: float) -> list[ControlInput]:
         if self._bus is None:
-            if self._backoff.ready(now):
-                self._health.reconnects += 1
+            if self._retry_due(now):
                 self._connect(now)
             return []
         out = []

@@ -20,6 +20,13 @@ class _LinkBase(Params):
     timeout_s: float = Field(1.0, gt=0.05, le=60.0, description="a source silent this long is stale, s")
 
 
+def _known_keys(v: dict, allowed: dict, what: str) -> dict:
+    unknown = sorted(set(v) - set(allowed))
+    if unknown:
+        raise ValueError(f"unknown {what}(s) {unknown}; allowed: {', '.join(sorted(allowed))}")
+    return v
+
+
 def _loopback_unless(host: str, allowed: bool, key: str) -> str:
     try:
         ip = ipaddress.ip_address(host)
@@ -46,10 +53,7 @@ class NmeaLinkSettings(_LinkBase):
     @field_validator("talkers", "rates")
     @classmethod
     def _known_sentences(cls, v: dict) -> dict:
-        unknown = sorted(set(v) - set(DEFAULT_TALKERS))
-        if unknown:
-            raise ValueError(f"unknown sentence(s) {unknown}; allowed: {', '.join(sorted(DEFAULT_TALKERS))}")
-        return v
+        return _known_keys(v, DEFAULT_TALKERS, "sentence")
 
     @model_validator(mode="after")
     def _checks(self) -> "NmeaLinkSettings":
@@ -86,10 +90,7 @@ class CanLinkSettings(_LinkBase):
     @field_validator("rates")
     @classmethod
     def _known_outputs(cls, v: dict) -> dict:
-        unknown = sorted(set(v) - set(N2K_OUTPUTS))
-        if unknown:
-            raise ValueError(f"unknown output(s) {unknown}; allowed: {', '.join(N2K_OUTPUTS)}")
-        return v
+        return _known_keys(v, N2K_OUTPUTS, "output")
 
     def output_rates(self) -> dict[str, float]:
         return N2K_OUTPUTS | self.rates

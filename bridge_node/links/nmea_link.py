@@ -12,7 +12,6 @@ import serial
 from bridge_node.links.base import Alarm, ControlInput, Link, RateSchedule
 from bridge_node.links.link_settings import NmeaLinkSettings
 from bridge_node.links.nmea0183 import SentenceError, parse_order, render_alarm, render_outputs
-from bridge_node.links.reconnect import Backoff
 from bridge_node.links.session_record import SessionRecord
 from sim_core.ship_outputs import ShipOutputs
 
@@ -35,7 +34,6 @@ class NmeaLink(Link):
         self._budget = settings.baudrate / 10.0  # characters per second, 8N1
         self._tokens = self._budget
         self._last_refill = time.monotonic()
-        self._backoff = Backoff()
 
     def open(self) -> None:
         if self.settings.udp_port:
@@ -49,30 +47,24 @@ class NmeaLink(Link):
         try:
             self._port = serial.serial_for_url(self.settings.port, baudrate=self.settings.baudrate, timeout=0,
                                                write_timeout=0)
-            self._health.connected = True
-            self._backoff.succeeded()
+            self._up()
         except (serial.SerialException, OSError, ValueError):
             self._port = None
-            self._health.connected = False
-            self._count_error("open_failed")
-            self._backoff.failed(now)
+            self._down(now, "open_failed")
 
     def _lost(self, now: float) -> None:
-        self._count_error("port_lost")
         try:
             self._port.close()
         except (serial.SerialException, OSError):
             pass
         self._port = None
-        self._health.connected = False
-        self._backoff.failed(now)
+        self._down(now, "port_lost")
 
     def poll(self, now: float) -> list[ControlInput]:
         if not self.settings.port:
             return []
         if self._port is None:
-            if self._backoff.ready(now):
-                self._health.reconnects += 1
+            if self._retry_due(now):
                 self._connect(now)
             return []
         try:

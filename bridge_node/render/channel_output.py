@@ -1,5 +1,5 @@
-"""Offscreen channel targets: render each channel at its resolution, apply its edge-blend
-ramps in a second pass, and read the image back (for PNG frames or tests)."""
+"""Offscreen channel targets: render each channel at its resolution (edge blending is done
+by the scene's shaders) and read the image back (for PNG frames or tests)."""
 from __future__ import annotations
 
 import math
@@ -8,7 +8,6 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
-from bridge_node.render import shaders
 from bridge_node.render.render_settings import ChannelSettings
 from bridge_node.render.scene_renderer import SceneRenderer
 from sim_core.world import WorldData
@@ -20,8 +19,9 @@ def create_context() -> moderngl.Context:
 
 
 def blend_ramp(channel: ChannelSettings, azimuth: np.ndarray) -> np.ndarray:
-    """Light share (linear, 0..1) the channel gives at azimuths (rad from its centre): the
-    same ramp the blend shader applies, for checks."""
+    """Light share (linear, 0..1) the channel gives at azimuths (rad from its centre). In
+    each blend band the light falls linearly with azimuth, so where two channels overlap
+    their light sums to one."""
     half = math.radians(channel.hfov_deg) / 2.0
     ramp = np.ones_like(azimuth)
     if channel.blend_left_deg > 0:
@@ -31,36 +31,31 @@ def blend_ramp(channel: ChannelSettings, azimuth: np.ndarray) -> np.ndarray:
     return ramp
 
 
-class ChannelTarget:
-    """Framebuffers of one channel."""
+def column_factors(channel: ChannelSettings) -> np.ndarray:
+    """The factor each pixel column's colour is scaled by: the blend ramp at the column's
+    azimuth, with the projector's gamma undone (the projector raises it to gamma again)."""
+    x = (np.arange(channel.width) + 0.5) / channel.width * 2.0 - 1.0
+    azimuth = np.arctan(x * math.tan(math.radians(channel.hfov_deg) / 2.0))
+    return (blend_ramp(channel, azimuth) ** (1.0 / channel.gamma)).astype("f4")
 
-    def __init__(self, ctx: moderngl.Context, channel: ChannelSettings, blend: moderngl.Program,
-                 quad: moderngl.Buffer) -> None:
+
+class ChannelTarget:
+    """The framebuffer of one channel."""
+
+    def __init__(self, ctx: moderngl.Context, channel: ChannelSettings) -> None:
         size = (channel.width, channel.height)
         self.channel = channel
-        self.colour = ctx.texture(size, 3)
-        self.scene_fbo = ctx.framebuffer([self.colour], ctx.depth_renderbuffer(size))
-        self.out_fbo = ctx.framebuffer([ctx.renderbuffer(size, 3)])
-        self.blend = blend
-        self.blend_vao = ctx.vertex_array(blend, [(quad, "2f", "in_ndc")])
+        self.fbo = ctx.framebuffer([ctx.renderbuffer(size, 3)], ctx.depth_renderbuffer(size))
+        self.blend = ctx.texture((channel.width, 1), 1, column_factors(channel).tobytes(), dtype="f4")
+        self.blend.filter = moderngl.NEAREST, moderngl.NEAREST
 
     def render(self, renderer: SceneRenderer, data: WorldData) -> None:
-        c = self.channel
-        self.scene_fbo.use()
-        renderer.draw(data, c)
-        self.out_fbo.use()
-        self.colour.use(0)
-        half = math.radians(c.hfov_deg) / 2
-        for name, value in (("scene", 0), ("tan_half_hfov", math.tan(half)), ("half_hfov", half),
-                            ("blend_left", math.radians(c.blend_left_deg)),
-                            ("blend_right", math.radians(c.blend_right_deg)), ("gamma", c.gamma)):
-            self.blend[name].value = value
-        self.blend_vao.render()
+        self.fbo.use()
+        renderer.draw(data, self.channel, self.blend)
 
-    def image(self, blended: bool = True) -> np.ndarray:
+    def image(self) -> np.ndarray:
         """The last frame as (height, width, 3) uint8, top row first."""
-        fbo = self.out_fbo if blended else self.scene_fbo
-        raw = fbo.read(components=3, alignment=1)
+        raw = self.fbo.read(components=3, alignment=1)
         return np.frombuffer(raw, dtype=np.uint8).reshape(self.channel.height, self.channel.width, 3)[::-1]
 
 
@@ -68,10 +63,8 @@ class ChannelSet:
     """All channels of a projection system over one scene renderer."""
 
     def __init__(self, renderer: SceneRenderer, channels: list[ChannelSettings]) -> None:
-        ctx = renderer.ctx
         self.renderer = renderer
-        blend = ctx.program(vertex_shader=shaders.BLEND_VS, fragment_shader=shaders.BLEND_FS)
-        self.targets = [ChannelTarget(ctx, c, blend, renderer.quad) for c in channels]
+        self.targets = [ChannelTarget(renderer.ctx, c) for c in channels]
 
     def render(self, data: WorldData) -> None:
         self.renderer.update(data)

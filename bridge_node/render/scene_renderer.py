@@ -1,13 +1,17 @@
 """Draw the world state to the projector channels with moderngl.
 
-GPU data mirrors the MuJoCo-style split of the simulation. Static: one vertex buffer per
-tile template (every cell's triangles about its centroid, with the cell's index), the
-sea, slab and own-ship meshes. Dynamic: two float textures holding every floe row's pose
-(x, y, heave, yaw; roll, pitch, status), an instance buffer per template listing the first
-floe row of each placed tile, and a one-byte-per-tile texture of tile states. All floes of
-a template are drawn in one instanced call: the vertex shader finds its floe row as the
-tile's first row plus the cell index and fetches the pose. Per frame only the pose rows of
-tiles placed or simulated since the last frame are uploaded; frozen tiles cost nothing.
+GPU data mirrors the MuJoCo-style split of the simulation. Static: every template cell's
+triangles about its centroid (seen from above the water: no bottom faces), each template's
+cell raster (which cell covers each 0.1 m of the tile), the own ship's mesh. Dynamic: two
+float textures holding every floe row's pose (x, y, heave, yaw; roll, pitch, status) and a
+byte texture of each row's status, a tile table (each placed tile's first floe row,
+template and rotation; -1 for the unbreakable slab), and a vertex buffer of the broken
+floes, to which a cell's template triangles are appended once, when it breaks; the vertex
+shader places them by the pose texture. Level ice (unbreakable tiles and the intact cells
+of breakable ones) is drawn per pixel by the environment pass from the cell raster, so it
+costs no triangles: on a software rasteriser the vertex work of thousands of intact cells
+would dominate the frame. Per frame only the poses of tiles placed or simulated since the
+last frame are uploaded; frozen tiles cost nothing.
 """
 from __future__ import annotations
 
@@ -19,11 +23,13 @@ import numpy as np
 
 from bridge_node.render import shaders
 from bridge_node.render.render_settings import ChannelSettings, RenderSettings
-from sim_core.ice_scene import BREAKABLE
+from sim_core.floe_state import INTACT
 from sim_core.world import WorldData, WorldModel
 
 GL_CLIP_DISTANCE0 = 0x3000
 POSE_WIDTH = 2048  # texels per line of the pose textures
+MAX_TILES = 4096 * 4096  # tile table of 8 bytes per tile: 134 MB of texture at most
+RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m tiles)
 NEAR = 0.5  # m
 SKY_HORIZON, SKY_ZENITH = (0.78, 0.84, 0.90), (0.38, 0.55, 0.78)
 FOG = (0.70, 0.74, 0.78)
@@ -70,27 +76,45 @@ def channel_camera(channel: ChannelSettings, north: float, east: float, psi: flo
     return Camera(eye, view, proj)
 
 
-def _template_vertices(model: WorldModel, template: int) -> np.ndarray:
-    """Interleaved (position 3f, normal 3f, cell index i4) of the triangles of a template
-    that can be seen from above the water: bottom faces are left out. Triangles are wound
-    counter-clockwise seen from outside, so back faces can be culled."""
+def _cell_vertices(model: WorldModel) -> tuple[np.ndarray, np.ndarray]:
+    """Triangles of every template cell that can be seen from above the water (bottom faces
+    left out), wound counter-clockwise from outside: (position 3f, normal 3f) per vertex,
+    and each global cell's first vertex (G + 1,)."""
     ice = model.ice
-    g0, g1 = ice.template_start[template], ice.template_start[template + 1]
-    t0, t1 = ice.tri_start[g0], ice.tri_start[g1]
-    tris = ice.tris[t0:t1].copy()
-    cell = np.repeat(np.arange(g1 - g0), np.diff(ice.tri_start[g0:g1 + 1]))
+    tris = ice.tris.copy()
+    owner = np.repeat(np.arange(len(ice.mass)), np.diff(ice.tri_start))
     n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
     inward = (n * tris.mean(axis=1)).sum(axis=1) < 0.0  # the centroid is the origin
     n[inward] *= -1.0
     tris[inward] = tris[inward][:, ::-1]
     keep = n[:, 2] > -0.5
-    tris, n, cell = tris[keep], n[keep], cell[keep]
-    out = np.zeros(len(tris) * 3, dtype=[("p", "f4", 3), ("n", "f4", 3), ("c", "i4")])
-    out["p"] = tris.reshape(-1, 3)
-    out["n"] = np.repeat(n, 3, axis=0)
-    out["c"] = np.repeat(cell, 3)
-    return out
+    tris, n, owner = tris[keep], n[keep], owner[keep]
+    out = np.zeros((len(tris) * 3, 6), dtype="f4")
+    out[:, :3] = tris.reshape(-1, 3)
+    out[:, 3:] = np.repeat(n, 3, axis=0)
+    start = np.concatenate([[0], np.cumsum(3 * np.bincount(owner, minlength=len(ice.mass)))])
+    return out, start
+
+
+def cell_rasters(model: WorldModel, size: int) -> np.ndarray:
+    """Per template, which cell covers each pixel of the tile: (templates * size, size)
+    uint16, 1 + the cell's index within its template, 0 in the cracks between cells."""
+    from PIL import Image, ImageDraw
+
+    ice = model.ice
+    out = []
+    for k, t in enumerate(ice.templates):
+        img = Image.new("I", (size, size), 0)
+        draw = ImageDraw.Draw(img)
+        scale = size / t.side
+        g0 = ice.template_start[k]
+        for c in range(t.n_cells):
+            g = g0 + c
+            ring = ice.outline[ice.outline_start[g]:ice.outline_start[g + 1]] + ice.centroid[g, :2]
+            draw.polygon([tuple(p) for p in ring * scale], fill=c + 1)
+        out.append(np.asarray(img, dtype=np.int64).astype(np.uint16))
+    return np.vstack(out)
 
 
 def _ship_vertices(contour: np.ndarray, freeboard: float) -> np.ndarray:
@@ -121,19 +145,25 @@ class SceneRenderer:
         self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=shaders.ENV_FS)
         self.floe = ctx.program(vertex_shader=shaders.FLOE_VS, fragment_shader=shaders.FLOE_FS)
         self.ship = ctx.program(vertex_shader=shaders.SHIP_VS, fragment_shader=shaders.SHIP_FS)
-        tri = ctx.buffer(np.array([[-1, -1], [3, -1], [-1, 3]], dtype="f4").tobytes())
-        self.env_vao = ctx.vertex_array(self.env, [(tri, "2f", "in_ndc")])
-        self.quad = ctx.buffer(np.array([[-1, -1], [1, -1], [1, 1], [-1, -1], [1, 1], [-1, 1]], dtype="f4").tobytes())
-        self.tile_state = ctx.texture((scene.nx, scene.ny), 1, dtype="u1")
-        self.tile_state.filter = moderngl.NEAREST, moderngl.NEAREST
-        self._tile_state = np.full(scene.nx * scene.ny, 255, dtype=np.uint8)  # forces the first upload
+        self.env_buf = ctx.buffer(reserve=3 * 5 * 4)
+        self.env_vao = ctx.vertex_array(self.env, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
+        if scene.nx * scene.ny > MAX_TILES:
+            raise ValueError(f"the renderer draws fields of up to {MAX_TILES} tiles; this one has {scene.nx * scene.ny}")
+        info = np.tile(np.array([-1, 0], "i4"), scene.nx * scene.ny)
+        self.tile_info = ctx.texture((scene.nx, scene.ny), 2, info.tobytes(), dtype="i4")
+        self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST
         hull = _ship_vertices(model.contour, settings.freeboard_m)
         self.ship_vao = ctx.vertex_array(self.ship, [(ctx.buffer(hull.tobytes()), "3f 3f", "in_pos", "in_normal")])
-        self.templates = []
-        for k in range(len(model.ice.templates)):
-            vbo = ctx.buffer(_template_vertices(model, k).tobytes())
-            self.templates.append({"vbo": vbo, "vertices": vbo.size // 28, "instances": 0, "ibo": None, "vao": None})
-        self.pose_a = self.pose_b = None
+        self.cell_verts, self.cell_vert_start = _cell_vertices(model)
+        self.raster_size = RASTER_SIZE if len(model.ice.templates) <= 4 else RASTER_SIZE // 2
+        raster = cell_rasters(model, self.raster_size)
+        self.cell_raster = ctx.texture((self.raster_size, raster.shape[0]), 1, raster.tobytes(), dtype="u2")
+        self.cell_raster.filter = moderngl.NEAREST, moderngl.NEAREST
+        self.broken_vbo = None
+        self.broken_vao = None
+        self.broken_vertices = 0
+        self._drawn = np.zeros(0, dtype=bool)
+        self.pose_a = self.pose_b = self.status = None
         self._pose_lines = 0
         self._placed = 0
         self._uploaded_rows = 0
@@ -146,46 +176,66 @@ class SceneRenderer:
 
     # -- per frame uploads ----------------------------------------------------------------
     def update(self, data: WorldData) -> None:
-        """Upload what changed since the last call: tile states, new tiles' instances, and
-        the poses of the rows of tiles placed or simulated since then."""
+        """Upload what changed since the last call: tile states, new placements, the
+        triangles of newly broken floes, and the poses of the rows of tiles placed or
+        simulated since then."""
         tiles = data.ice.tiles
-        state = data.scene.tile_state
-        changed = np.nonzero(state != self._tile_state)[0]
-        if len(changed):
-            nx = self.model.scene.nx
-            if len(changed) > 64:
-                self.tile_state.write(np.ascontiguousarray(state).tobytes())
-            else:
-                for t in changed:
-                    self.tile_state.write(bytes([state[t]]), viewport=(int(t % nx), int(t // nx), 1, 1))
-            self._tile_state = state.copy()
         st = data.ice.state
         self._ensure_pose_capacity(st.n)
         if len(tiles.template) != self._placed:
-            self._placed = len(tiles.template)
-            for k, t in enumerate(self.templates):
-                starts = np.array([s for s, tk in zip(tiles.row_start, tiles.template) if tk == k], dtype="i4")
-                t["instances"] = len(starts)
-                if len(starts):
-                    t["ibo"] = self.ctx.buffer(starts.tobytes())
-                    t["vao"] = self.ctx.vertex_array(self.floe, [
-                        (t["vbo"], "3f 3f i", "in_pos", "in_normal", "in_cell"), (t["ibo"], "i/i", "in_row_start")])
+            self._upload_placements(data)
+        self._append_broken(st)
         # rows of tiles live now or at the last upload (a tile frozen since then gets its final pose)
         live = [tiles.row_start[data.scene.placement[int(t)]] for t in data.scene.live if int(t) in data.scene.placement]
         self._upload_poses(st, min([self._uploaded_rows, *live, *self._live_rows]))
         self._live_rows = live
         self._uploaded_rows = st.n
 
+    def _upload_placements(self, data: WorldData) -> None:
+        tiles, nx = data.ice.tiles, self.model.scene.nx
+        for tile, k in data.scene.placement.items():
+            if k >= self._placed:
+                info = np.array([tiles.row_start[k], tiles.template[k] | (tiles.quarter_turns[k] << 16)], "i4")
+                self.tile_info.write(info.tobytes(), viewport=(tile % nx, tile // nx, 1, 1))
+        self._placed = len(tiles.template)
+
+    def _append_broken(self, st) -> None:
+        """Append the template triangles of cells broken since the last call."""
+        if len(self._drawn) < st.n:
+            self._drawn = np.concatenate([self._drawn, np.zeros(st.n - len(self._drawn), bool)])
+        new = np.nonzero((st.status != INTACT) & ~self._drawn[: st.n])[0]
+        if not len(new):
+            return
+        self._drawn[new] = True
+        g = st.gcell[new]
+        a, b = self.cell_vert_start[g], self.cell_vert_start[g + 1]
+        counts = b - a
+        idx = np.repeat(a - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+        verts = np.zeros(len(idx), dtype=[("v", "f4", 6), ("row", "i4")])
+        verts["v"] = self.cell_verts[idx]
+        verts["row"] = np.repeat(new, counts)
+        size = (self.broken_vertices + len(idx)) * verts.itemsize
+        if self.broken_vbo is None or size > self.broken_vbo.size:
+            old = self.broken_vbo
+            self.broken_vbo = self.ctx.buffer(reserve=max(size, 2 * (old.size if old else 0), 1 << 20))
+            if old is not None:
+                self.ctx.copy_buffer(self.broken_vbo, old, self.broken_vertices * verts.itemsize)
+                old.release()
+            self.broken_vao = self.ctx.vertex_array(
+                self.floe, [(self.broken_vbo, "3f 3f i", "in_pos", "in_normal", "in_row")])
+        self.broken_vbo.write(verts.tobytes(), offset=self.broken_vertices * verts.itemsize)
+        self.broken_vertices += len(idx)
+
     def _ensure_pose_capacity(self, rows: int) -> None:
         lines = max(1, math.ceil(rows / POSE_WIDTH))
         if lines <= self._pose_lines:
             return
         lines = max(lines, 2 * self._pose_lines)
-        for name in ("pose_a", "pose_b"):
+        for name, components, dtype in (("pose_a", 4, "f4"), ("pose_b", 4, "f4"), ("status", 1, "u1")):
             old = getattr(self, name)
             if old is not None:
                 old.release()
-            tex = self.ctx.texture((POSE_WIDTH, lines), 4, dtype="f4")
+            tex = self.ctx.texture((POSE_WIDTH, lines), components, dtype=dtype)
             tex.filter = moderngl.NEAREST, moderngl.NEAREST
             setattr(self, name, tex)
         self._pose_lines = lines
@@ -209,38 +259,50 @@ class SceneRenderer:
         view = (0, line0, POSE_WIDTH, lines)
         self.pose_a.write(a.tobytes(), viewport=view)
         self.pose_b.write(b.tobytes(), viewport=view)
+        status = np.zeros(lines * POSE_WIDTH, dtype=np.uint8)
+        status[:n] = st.status[r0:r1]
+        self.status.write(status.tobytes(), viewport=view)
 
     # -- drawing --------------------------------------------------------------------------
-    def draw(self, data: WorldData, channel: ChannelSettings) -> Camera:
-        """Draw the scene for one channel into the bound framebuffer."""
+    def draw(self, data: WorldData, channel: ChannelSettings, blend: moderngl.Texture) -> Camera:
+        """Draw the scene for one channel into the bound framebuffer, its columns scaled by
+        the blend texture (width x 1 float: the channel's edge-blend factors)."""
         ctx, s = self.ctx, self.settings
         north, east, psi = (float(v) for v in (data.ship.eta[0], data.ship.eta[1], data.ship.eta[5]))
         cam = channel_camera(channel, north, east, psi, s.far_m)
         vp = cam.view_proj
+        half = math.radians(channel.hfov_deg) / 2
+        blend.use(6)
+        common = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "fog_colour": FOG, "blend_ramp": 6}
         ctx.clear(*FOG, depth=1.0)
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
-        fog = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "fog_colour": FOG}
+        tx, ty = math.tan(half), math.tan(channel.vfov() / 2)
+        corners = np.array([[-1, -1], [3, -1], [-1, 3]], dtype=float)
+        rays = -cam.view[2, :3] + corners[:, :1] * tx * cam.view[0, :3] + corners[:, 1:] * ty * cam.view[1, :3]
+        self.env_buf.write(np.hstack([corners, rays]).astype("f4").tobytes())
         scene = self.model.scene
-        self.tile_state.use(0)
+        self.tile_info.use(0)
+        self.cell_raster.use(3)
+        if self.pose_b is not None:
+            self.pose_a.use(4)
+            self.pose_b.use(5)
+            self.status.use(7)
         ice = tuple(c * (0.7 + 0.3 * max(self.sun[2], 0.0)) for c in ICE_INTACT)
-        self._set(self.env, inv_view_proj=np.linalg.inv(vp), horizon_colour=SKY_HORIZON, zenith_colour=SKY_ZENITH,
-                  water_colour=WATER, ice_colour=ice, slab_z=self.slab_z, far=s.far_m, tile_state=0,
-                  field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **fog)
+        self._set(self.env, horizon_colour=SKY_HORIZON, zenith_colour=SKY_ZENITH, water_colour=WATER,
+                  ice_colour=ice, slab_z=self.slab_z, far=s.far_m, tile_info=0, cell_raster=3,
+                  raster_size=self.raster_size, status=7, pose_width=POSE_WIDTH,
+                  field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
         self.env_vao.render()
         ctx.enable(moderngl.DEPTH_TEST)
-        ctx.enable_direct(GL_CLIP_DISTANCE0)
-        if self.pose_a is not None:
-            self.pose_a.use(1)
-            self.pose_b.use(2)
-            self._set(self.floe, view_proj=vp, pose_a=1, pose_b=2, pose_width=POSE_WIDTH, sun=self.sun,
-                      intact_colour=ICE_INTACT, broken_colour=ICE_BROKEN, edge_colour=ICE_EDGE, **fog)
+        if self.broken_vertices:
+            ctx.enable_direct(GL_CLIP_DISTANCE0)
             ctx.enable(moderngl.CULL_FACE)
-            for t in self.templates:
-                if t["instances"]:
-                    t["vao"].render(instances=t["instances"])
+            self._set(self.floe, view_proj=vp, pose_a=4, pose_b=5, pose_width=POSE_WIDTH, sun=self.sun,
+                      broken_colour=ICE_BROKEN, edge_colour=ICE_EDGE, **common)
+            self.broken_vao.render(vertices=self.broken_vertices)
             ctx.disable(moderngl.CULL_FACE)  # the ship matrix mirrors (starboard-handed frame)
-        ctx.disable_direct(GL_CLIP_DISTANCE0)
-        self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), sun=self.sun, **fog)
+            ctx.disable_direct(GL_CLIP_DISTANCE0)
+        self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), sun=self.sun, **common)
         self.ship_vao.render()
         return cam
 

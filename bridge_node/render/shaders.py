@@ -1,56 +1,78 @@
-"""GLSL 3.30 programs of the scene: sky, sea, level-ice slab, floes (instanced per tile),
-own ship, and the channel's edge-blend pass. World frame: x east, y north, z up, metres."""
+"""GLSL 3.30 programs of the scene: the environment pass (sky, sea, level ice: the
+unbreakable slab and the intact cells of breakable tiles), broken floes, and the own ship.
+World frame: x east, y north, z up, metres. Every fragment shader applies the channel's
+edge-blend ramp itself, so no separate blend pass is needed."""
 
-_FOG = """
+_COMMON = """
 uniform vec3 eye;
 uniform float visibility;
 uniform vec3 fog_colour;
+uniform sampler2D blend_ramp;    // per pixel column: the channel's edge-blend factor
 vec3 fogged(vec3 colour, vec3 world) {
     // meteorological visibility: contrast falls to 5 % (exp(-3)) at that distance
     float f = exp(-3.0 * distance(world, eye) / visibility);
     return mix(fog_colour, colour, f);
+}
+// Edge blending: a factor per pixel column, computed once per channel (channel_output.py)
+vec4 blended(vec3 colour) {
+    return vec4(colour * texelFetch(blend_ramp, ivec2(gl_FragCoord.x, 0), 0).r, 1.0);
 }
 """
 
 ENV_VS = """
 #version 330
 in vec2 in_ndc;
-out vec2 ndc;
-void main() { ndc = in_ndc; gl_Position = vec4(in_ndc, 0.9999, 1.0); }
+in vec3 in_ray;                  // world direction through this corner (linear in the screen)
+out vec3 ray;
+void main() { ray = in_ray; gl_Position = vec4(in_ndc, 0.9999, 1.0); }
 """
-# One full-screen pass draws sky, sea and the unbreakable ice slab: each pixel's view ray
-# is intersected with the water plane (and the slab's top), so far ice neither z-fights
-# with the water nor costs three full-screen passes on a software rasteriser.
-ENV_FS = "#version 330\n" + _FOG + """
-uniform mat4 inv_view_proj;
+# One full-screen pass draws sky, sea and level ice. Each pixel's view ray is intersected
+# with the water plane and with the ice top: on an unbreakable tile that is ice; on a
+# breakable or frozen tile the template's cell raster names the cell under the point, and
+# the cell's status (from the pose texture) says intact ice or water between broken floes.
+# Level ice thus costs no triangles, and far ice does not z-fight with the water.
+ENV_FS = "#version 330\n" + _COMMON + """
 uniform vec3 horizon_colour;
 uniform vec3 zenith_colour;
 uniform vec3 water_colour;
 uniform vec3 ice_colour;
 uniform float slab_z;
 uniform float far;
-uniform usampler2D tile_state;   // 0: unbreakable slab; else the tile's cells are drawn
+uniform isampler2D tile_info;    // per tile: first floe row (-1: unbreakable), template | quarter turns << 16
+uniform usampler2D cell_raster;  // templates stacked in y: 1 + cell index, 0 in a crack
+uniform int raster_size;
+uniform usampler2D status;       // per floe row: 0 intact, 1 free, 2 frozen
+uniform int pose_width;
 uniform vec2 field_size;         // m
 uniform float tile_side;
-in vec2 ndc;
+in vec3 ray;
 out vec4 colour;
+bool level_ice(vec2 p) {
+    ivec2 tile = ivec2(floor(p / tile_side));
+    ivec2 info = texelFetch(tile_info, tile, 0).rg;
+    if (info.x < 0) return true;                                        // the unbreakable slab
+    vec2 local = p - vec2(tile) * tile_side - 0.5 * tile_side;          // about the tile centre
+    int k = info.y >> 16;                                               // undo the quarter turns
+    float c = k == 0 ? 1.0 : (k == 2 ? -1.0 : 0.0), s = k == 1 ? 1.0 : (k == 3 ? -1.0 : 0.0);
+    local = vec2(c * local.x + s * local.y, c * local.y - s * local.x);
+    vec2 uv = clamp((local / tile_side + 0.5) * float(raster_size), vec2(0.0), vec2(float(raster_size) - 1.0));
+    uint cell = texelFetch(cell_raster, ivec2(uv) + ivec2(0, (info.y & 0xFFFF) * raster_size), 0).r;
+    if (cell == 0u) return false;
+    int row = info.x + int(cell) - 1;
+    return texelFetch(status, ivec2(row % pose_width, row / pose_width), 0).r == 0u;
+}
 void main() {
-    vec4 a = inv_view_proj * vec4(ndc, -1.0, 1.0);
-    vec4 b = inv_view_proj * vec4(ndc, 1.0, 1.0);
-    vec3 ray = normalize(b.xyz / b.w - a.xyz / a.w);
-    if (ray.z >= 0.0) {
-        colour = vec4(mix(horizon_colour, zenith_colour, pow(ray.z, 0.6)), 1.0);
+    vec3 r = normalize(ray);
+    if (r.z >= 0.0) {
+        colour = blended(mix(horizon_colour, zenith_colour, pow(r.z, 0.6)));
         return;
     }
-    float t_sea = -eye.z / ray.z;
-    if (t_sea > far) { colour = vec4(fog_colour, 1.0); return; }
-    vec3 hit = eye + ray * ((slab_z - eye.z) / ray.z);
+    float t_sea = -eye.z / r.z;
+    if (t_sea > far) { colour = blended(fog_colour); return; }
+    vec3 hit = eye + r * ((slab_z - eye.z) / r.z);
     bool on_field = hit.x >= 0.0 && hit.y >= 0.0 && hit.x < field_size.x && hit.y < field_size.y;
-    if (on_field && texelFetch(tile_state, ivec2(floor(hit.xy / tile_side)), 0).r == 0u) {
-        colour = vec4(fogged(ice_colour, hit), 1.0);
-    } else {
-        colour = vec4(fogged(water_colour, eye + ray * t_sea), 1.0);
-    }
+    if (on_field && level_ice(hit.xy)) colour = blended(fogged(ice_colour, hit));
+    else colour = blended(fogged(water_colour, eye + r * t_sea));
 }
 """
 
@@ -62,14 +84,12 @@ uniform sampler2D pose_b;        // roll, pitch, status, unused
 uniform int pose_width;
 in vec3 in_pos;                  // about the cell's centroid, template frame, m
 in vec3 in_normal;
-in int in_cell;                  // cell index within the template
-in int in_row_start;             // per instance: first floe row of the placed tile
+in int in_row;                   // the floe's row in the state arrays
 out vec3 world;
 out vec3 normal;
 flat out float status;
 void main() {
-    int row = in_row_start + in_cell;
-    ivec2 at = ivec2(row % pose_width, row / pose_width);
+    ivec2 at = ivec2(in_row % pose_width, in_row / pose_width);
     vec4 a = texelFetch(pose_a, at, 0);
     vec4 b = texelFetch(pose_b, at, 0);
     float cr = cos(b.x), sr = sin(b.x), cp = cos(b.y), sp = sin(b.y), cy = cos(a.w), sy = sin(a.w);
@@ -84,9 +104,8 @@ void main() {
     gl_Position = view_proj * vec4(world, 1.0);
 }
 """
-FLOE_FS = "#version 330\n" + _FOG + """
+FLOE_FS = "#version 330\n" + _COMMON + """
 uniform vec3 sun;
-uniform vec3 intact_colour;
 uniform vec3 broken_colour;
 uniform vec3 edge_colour;
 in vec3 world;
@@ -95,9 +114,9 @@ flat in float status;
 out vec4 colour;
 void main() {
     vec3 n = normalize(normal);
-    vec3 base = abs(n.z) > 0.5 ? (status > 0.5 ? broken_colour : intact_colour) : edge_colour;
+    vec3 base = abs(n.z) > 0.5 ? broken_colour : edge_colour;
     float light = 0.7 + 0.3 * max(dot(n, sun), 0.0);
-    colour = vec4(fogged(base * light, world), 1.0);
+    colour = blended(fogged(base * light, world));
 }
 """
 
@@ -115,7 +134,7 @@ void main() {
     gl_Position = view_proj * vec4(world, 1.0);
 }
 """
-SHIP_FS = "#version 330\n" + _FOG + """
+SHIP_FS = "#version 330\n" + _COMMON + """
 uniform vec3 sun;
 in vec3 world;
 in vec3 normal;
@@ -123,34 +142,6 @@ out vec4 colour;
 void main() {
     vec3 n = normalize(normal);
     vec3 base = n.z > 0.5 ? vec3(0.35, 0.38, 0.36) : vec3(0.55, 0.12, 0.10);   // grey deck, red hull
-    colour = vec4(fogged(base * (0.55 + 0.45 * max(dot(n, sun), 0.0)), world), 1.0);
-}
-"""
-
-BLEND_VS = """
-#version 330
-in vec2 in_ndc;
-out vec2 uv;
-void main() { uv = in_ndc * 0.5 + 0.5; gl_Position = vec4(in_ndc, 0.0, 1.0); }
-"""
-BLEND_FS = """
-#version 330
-uniform sampler2D scene;
-uniform float tan_half_hfov;
-uniform float half_hfov;         // rad
-uniform float blend_left;        // rad
-uniform float blend_right;       // rad
-uniform float gamma;
-in vec2 uv;
-out vec4 colour;
-// Edge blending: in each band the light falls linearly with azimuth, so that where two
-// channels overlap their light sums to one; the projector's gamma is undone on the ramp.
-void main() {
-    float azimuth = atan((2.0 * uv.x - 1.0) * tan_half_hfov);
-    float ramp = 1.0;
-    if (blend_left > 0.0) ramp *= clamp((azimuth + half_hfov) / blend_left, 0.0, 1.0);
-    if (blend_right > 0.0) ramp *= clamp((half_hfov - azimuth) / blend_right, 0.0, 1.0);
-    vec3 c = texture(scene, uv).rgb;
-    colour = vec4(c * pow(ramp, 1.0 / gamma), 1.0);
+    colour = blended(fogged(base * (0.55 + 0.45 * max(dot(n, sun), 0.0)), world));
 }
 """
