@@ -22,7 +22,7 @@ from bridge_node.errors import UserError
 from bridge_node.ice_plots import save_figure
 from bridge_node.link_hub import LinkHub
 from bridge_node.realtime_loop import LoopStats, run_realtime
-from bridge_node.world_setup import build_world, start_world
+from bridge_node.world_setup import build_world, start_world, warm_up
 from sim_core.floe_state import FREE, FROZEN
 
 
@@ -44,6 +44,7 @@ def run(args: argparse.Namespace) -> int:
     console = Console(stderr=args.json)
     with console.status("loading the exercise"):
         model = build_world(cfg, args.config)
+        warm_up(model, cfg)
         data = start_world(model, cfg)
     record = None
     if not args.no_record:

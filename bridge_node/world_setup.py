@@ -19,7 +19,7 @@ from sim_core.ice_model import compile_ice_model
 from sim_core.ice_scene import compile_scene
 from sim_core.manoeuvring_trials import KNOT
 from sim_core.ship_model import compile_ship
-from sim_core.world import WorldData, WorldModel, compile_world, new_world_data
+from sim_core.world import WorldData, WorldModel, compile_world, new_world_data, step
 
 
 def field_tile_classes(cfg: NodeConfig, config_path: str | None) -> tuple[np.ndarray, np.ndarray]:
@@ -60,6 +60,16 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
     except ValueError as exc:
         raise UserError(f"{config_path}: scene: {exc}") from None
     return compile_world(ship, ice, scene)
+
+
+def warm_up(model: WorldModel, cfg: NodeConfig) -> None:
+    """Compile the numba kernels (or load them from numba's cache) before a real-time run,
+    by stepping a throwaway copy of the exercise with its bow in the ice for a few ticks;
+    otherwise the first ice contact would stall the loop for seconds."""
+    data = start_world(model, cfg)
+    data.ship.eta[0] = 0.0  # the stem 75 m into the ice: tiles placed, cells broken, floes floating
+    for _ in range(3):
+        step(model, data, 1.0 / 30.0)
 
 
 def start_world(model: WorldModel, cfg: NodeConfig) -> WorldData:
