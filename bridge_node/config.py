@@ -18,7 +18,7 @@ from sim_core.ice_field import IceFieldSettings
 from sim_core.ice_material import IceMaterial
 from sim_core.ice_model import IceDynamicsSettings
 from sim_core.ice_scene import SceneSettings
-from sim_core.params import Params
+from sim_core.params import Params, repeated
 from sim_core.ship_particulars import TELEGRAPH_POSITIONS, ShipParticulars
 from sim_core.tile_template import FractureSettings
 
@@ -78,7 +78,7 @@ class NodeConfig(Params):
     @model_validator(mode="after")
     def _link_names(self) -> "NodeConfig":
         names = [link.name for link in self.links]
-        doubled = sorted({n for n in names if names.count(n) > 1})
+        doubled = repeated(names)
         if doubled:
             raise ValueError(f"links: names must be unique, repeated: {doubled}")
         for order in ("rudder", "engine"):

@@ -10,3 +10,8 @@ class Params(BaseModel):
     """Frozen, validated parameter block; unknown keys are errors (catches config typos)."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+def repeated(names: list[str]) -> list[str]:
+    """Names that occur more than once (sorted), for uniqueness checks in configs."""
+    return sorted({n for n in names if names.count(n) > 1})

@@ -13,7 +13,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from sim_core.params import Params
+from sim_core.params import Params, repeated
 
 
 class ChannelSettings(Params):
@@ -63,8 +63,7 @@ class RenderSettings(Params):
 
     @model_validator(mode="after")
     def _unique_names(self) -> "RenderSettings":
-        names = [c.name for c in self.channels]
-        doubled = sorted({n for n in names if names.count(n) > 1})
+        doubled = repeated([c.name for c in self.channels])
         if doubled:
             raise ValueError(f"channel names must be unique, repeated: {doubled}")
         return self

@@ -35,6 +35,7 @@ SKY_HORIZON, SKY_ZENITH = (0.78, 0.84, 0.90), (0.38, 0.55, 0.78)
 FOG = (0.70, 0.74, 0.78)
 WATER = (0.10, 0.17, 0.22)
 ICE_INTACT, ICE_BROKEN, ICE_EDGE = (0.93, 0.95, 0.97), (0.60, 0.68, 0.75), (0.52, 0.68, 0.78)
+DECK, HULL = (0.35, 0.38, 0.36), (0.55, 0.12, 0.10)
 
 
 def _mat(m: np.ndarray) -> bytes:
@@ -298,11 +299,12 @@ class SceneRenderer:
             ctx.enable_direct(GL_CLIP_DISTANCE0)
             ctx.enable(moderngl.CULL_FACE)
             self._set(self.floe, view_proj=vp, pose_a=4, pose_b=5, pose_width=POSE_WIDTH, sun=self.sun,
-                      broken_colour=ICE_BROKEN, edge_colour=ICE_EDGE, **common)
+                      top_colour=ICE_BROKEN, side_colour=ICE_EDGE, ambient=0.7, **common)
             self.broken_vao.render(vertices=self.broken_vertices)
             ctx.disable(moderngl.CULL_FACE)  # the ship matrix mirrors (starboard-handed frame)
             ctx.disable_direct(GL_CLIP_DISTANCE0)
-        self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), sun=self.sun, **common)
+        self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), sun=self.sun,
+                  top_colour=DECK, side_colour=HULL, ambient=0.55, **common)
         self.ship_vao.render()
         return cam
 

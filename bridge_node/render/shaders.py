@@ -87,7 +87,6 @@ in vec3 in_normal;
 in int in_row;                   // the floe's row in the state arrays
 out vec3 world;
 out vec3 normal;
-flat out float status;
 void main() {
     ivec2 at = ivec2(in_row % pose_width, in_row / pose_width);
     vec4 a = texelFetch(pose_a, at, 0);
@@ -99,26 +98,26 @@ void main() {
     mat3 r = rz * ry * rx;
     world = r * in_pos + vec3(a.x, a.y, a.z);
     normal = r * in_normal;
-    status = b.z;
     gl_ClipDistance[0] = world.z;                       // opaque water hides what is under it
     gl_Position = view_proj * vec4(world, 1.0);
 }
 """
-FLOE_FS = "#version 330\n" + _COMMON + """
+# Flat faces, lit by the sun: horizontal faces in one colour, vertical ones in another.
+_SHADED = "#version 330\n" + _COMMON + """
 uniform vec3 sun;
-uniform vec3 broken_colour;
-uniform vec3 edge_colour;
+uniform vec3 top_colour;
+uniform vec3 side_colour;
+uniform float ambient;
 in vec3 world;
 in vec3 normal;
-flat in float status;
 out vec4 colour;
 void main() {
     vec3 n = normalize(normal);
-    vec3 base = abs(n.z) > 0.5 ? broken_colour : edge_colour;
-    float light = 0.7 + 0.3 * max(dot(n, sun), 0.0);
-    colour = blended(fogged(base * light, world));
+    vec3 base = abs(n.z) > 0.5 ? top_colour : side_colour;
+    colour = blended(fogged(base * (ambient + (1.0 - ambient) * max(dot(n, sun), 0.0)), world));
 }
 """
+FLOE_FS = _SHADED
 
 SHIP_VS = """
 #version 330
@@ -134,14 +133,4 @@ void main() {
     gl_Position = view_proj * vec4(world, 1.0);
 }
 """
-SHIP_FS = "#version 330\n" + _COMMON + """
-uniform vec3 sun;
-in vec3 world;
-in vec3 normal;
-out vec4 colour;
-void main() {
-    vec3 n = normalize(normal);
-    vec3 base = n.z > 0.5 ? vec3(0.35, 0.38, 0.36) : vec3(0.55, 0.12, 0.10);   // grey deck, red hull
-    colour = blended(fogged(base * (0.55 + 0.45 * max(dot(n, sun), 0.0)), world));
-}
-"""
+SHIP_FS = _SHADED
