@@ -60,6 +60,7 @@ class RenderSettings(Params):
     sun_elevation_deg: float = Field(25.0, ge=-10.0, le=90.0)
     sun_azimuth_deg: float = Field(150.0, ge=0.0, lt=360.0)
     freeboard_m: float = Field(9.0, ge=0.5, le=40.0, description="own ship's deck height above the waterline")
+    lod_distance_m: float = Field(300.0, ge=0.0, le=1.0e6, description="floe side faces drawn within this distance")
 
     @model_validator(mode="after")
     def _unique_names(self) -> "RenderSettings":

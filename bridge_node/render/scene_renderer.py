@@ -5,9 +5,11 @@ triangles about its centroid (seen from above the water: no bottom faces), each 
 cell raster (which cell covers each 0.1 m of the tile), the own ship's mesh. Dynamic: two
 float textures holding every floe row's pose (x, y, heave, yaw; roll, pitch, status) and a
 byte texture of each row's status, a tile table (each placed tile's first floe row,
-template and rotation; -1 for the unbreakable slab), and a vertex buffer of the broken
-floes, to which a cell's template triangles are appended once, when it breaks; the vertex
-shader places them by the pose texture. Level ice (unbreakable tiles and the intact cells
+template and rotation; -1 for the unbreakable slab), and per tile the vertex buffers of its
+broken floes (tops and sides apart), to which a cell's template triangles are appended
+once, when it breaks; the vertex shader places them by the pose texture. A tile's floes
+are drawn only when its box is in the channel's view, their side faces only within the
+level-of-detail distance. Level ice (unbreakable tiles and the intact cells
 of breakable ones) is drawn per pixel by the environment pass from the cell raster, so it
 costs no triangles: on a software rasteriser the vertex work of thousands of intact cells
 would dominate the frame. Per frame only the poses of tiles placed or simulated since the
@@ -27,6 +29,7 @@ from sim_core.floe_state import INTACT
 from sim_core.world import WorldData, WorldModel
 
 GL_CLIP_DISTANCE0 = 0x3000
+FLOE_DRIFT_MARGIN = 30.0  # m: broken floes may drift this far out of their tile
 POSE_WIDTH = 2048  # texels per line of the pose textures
 MAX_TILES = 4096 * 4096  # tile table of 8 bytes per tile: 134 MB of texture at most
 RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m tiles)
@@ -77,10 +80,11 @@ def channel_camera(channel: ChannelSettings, north: float, east: float, psi: flo
     return Camera(eye, view, proj)
 
 
-def _cell_vertices(model: WorldModel) -> tuple[np.ndarray, np.ndarray]:
+def _cell_vertices(model: WorldModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Triangles of every template cell that can be seen from above the water (bottom faces
     left out), wound counter-clockwise from outside: (position 3f, normal 3f) per vertex,
-    and each global cell's first vertex (G + 1,)."""
+    each cell's tops first, then its sides. Returns the vertices, each global cell's first
+    vertex (G + 1,) and its first side vertex (G,)."""
     ice = model.ice
     tris = ice.tris.copy()
     owner = np.repeat(np.arange(len(ice.mass)), np.diff(ice.tri_start))
@@ -91,11 +95,63 @@ def _cell_vertices(model: WorldModel) -> tuple[np.ndarray, np.ndarray]:
     tris[inward] = tris[inward][:, ::-1]
     keep = n[:, 2] > -0.5
     tris, n, owner = tris[keep], n[keep], owner[keep]
+    side = n[:, 2] < 0.5
+    order = np.lexsort((side, owner))  # by cell, tops before sides
+    tris, n, owner, side = tris[order], n[order], owner[order], side[order]
     out = np.zeros((len(tris) * 3, 6), dtype="f4")
     out[:, :3] = tris.reshape(-1, 3)
     out[:, 3:] = np.repeat(n, 3, axis=0)
-    start = np.concatenate([[0], np.cumsum(3 * np.bincount(owner, minlength=len(ice.mass)))])
-    return out, start
+    cells = len(ice.mass)
+    start = np.concatenate([[0], np.cumsum(3 * np.bincount(owner, minlength=cells))])
+    side_start = start[:-1] + 3 * np.bincount(owner[~side], minlength=cells)
+    return out, start, side_start
+
+
+def _gather(starts: np.ndarray, stops: np.ndarray) -> np.ndarray:
+    """Indices of the concatenated ranges [starts[i], stops[i])."""
+    counts = stops - starts
+    return np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+
+
+class _FloeBuffer:
+    """Triangles of one tile's broken floes (tops or sides), appended to as cells break;
+    the storage doubles when full."""
+
+    STRIDE = 28  # bytes: position 3f, normal 3f, floe row i4
+
+    def __init__(self, ctx: moderngl.Context, program: moderngl.Program) -> None:
+        self.ctx, self.program = ctx, program
+        self.vbo = self.vao = None
+        self.vertices = 0
+
+    def append(self, verts: np.ndarray, rows: np.ndarray) -> None:
+        data = np.zeros(len(verts), dtype=[("v", "f4", 6), ("row", "i4")])
+        data["v"], data["row"] = verts, rows
+        size = (self.vertices + len(verts)) * self.STRIDE
+        if self.vbo is None or size > self.vbo.size:
+            old = self.vbo
+            self.vbo = self.ctx.buffer(reserve=max(size, 2 * (old.size if old else 0), 1 << 16))
+            if old is not None:
+                self.ctx.copy_buffer(self.vbo, old, self.vertices * self.STRIDE)
+                old.release()
+            self.vao = self.ctx.vertex_array(self.program, [(self.vbo, "3f 3f i", "in_pos", "in_normal", "in_row")])
+        self.vbo.write(data.tobytes(), offset=self.vertices * self.STRIDE)
+        self.vertices += len(verts)
+
+    def render(self) -> None:
+        if self.vertices:
+            self.vao.render(vertices=self.vertices)
+
+
+def visible_boxes(view_proj: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Which axis-aligned boxes (n, 3) corners lo..hi, world m, may be seen: False only when
+    all eight corners lie outside the same clip plane."""
+    corners = np.stack(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij"), -1).reshape(8, 3)
+    pts = lo[:, None, :] + corners[None] * (hi - lo)[:, None, :]
+    clip = np.concatenate([pts, np.ones(pts.shape[:2] + (1,))], axis=-1) @ view_proj.T
+    x, y, z, w = clip[..., 0], clip[..., 1], clip[..., 2], clip[..., 3]
+    outside = [x < -w, x > w, y < -w, y > w, z < -w, z > w]
+    return ~np.any([o.all(axis=1) for o in outside], axis=0)
 
 
 def cell_rasters(model: WorldModel, size: int) -> np.ndarray:
@@ -155,14 +211,12 @@ class SceneRenderer:
         self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST
         hull = _ship_vertices(model.contour, settings.freeboard_m)
         self.ship_vao = ctx.vertex_array(self.ship, [(ctx.buffer(hull.tobytes()), "3f 3f", "in_pos", "in_normal")])
-        self.cell_verts, self.cell_vert_start = _cell_vertices(model)
+        self.cell_verts, self.cell_vert_start, self.cell_side_start = _cell_vertices(model)
         self.raster_size = RASTER_SIZE if len(model.ice.templates) <= 4 else RASTER_SIZE // 2
         raster = cell_rasters(model, self.raster_size)
         self.cell_raster = ctx.texture((self.raster_size, raster.shape[0]), 1, raster.tobytes(), dtype="u2")
         self.cell_raster.filter = moderngl.NEAREST, moderngl.NEAREST
-        self.broken_vbo = None
-        self.broken_vao = None
-        self.broken_vertices = 0
+        self.tile_floes: dict[int, tuple[_FloeBuffer, _FloeBuffer]] = {}  # placement -> (tops, sides)
         self._drawn = np.zeros(0, dtype=bool)
         self.pose_a = self.pose_b = self.status = None
         self._pose_lines = 0
@@ -201,31 +255,20 @@ class SceneRenderer:
         self._placed = len(tiles.template)
 
     def _append_broken(self, st) -> None:
-        """Append the template triangles of cells broken since the last call."""
+        """Append the template triangles of cells broken since the last call to their
+        tile's buffers (tops and sides apart, for the level of detail)."""
         if len(self._drawn) < st.n:
             self._drawn = np.concatenate([self._drawn, np.zeros(st.n - len(self._drawn), bool)])
         new = np.nonzero((st.status != INTACT) & ~self._drawn[: st.n])[0]
-        if not len(new):
-            return
         self._drawn[new] = True
-        g = st.gcell[new]
-        a, b = self.cell_vert_start[g], self.cell_vert_start[g + 1]
-        counts = b - a
-        idx = np.repeat(a - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
-        verts = np.zeros(len(idx), dtype=[("v", "f4", 6), ("row", "i4")])
-        verts["v"] = self.cell_verts[idx]
-        verts["row"] = np.repeat(new, counts)
-        size = (self.broken_vertices + len(idx)) * verts.itemsize
-        if self.broken_vbo is None or size > self.broken_vbo.size:
-            old = self.broken_vbo
-            self.broken_vbo = self.ctx.buffer(reserve=max(size, 2 * (old.size if old else 0), 1 << 20))
-            if old is not None:
-                self.ctx.copy_buffer(self.broken_vbo, old, self.broken_vertices * verts.itemsize)
-                old.release()
-            self.broken_vao = self.ctx.vertex_array(
-                self.floe, [(self.broken_vbo, "3f 3f i", "in_pos", "in_normal", "in_row")])
-        self.broken_vbo.write(verts.tobytes(), offset=self.broken_vertices * verts.itemsize)
-        self.broken_vertices += len(idx)
+        for k in np.unique(st.tile[new]):
+            rows = new[st.tile[new] == k]
+            g = st.gcell[rows]
+            if int(k) not in self.tile_floes:
+                self.tile_floes[int(k)] = (_FloeBuffer(self.ctx, self.floe), _FloeBuffer(self.ctx, self.floe))
+            for buf, a, b in zip(self.tile_floes[int(k)], (self.cell_vert_start[g], self.cell_side_start[g]),
+                                 (self.cell_side_start[g], self.cell_vert_start[g + 1])):
+                buf.append(self.cell_verts[_gather(a, b)], np.repeat(rows, b - a))
 
     def _ensure_pose_capacity(self, rows: int) -> None:
         lines = max(1, math.ceil(rows / POSE_WIDTH))
@@ -276,37 +319,56 @@ class SceneRenderer:
         blend.use(6)
         common = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "fog_colour": FOG, "blend_ramp": 6}
         ctx.clear(*FOG, depth=1.0)
-        ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
-        tx, ty = math.tan(half), math.tan(channel.vfov() / 2)
-        corners = np.array([[-1, -1], [3, -1], [-1, 3]], dtype=float)
-        rays = -cam.view[2, :3] + corners[:, :1] * tx * cam.view[0, :3] + corners[:, 1:] * ty * cam.view[1, :3]
-        self.env_buf.write(np.hstack([corners, rays]).astype("f4").tobytes())
-        scene = self.model.scene
         self.tile_info.use(0)
         self.cell_raster.use(3)
         if self.pose_b is not None:
             self.pose_a.use(4)
             self.pose_b.use(5)
             self.status.use(7)
+        # near to far: ship, floes, then the environment behind them, so that the depth test
+        # spares the full-screen pass every pixel already covered
+        ctx.enable(moderngl.DEPTH_TEST)
+        self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), sun=self.sun,
+                  top_colour=DECK, side_colour=HULL, ambient=0.55, **common)
+        self.ship_vao.render()
+        if self.tile_floes:
+            ctx.enable_direct(GL_CLIP_DISTANCE0)
+            ctx.enable(moderngl.CULL_FACE)  # not for the ship: its matrix mirrors (starboard-handed frame)
+            self._set(self.floe, view_proj=vp, pose_a=4, pose_b=5, pose_width=POSE_WIDTH, sun=self.sun,
+                      top_colour=ICE_BROKEN, side_colour=ICE_EDGE, ambient=0.7, **common)
+            self._draw_floes(data, cam)
+            ctx.disable(moderngl.CULL_FACE)
+            ctx.disable_direct(GL_CLIP_DISTANCE0)
+        tx, ty = math.tan(half), math.tan(channel.vfov() / 2)
+        corners = np.array([[-1, -1], [3, -1], [-1, 3]], dtype=float)
+        rays = -cam.view[2, :3] + corners[:, :1] * tx * cam.view[0, :3] + corners[:, 1:] * ty * cam.view[1, :3]
+        self.env_buf.write(np.hstack([corners, rays]).astype("f4").tobytes())
+        scene = self.model.scene
         ice = tuple(c * (0.7 + 0.3 * max(self.sun[2], 0.0)) for c in ICE_INTACT)
         self._set(self.env, horizon_colour=SKY_HORIZON, zenith_colour=SKY_ZENITH, water_colour=WATER,
                   ice_colour=ice, slab_z=self.slab_z, far=s.far_m, tile_info=0, cell_raster=3,
                   raster_size=self.raster_size, status=7, pose_width=POSE_WIDTH,
                   field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
         self.env_vao.render()
-        ctx.enable(moderngl.DEPTH_TEST)
-        if self.broken_vertices:
-            ctx.enable_direct(GL_CLIP_DISTANCE0)
-            ctx.enable(moderngl.CULL_FACE)
-            self._set(self.floe, view_proj=vp, pose_a=4, pose_b=5, pose_width=POSE_WIDTH, sun=self.sun,
-                      top_colour=ICE_BROKEN, side_colour=ICE_EDGE, ambient=0.7, **common)
-            self.broken_vao.render(vertices=self.broken_vertices)
-            ctx.disable(moderngl.CULL_FACE)  # the ship matrix mirrors (starboard-handed frame)
-            ctx.disable_direct(GL_CLIP_DISTANCE0)
-        self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), sun=self.sun,
-                  top_colour=DECK, side_colour=HULL, ambient=0.55, **common)
-        self.ship_vao.render()
         return cam
+
+    def _draw_floes(self, data: WorldData, cam: Camera) -> None:
+        """Each tile's broken floes, if its box (with a margin for drift) is in view; their
+        side faces only within the level-of-detail distance."""
+        keys = list(self.tile_floes)
+        corner = np.array([data.ice.tiles.corner[k] for k in keys], dtype=float)
+        side = self.model.scene.side
+        lo = np.column_stack([corner - FLOE_DRIFT_MARGIN, np.full(len(keys), -2.0)])
+        hi = np.column_stack([corner + side + FLOE_DRIFT_MARGIN, np.full(len(keys), 2.0)])
+        seen = visible_boxes(cam.view_proj, lo, hi)
+        gap = np.maximum(np.maximum(lo[:, :2] - cam.eye[:2], cam.eye[:2] - hi[:, :2]), 0.0)
+        near = np.hypot(gap[:, 0], gap[:, 1]) < self.settings.lod_distance_m
+        for k, show, full in zip(keys, seen, near):
+            if show:
+                tops, sides = self.tile_floes[k]
+                tops.render()
+                if full:
+                    sides.render()
 
     @staticmethod
     def _set(prog: moderngl.Program, **uniforms) -> None:
