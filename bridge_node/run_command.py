@@ -1,7 +1,9 @@
 """``icebridge run``: the node. Links -> orders -> ship -> ice world -> outputs, in real time.
 
 Shows a live status line; at the end prints a summary and writes the ship's track and the
-tick times as plots. Ctrl-C (or SIGTERM) ends the run cleanly.
+tick times as plots. With ``--frames-every S`` it also renders the projector channels
+every S simulated seconds to PNG frames (offscreen; a frame costs the loop its render
+time). Ctrl-C (or SIGTERM) ends the run cleanly.
 """
 from __future__ import annotations
 
@@ -22,6 +24,7 @@ from bridge_node.errors import UserError
 from bridge_node.ice_plots import save_figure
 from bridge_node.link_hub import LinkHub
 from bridge_node.realtime_loop import LoopStats, run_realtime
+from bridge_node.render_snapshot_command import open_renderer
 from bridge_node.world_setup import build_world, start_world, warm_up
 from sim_core.floe_state import FREE, FROZEN
 
@@ -31,7 +34,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rate", type=float, default=None, help="world steps per second (default: config)")
     p.add_argument("--no-record", action="store_true", help="do not record the link traffic")
     p.add_argument("--json", action="store_true", help="end with one JSON summary")
-    p.add_argument("--out", default="out", help="folder for the plots (default: out)")
+    p.add_argument("--out", default="out", help="folder for the plots and frames (default: out)")
+    p.add_argument("--frames-every", type=float, default=None, metavar="S",
+                   help="also render the projector channels every S simulated seconds to OUT/frames/ (PNG)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -41,6 +46,8 @@ def run(args: argparse.Namespace) -> int:
     rate = args.rate if args.rate is not None else cfg.realtime.rate_hz
     if not 5.0 <= rate <= 120.0:
         raise UserError(f"--rate {rate} Hz is outside the allowed range [5, 120]")
+    if args.frames_every is not None and not 0.1 <= args.frames_every <= 3600.0:
+        raise UserError(f"--frames-every {args.frames_every} s is outside the allowed range [0.1, 3600]")
     console = Console(stderr=args.json)
     with console.status("loading the exercise"):
         model = build_world(cfg, args.config)
@@ -54,10 +61,17 @@ def run(args: argparse.Namespace) -> int:
     signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt))
     origin = (math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg))
     shown = [0.0]
+    channels = open_renderer(cfg, model) if args.frames_every is not None else None
+    frames = {"next": 0.0, "written": 0}
     hub.open()
     try:
         with Live(console=console, refresh_per_second=4, transient=True) as live:
             def on_tick(d, events, out) -> None:
+                if channels is not None and d.time >= frames["next"]:
+                    frames["next"] += args.frames_every
+                    channels.render(d)
+                    channels.save_png(Path(args.out) / "frames", f"t{d.time:08.2f}_")
+                    frames["written"] += 1
                 now = time.monotonic()
                 if now - shown[0] > 0.25:
                     shown[0] = now
@@ -78,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
         "rate_hz": rate, "live_floes": data.ice.state.count(FREE), "frozen_floes": data.ice.state.count(FROZEN),
         "north_m": round(float(data.ship.eta[0]), 1), "east_m": round(float(data.ship.eta[1]), 1),
         "speed_kn": round(float(data.ship.nu[0]) / 0.5144, 2), "alarms": [a.text for a in hub.active_alarms.values()],
-        "links": links, "plot": str(plot),
+        "links": links, "plot": str(plot), "frames_rendered": frames["written"],
         "record": str(record) if record else None,
     }
     if args.json:
