@@ -202,6 +202,9 @@ class SceneRenderer:
         self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=shaders.ENV_FS)
         self.floe = ctx.program(vertex_shader=shaders.FLOE_VS, fragment_shader=shaders.FLOE_FS)
         self.ship = ctx.program(vertex_shader=shaders.SHIP_VS, fragment_shader=shaders.SHIP_FS)
+        self.band = ctx.program(vertex_shader=shaders.BAND_VS, fragment_shader=shaders.BAND_FS)
+        self.band_buf = ctx.buffer(reserve=2 * 6 * 2 * 4)
+        self.band_vao = ctx.vertex_array(self.band, [(self.band_buf, "2f", "in_ndc")])
         self.env_buf = ctx.buffer(reserve=3 * 5 * 4)
         self.env_vao = ctx.vertex_array(self.env, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
         if scene.nx * scene.ny > MAX_TILES:
@@ -316,8 +319,7 @@ class SceneRenderer:
         cam = channel_camera(channel, north, east, psi, s.far_m)
         vp = cam.view_proj
         half = math.radians(channel.hfov_deg) / 2
-        blend.use(6)
-        common = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "fog_colour": FOG, "blend_ramp": 6}
+        common = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "fog_colour": FOG}
         ctx.clear(*FOG, depth=1.0)
         self.tile_info.use(0)
         self.cell_raster.use(3)
@@ -350,7 +352,31 @@ class SceneRenderer:
                   raster_size=self.raster_size, status=7, pose_width=POSE_WIDTH,
                   field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
         self.env_vao.render()
+        self._blend_bands(channel, blend)
         return cam
+
+    def _blend_bands(self, channel: ChannelSettings, blend: moderngl.Texture) -> None:
+        """Multiply the columns of the blend bands by their factors (a pass over the bands
+        only, not the whole image)."""
+        t = math.tan(math.radians(channel.hfov_deg) / 2)
+        spans = []
+        if channel.blend_left_deg > 0:
+            spans.append((-1.0, math.tan(math.radians(channel.blend_left_deg - channel.hfov_deg / 2)) / t))
+        if channel.blend_right_deg > 0:
+            spans.append((math.tan(math.radians(channel.hfov_deg / 2 - channel.blend_right_deg)) / t, 1.0))
+        if not spans:
+            return
+        quads = np.array([[[a, -1], [b, -1], [b, 1], [a, -1], [b, 1], [a, 1]] for a, b in spans], dtype="f4")
+        self.band_buf.orphan(quads.nbytes)
+        self.band_buf.write(quads.tobytes())
+        ctx = self.ctx
+        ctx.disable(moderngl.DEPTH_TEST)
+        ctx.enable(moderngl.BLEND)
+        ctx.blend_func = moderngl.ZERO, moderngl.SRC_COLOR
+        blend.use(6)
+        self.band["blend_ramp"].value = 6
+        self.band_vao.render(vertices=6 * len(spans))
+        ctx.disable(moderngl.BLEND)
 
     def _draw_floes(self, data: WorldData, cam: Camera) -> None:
         """Each tile's broken floes, if its box (with a margin for drift) is in view; their

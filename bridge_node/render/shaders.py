@@ -1,22 +1,18 @@
 """GLSL 3.30 programs of the scene: the environment pass (sky, sea, level ice: the
 unbreakable slab and the intact cells of breakable tiles), broken floes, and the own ship.
-World frame: x east, y north, z up, metres. Every fragment shader applies the channel's
-edge-blend ramp itself, so no separate blend pass is needed."""
+World frame: x east, y north, z up, metres. The channel's edge blending is a last pass over
+the blend bands only, multiplying what is there by each column's factor."""
 
 _COMMON = """
 uniform vec3 eye;
 uniform float visibility;
 uniform vec3 fog_colour;
-uniform sampler2D blend_ramp;    // per pixel column: the channel's edge-blend factor
 vec3 fogged(vec3 colour, vec3 world) {
     // meteorological visibility: contrast falls to 5 % (exp(-3)) at that distance
     float f = exp(-3.0 * distance(world, eye) / visibility);
     return mix(fog_colour, colour, f);
 }
-// Edge blending: a factor per pixel column, computed once per channel (channel_output.py)
-vec4 blended(vec3 colour) {
-    return vec4(colour * texelFetch(blend_ramp, ivec2(gl_FragCoord.x, 0), 0).r, 1.0);
-}
+vec4 opaque(vec3 colour) { return vec4(colour, 1.0); }
 """
 
 ENV_VS = """
@@ -64,15 +60,15 @@ bool level_ice(vec2 p) {
 void main() {
     vec3 r = normalize(ray);
     if (r.z >= 0.0) {
-        colour = blended(mix(horizon_colour, zenith_colour, pow(r.z, 0.6)));
+        colour = opaque(mix(horizon_colour, zenith_colour, sqrt(r.z)));
         return;
     }
     float t_sea = -eye.z / r.z;
-    if (t_sea > far) { colour = blended(fog_colour); return; }
+    if (t_sea > far) { colour = opaque(fog_colour); return; }
     vec3 hit = eye + r * ((slab_z - eye.z) / r.z);
     bool on_field = hit.x >= 0.0 && hit.y >= 0.0 && hit.x < field_size.x && hit.y < field_size.y;
-    if (on_field && level_ice(hit.xy)) colour = blended(fogged(ice_colour, hit));
-    else colour = blended(fogged(water_colour, eye + r * t_sea));
+    if (on_field && level_ice(hit.xy)) colour = opaque(fogged(ice_colour, hit));
+    else colour = opaque(fogged(water_colour, eye + r * t_sea));
 }
 """
 
@@ -114,7 +110,7 @@ out vec4 colour;
 void main() {
     vec3 n = normalize(normal);
     vec3 base = abs(n.z) > 0.5 ? top_colour : side_colour;
-    colour = blended(fogged(base * (ambient + (1.0 - ambient) * max(dot(n, sun), 0.0)), world));
+    colour = opaque(fogged(base * (ambient + (1.0 - ambient) * max(dot(n, sun), 0.0)), world));
 }
 """
 FLOE_FS = _SHADED
@@ -134,3 +130,16 @@ void main() {
 }
 """
 SHIP_FS = _SHADED
+
+BAND_VS = """
+#version 330
+in vec2 in_ndc;
+void main() { gl_Position = vec4(in_ndc, 0.0, 1.0); }
+"""
+# drawn with blending (zero, source colour): the framebuffer is multiplied by the factor
+BAND_FS = """
+#version 330
+uniform sampler2D blend_ramp;    // per pixel column: the channel's edge-blend factor
+out vec4 colour;
+void main() { colour = vec4(vec3(texelFetch(blend_ramp, ivec2(gl_FragCoord.x, 0), 0).r), 1.0); }
+"""
