@@ -7,6 +7,7 @@ A user's mistake (bad config, bad argument) prints one clear message and exits w
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 
 from bridge_node import (experiment_command, links_command, prefracture_command, render_snapshot_command, run_command,
@@ -34,8 +35,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _interrupt(*_) -> None:
+    raise KeyboardInterrupt
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    # SIGTERM ends a command as Ctrl-C does: the long-running ones close their links and
+    # flush their session record on the way out
+    signal.signal(signal.SIGTERM, _interrupt)
     try:
         return int(args.handler(args) or 0)
     except UserError as exc:

@@ -3,3 +3,4 @@
 
 class UserError(Exception):
     """A bad argument or input file; the message says what is wrong and what is allowed."""
+

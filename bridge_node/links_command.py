@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import signal
 import time
 from datetime import datetime, timezone
 from pathlib import Path
@@ -74,7 +73,6 @@ def run(args: argparse.Namespace) -> int:
         stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
         record = Path(args.record) if args.record else resolve_path(args.config, cfg.paths.session_dir) / stamp
     hub = LinkHub(cfg, args.config, record)
-    signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt))
     console = Console(stderr=True)
     rejected: list[str] = []
     hub.open()

@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import signal
 import time
 from datetime import datetime, timezone
 from pathlib import Path
@@ -58,7 +57,6 @@ def run(args: argparse.Namespace) -> int:
         stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
         record = resolve_path(args.config, cfg.paths.session_dir) / stamp
     hub = LinkHub(cfg, args.config, record)
-    signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt))
     origin = (math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg))
     shown = [0.0]
     channels = open_renderer(cfg, model) if args.frames_every is not None else None

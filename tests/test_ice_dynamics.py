@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from sim_core.breaking_experiment import channel_and_band, run_breaking
-from sim_core.floe_state import BY_CONTACT, BY_HULL, FREE, INTACT
+from sim_core.floe_state import BY_HULL, FREE, INTACT
 from sim_core.hull_contour import CONTOUR_POINTS, waterline_contour
 from sim_core.ice_breaking import impact_constant
 from sim_core.ice_dynamics import HullMotion, ice_step, new_ice_data, place_tile

@@ -2,7 +2,6 @@
 ice world, and the instruments see the result."""
 import math
 import threading
-import time
 
 import can
 import pytest
