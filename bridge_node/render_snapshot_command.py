@@ -24,17 +24,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def open_renderer(cfg, model):
-    """EGL context, scene renderer and channel set; a missing EGL/Mesa is a clear error."""
-    from bridge_node.render.channel_output import ChannelSet, create_context
+    """Context, scene renderer and channel set (with the channel windows); a missing display
+    or EGL is a clear error."""
+    from bridge_node.render.channel_output import ChannelSet, context_for
+    from bridge_node.render.channel_windows import WindowError
     from bridge_node.render.scene_renderer import SceneRenderer
 
+    no_display = "set the channels' output to \"png\" on a node without a display"
     try:
-        ctx = create_context()
+        ctx, hidden = context_for(cfg.render.channels)
+    except WindowError as exc:
+        raise UserError(f"render: {exc}; {no_display}") from None
     except Exception as exc:  # moderngl raises plain Exception when EGL cannot start
         raise UserError(f"cannot open a headless OpenGL context through EGL ({exc}); install the EGL and "
                         "Mesa libraries (scripts/setup.sh installs libegl1, libgl1, libegl-mesa0, "
                         "libgl1-mesa-dri)") from None
-    return ChannelSet(SceneRenderer(ctx, model, cfg.render), cfg.render.channels)
+    try:
+        return ChannelSet(SceneRenderer(ctx, model, cfg.render), cfg.render.channels, hidden)
+    except WindowError as exc:
+        raise UserError(f"render: {exc}; {no_display}") from None
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,5 +1,5 @@
-"""Offscreen channel targets: render each channel at its resolution (edge blending is done
-by the scene's shaders) and read the image back (for PNG frames or tests)."""
+"""Channel targets: render each channel at its resolution into a framebuffer, then show it
+in its window, write it as a PNG frame, or read it back (tests)."""
 from __future__ import annotations
 
 import math
@@ -8,6 +8,7 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
+from bridge_node.render.channel_windows import ChannelWindow, window_context
 from bridge_node.render.render_settings import ChannelSettings
 from bridge_node.render.scene_renderer import SceneRenderer
 from sim_core.world import WorldData
@@ -16,6 +17,15 @@ from sim_core.world import WorldData
 def create_context() -> moderngl.Context:
     """A headless OpenGL 3.3 context through EGL (Mesa's llvmpipe works without a GPU)."""
     return moderngl.create_standalone_context(backend="egl")
+
+
+def context_for(channels: list[ChannelSettings]) -> tuple[moderngl.Context, object | None]:
+    """The context to draw these channels in: a hidden glfw window's if any channel is shown
+    in a window (the channel windows share it), else headless EGL. Returns it with the
+    hidden window (None for EGL)."""
+    if any(c.output == "window" for c in channels):
+        return window_context()
+    return create_context(), None
 
 
 def blend_ramp(channel: ChannelSettings, azimuth: np.ndarray) -> np.ndarray:
@@ -45,7 +55,8 @@ class ChannelTarget:
     def __init__(self, ctx: moderngl.Context, channel: ChannelSettings) -> None:
         size = (channel.width, channel.height)
         self.channel = channel
-        self.fbo = ctx.framebuffer([ctx.renderbuffer(size, 3)], ctx.depth_renderbuffer(size))
+        self.colour = ctx.texture(size, 3)  # a texture, so that a channel window can show it
+        self.fbo = ctx.framebuffer([self.colour], ctx.depth_renderbuffer(size))
         self.blend = ctx.texture((channel.width, 1), 1, column_factors(channel).tobytes(), dtype="f4")
         self.blend.filter = moderngl.NEAREST, moderngl.NEAREST
 
@@ -62,15 +73,20 @@ class ChannelTarget:
 class ChannelSet:
     """All channels of a projection system over one scene renderer."""
 
-    def __init__(self, renderer: SceneRenderer, channels: list[ChannelSettings]) -> None:
+    def __init__(self, renderer: SceneRenderer, channels: list[ChannelSettings], hidden_window=None) -> None:
         self.renderer = renderer
         self.targets = [ChannelTarget(renderer.ctx, c) for c in channels]
+        self.windows = [ChannelWindow(renderer.ctx, hidden_window, t.channel, t.colour)
+                        for t in self.targets if t.channel.output == "window"]
 
     def render(self, data: WorldData) -> None:
+        """Draw every channel, and show the window channels."""
         self.renderer.update(data)
         for t in self.targets:
             t.render(self.renderer, data)
         self.renderer.ctx.finish()
+        for w in self.windows:
+            w.present()
 
     def save_png(self, folder: Path, stem: str = "") -> list[Path]:
         from PIL import Image

@@ -3,8 +3,9 @@
 A channel is one projector: its view direction relative to the ship's head (yaw, + to
 starboard; pitch, + up), its field of view, resolution, eye point on the bridge (ship
 frame: x forward, y to starboard, z up from the waterline, m), edge-blend bands (degrees at
-its left and right edges, where it overlaps its neighbours), and its output: PNG frames
-offscreen, or ``none`` (render only, for timing).
+its left and right edges, where it overlaps its neighbours), and its output: PNG frames,
+a window on a given monitor (glfw; full-screen or at the monitor's corner), or ``none``
+(render only, for timing).
 """
 from __future__ import annotations
 
@@ -28,7 +29,9 @@ class ChannelSettings(Params):
     blend_left_deg: float = Field(0.0, ge=0.0, le=30.0)
     blend_right_deg: float = Field(0.0, ge=0.0, le=30.0)
     gamma: float = Field(2.2, ge=1.0, le=3.0, description="projector gamma for the blend ramps")
-    output: Literal["png", "none"] = "png"
+    output: Literal["png", "window", "none"] = "png"
+    monitor: int = Field(0, ge=0, le=15, description="window output: the monitor's number")
+    fullscreen: bool = Field(False, description="window output: full-screen on that monitor")
 
     @model_validator(mode="after")
     def _blend_fits(self) -> "ChannelSettings":
