@@ -138,6 +138,13 @@ def _load_validated(path: Path, schema: type[Params]) -> Params:
         raise ConfigError(f"{path}: invalid configuration:\n  {lines}") from None
 
 
+def new_session_dir(cfg: NodeConfig, config_path: str | Path | None) -> Path:
+    """A new session record folder under ``paths.session_dir``, named by the UTC time."""
+    from datetime import datetime, timezone
+
+    return resolve_path(config_path, cfg.paths.session_dir) / datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+
+
 def resolve_path(config_path: str | Path | None, value: str) -> Path:
     """A path from the config: ~ expanded, relative paths taken from the config's folder."""
     p = Path(value).expanduser()

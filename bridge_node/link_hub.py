@@ -73,7 +73,6 @@ class LinkHub:
             number, up = LINK_DOWN_ALARM + i, link.health().connected
             if up == (number in self.active_alarms):
                 changes.append(Alarm(number, f"link {link.name} {'up' if up else 'down'}", not up))
-        changes = [a for a in changes if a.active or a.number in self.active_alarms]  # clear only what is set
         for alarm in changes:
             self._raise(alarm, now)
         if now - self._last_announce >= ALARM_REPEAT_S:

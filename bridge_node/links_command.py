@@ -11,16 +11,16 @@ import argparse
 import json
 import math
 import time
-from datetime import datetime, timezone
 from pathlib import Path
 
 from rich.console import Console
 from rich.live import Live
 from rich.table import Table
 
-from bridge_node.config import load_config, load_ship, resolve_path
+from bridge_node.config import load_config, load_ship, new_session_dir
 from bridge_node.errors import UserError
 from bridge_node.link_hub import LinkHub
+from sim_core.manoeuvring_trials import KNOT
 from sim_core.ship_model import compile_ship, new_ship_data, step
 from sim_core.ship_outputs import ship_outputs
 from sim_core.world import apply_controls
@@ -44,7 +44,7 @@ def _value(order) -> str:
 
 def _view(hub: LinkHub, ship, now: float) -> Table:
     table = Table(title=f"icebridge links monitor: rudder {math.degrees(ship.rudder):+.1f} deg, "
-                        f"shaft {ship.rps * 60:+.0f} rpm, speed {ship.nu[0] / 0.5144:.1f} kn")
+                        f"shaft {ship.rps * 60:+.0f} rpm, speed {ship.nu[0] / KNOT:.1f} kn")
     for col in ("source/order/engine", "value", "age, s"):
         table.add_column(col)
     for key, order in sorted(hub.last_orders.items()):
@@ -70,8 +70,7 @@ def run(args: argparse.Namespace) -> int:
     lat0, lon0 = math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg)
     record = None
     if not args.no_record:
-        stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
-        record = Path(args.record) if args.record else resolve_path(args.config, cfg.paths.session_dir) / stamp
+        record = Path(args.record) if args.record else new_session_dir(cfg, args.config)
     hub = LinkHub(cfg, args.config, record)
     console = Console(stderr=True)
     rejected: list[str] = []
@@ -113,7 +112,7 @@ def _summary(hub: LinkHub, data, start: float, rejected: list[str], record: Path
         "outputs": {link.name: link.health().outputs for link in hub.links},
         "links": [link.health().as_dict() for link in hub.links],
         "ship": {"rudder_deg": round(math.degrees(data.rudder), 2), "shaft_rpm": round(data.rps * 60, 1),
-                 "speed_kn": round(data.nu[0] / 0.5144, 2)},
+                 "speed_kn": round(data.nu[0] / KNOT, 2)},
         "rejected_orders": rejected[-20:],
         "record": str(record) if record else None,
     }

@@ -29,6 +29,7 @@ class _Channel:
     applied: float = -math.inf  # time of the last order passed on
     all_stale_since: float | None = None
     fail_safe_applied: bool = False
+    stale_alarm: bool = False  # the source-stale alarm is raised
 
 
 @dataclass
@@ -72,12 +73,16 @@ class OrderArbiter:
             if source != ch.active:
                 if ch.active is not None and source is not None:
                     alarms.append(Alarm(stale_no, f"{name} source {ch.active} stale; using {source}", True))
-                elif source is not None:  # back from none: clear both alarms
-                    alarms.append(Alarm(stale_no, f"{name} source {source} in use", False))
+                    ch.stale_alarm = True
+                elif source is not None:  # back from none: clear the alarms that were raised
+                    if ch.stale_alarm:
+                        alarms.append(Alarm(stale_no, f"{name} source {source} in use", False))
+                        ch.stale_alarm = False
                     if ch.fail_safe_applied:
                         alarms.append(Alarm(fail_no, f"{name} fail-safe cleared", False))
                 else:
                     alarms.append(Alarm(stale_no, f"{name} source {ch.active} stale; no other source", True))
+                    ch.stale_alarm = True
                 ch.active = source
                 ch.applied = -math.inf
             if source is None:

@@ -11,14 +11,13 @@ import argparse
 import json
 import math
 import time
-from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
 from rich.console import Console
 from rich.live import Live
 
-from bridge_node.config import load_config, resolve_path
+from bridge_node.config import load_config, new_session_dir
 from bridge_node.errors import UserError
 from bridge_node.ice_plots import save_figure
 from bridge_node.link_hub import LinkHub
@@ -26,6 +25,7 @@ from bridge_node.realtime_loop import LoopStats, run_realtime
 from bridge_node.render_snapshot_command import open_renderer
 from bridge_node.world_setup import build_world, start_world, warm_up
 from sim_core.floe_state import FREE, FROZEN
+from sim_core.manoeuvring_trials import KNOT
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -54,8 +54,7 @@ def run(args: argparse.Namespace) -> int:
         data = start_world(model, cfg)
     record = None
     if not args.no_record:
-        stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
-        record = resolve_path(args.config, cfg.paths.session_dir) / stamp
+        record = new_session_dir(cfg, args.config)
     hub = LinkHub(cfg, args.config, record)
     origin = (math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg))
     shown = [0.0]
@@ -76,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
                     st = d.ice.state
                     live.update(
                         f"t {d.time:7.1f} s | N {out.north:8.1f} m E {out.east:8.1f} m | hdg "
-                        f"{math.degrees(out.heading):5.1f} deg | {out.speed_over_ground / 0.5144:4.1f} kn | "
+                        f"{math.degrees(out.heading):5.1f} deg | {out.speed_over_ground / KNOT:4.1f} kn | "
                         f"rudder {math.degrees(out.rudder_angle):+5.1f} | live floes {st.count(FREE)} | "
                         f"frozen {st.count(FROZEN)} | alarms {len(hub.active_alarms)}")
             stats = run_realtime(model, data, hub, rate, args.duration, origin, on_tick)
@@ -89,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
     summary = stats.summary() | {
         "rate_hz": rate, "live_floes": data.ice.state.count(FREE), "frozen_floes": data.ice.state.count(FROZEN),
         "north_m": round(float(data.ship.eta[0]), 1), "east_m": round(float(data.ship.eta[1]), 1),
-        "speed_kn": round(float(data.ship.nu[0]) / 0.5144, 2), "alarms": [a.text for a in hub.active_alarms.values()],
+        "speed_kn": round(float(data.ship.nu[0]) / KNOT, 2), "alarms": [a.text for a in hub.active_alarms.values()],
         "links": links, "plot": str(plot), "frames_rendered": frames["written"],
         "record": str(record) if record else None,
     }

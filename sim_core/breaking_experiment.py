@@ -22,6 +22,7 @@ from sim_core.hull_contour import waterline_contour
 from sim_core.ice_dynamics import HullMotion, IceData, ice_step, new_ice_data, place_tile
 from sim_core.ice_material import IceMaterial
 from sim_core.ice_model import IceDynamicsSettings, IceModel, compile_ice_model
+from sim_core.manoeuvring_trials import KNOT
 from sim_core.tile_template import FractureSettings, build_tile, template_seed
 
 BIN = 2.0  # m, lateral bin of the broken-share profile
@@ -47,7 +48,7 @@ class BreakingRun:
 
     def as_dict(self) -> dict:
         return {"thickness_m": self.thickness, "colliders": self.colliders,
-                "speed_kn": round(self.speed / (1852 / 3600), 2), "channel_width_m": round(self.channel_width, 2),
+                "speed_kn": round(self.speed / KNOT, 2), "channel_width_m": round(self.channel_width, 2),
                 "band_width_m": round(self.band_width, 2), "broken_cells": self.broken, "cells": self.cells,
                 "mean_resistance_kN": round(self.mean_resistance / 1e3, 1), "step_ms": round(self.step_ms, 2)}
 

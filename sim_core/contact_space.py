@@ -72,7 +72,6 @@ class ContactSpace:
         self.hull_shape.friction = hull_friction
         self.hull_shape.filter = _HULL
         self.space.add(self.hull, self.hull_shape)
-        self._tile_body: dict[int, pymunk.Body] = {}
         self._tile_rows: dict[int, tuple[np.ndarray, cKDTree]] = {}  # rows, tree of their seeds (world m)
         self._tile_of_id: dict[int, int] = {}
         self._floe_body: dict[int, pymunk.Body] = {}
@@ -126,7 +125,6 @@ class ContactSpace:
                 self._row_of_shape[sensor] = i
         self.space.add(body, *shapes)
         seeds = xy + _rotate(m.seed_offset[g], yaw)
-        self._tile_body[tile] = body
         self._tile_rows[tile] = (np.asarray(rows), cKDTree(seeds))
         self._tile_of_id[body.id] = tile
         self._lookup = None
@@ -191,7 +189,7 @@ class ContactSpace:
                 body = self._drop_intact_shapes(i)
                 if not body.shapes:
                     tile = self._tile_of_id.pop(body.id)
-                    del self._tile_body[tile], self._tile_rows[tile]
+                    del self._tile_rows[tile]
                     self.space.remove(body)
             else:
                 body, shape = self._floe_body.pop(i), self._shape.pop(i)

@@ -63,7 +63,6 @@ class Link(ABC):
     def __init__(self, name: str) -> None:
         self.name = name
         self._health = LinkHealth(name)
-        self._backoff = Backoff()
 
     @abstractmethod
     def open(self) -> None:
@@ -91,28 +90,67 @@ class Link(ABC):
     def _count_error(self, kind: str) -> None:
         self._health.errors[kind] += 1
 
-    def _up(self) -> None:
-        self._health.connected = True
-        self._backoff.succeeded()
-
-    def _down(self, now: float, kind: str) -> None:
-        """The port or bus failed (kind counted): retry after the back-off."""
-        self._health.connected = False
-        self._count_error(kind)
-        self._backoff.failed(now)
-
-    def _retry_due(self, now: float) -> bool:
-        """Whether a link that is down should try to reconnect now (counted as a reconnect)."""
-        if self._backoff.ready(now):
-            self._health.reconnects += 1
-            return True
-        return False
 
     def _received(self, inputs: list[ControlInput], now: float) -> list[ControlInput]:
         if inputs:
             self._health.inputs += len(inputs)
             self._health.last_input = now
         return inputs
+
+
+class DeviceLink(Link):
+    """A link over one port or bus (``self.device``) that may fail at any time: a failure
+    to open or a lost device is counted, and the device is reopened after a back-off."""
+
+    device_errors: tuple[type[Exception], ...] = (OSError,)  # what opening or using the device raises
+
+    def __init__(self, name: str) -> None:
+        super().__init__(name)
+        self.device = None
+        self._backoff = Backoff()
+
+    @abstractmethod
+    def _open_device(self):
+        """Open and return the port or bus."""
+
+    @abstractmethod
+    def _close_device(self, device) -> None:
+        """Release the port or bus."""
+
+    def _connect(self, now: float) -> None:
+        try:
+            self.device = self._open_device()
+            self._health.connected = True
+            self._backoff.succeeded()
+        except self.device_errors:
+            self.device = None
+            self._down(now, "open_failed")
+
+    def _lost(self, now: float, kind: str) -> None:
+        """The device failed in use (kind counted): close it and retry after the back-off."""
+        try:
+            self._close_device(self.device)
+        except self.device_errors:
+            pass
+        self.device = None
+        self._down(now, kind)
+
+    def _down(self, now: float, kind: str) -> None:
+        self._health.connected = False
+        self._count_error(kind)
+        self._backoff.failed(now)
+
+    def _reconnect_if_due(self, now: float) -> None:
+        """For a link whose device is down: try to reopen it once the back-off has passed."""
+        if self._backoff.ready(now):
+            self._health.reconnects += 1
+            self._connect(now)
+
+    def close(self) -> None:
+        if self.device is not None:
+            self._close_device(self.device)
+            self.device = None
+        self._health.connected = False
 
 
 class RateSchedule:

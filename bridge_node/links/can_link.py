@@ -10,7 +10,7 @@ from pathlib import Path
 import can
 import cantools
 
-from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, ControlInput, Link, RateSchedule
+from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, ControlInput, DeviceLink, RateSchedule
 from bridge_node.links.link_settings import CanLinkSettings
 from bridge_node.links.n2k_frames import fast_packet_frames, identifier, parse_identifier
 from bridge_node.links.nmea0183 import ETL_POSITIONS
@@ -57,8 +57,10 @@ def _n2k_fields(name: str, s: ShipOutputs, sid: int) -> dict:
             "Sog": s.speed_over_ground, "Reserved2": 65535}
 
 
-class CanLink(Link):
+class CanLink(DeviceLink):
     """Any python-can interface; the console's DBC from config."""
+
+    device_errors = (can.CanError, OSError, ValueError, ImportError)
 
     def __init__(self, settings: CanLinkSettings, dbc_path: Path, record: SessionRecord | None = None) -> None:
         super().__init__(settings.name)
@@ -66,7 +68,6 @@ class CanLink(Link):
         self.record = record
         self.console = load_dbc(dbc_path)
         self.n2k = load_dbc(N2K_DBC)
-        self._bus: can.BusABC | None = None
         self._schedule = RateSchedule(settings.output_rates())
         self._allowed = frozenset(settings.allowed_sources)
         self._sid = 0
@@ -75,34 +76,23 @@ class CanLink(Link):
     def open(self) -> None:
         self._connect(time.monotonic())
 
-    def _connect(self, now: float) -> None:
+    def _open_device(self) -> can.BusABC:
         s = self.settings
-        try:
-            self._bus = can.Bus(interface=s.interface, channel=s.channel, bitrate=s.bitrate)
-            self._up()
-        except (can.CanError, OSError, ValueError, ImportError):
-            self._bus = None
-            self._down(now, "open_failed")
+        return can.Bus(interface=s.interface, channel=s.channel, bitrate=s.bitrate)
 
-    def _lost(self, now: float) -> None:
-        try:
-            self._bus.shutdown()
-        except (can.CanError, OSError):
-            pass
-        self._bus = None
-        self._down(now, "bus_lost")
+    def _close_device(self, bus: can.BusABC) -> None:
+        bus.shutdown()
 
     def poll(self, now: float) -> list[ControlInput]:
-        if self._bus is None:
-            if self._retry_due(now):
-                self._connect(now)
+        if self.device is None:
+            self._reconnect_if_due(now)
             return []
         out = []
         for _ in range(MAX_FRAMES_PER_POLL):
             try:
-                msg = self._bus.recv(timeout=0.0)
+                msg = self.device.recv(timeout=0.0)
             except (can.CanError, OSError):
-                self._lost(now)
+                self._lost(now, "bus_lost")
                 break
             if msg is None:
                 break
@@ -187,7 +177,7 @@ class CanLink(Link):
         return [ControlInput(now, self.name, RUDDER, angle)]
 
     def publish(self, state: ShipOutputs, now: float) -> None:
-        if self._bus is None:
+        if self.device is None:
             return
         due = self._schedule.due(now)
         if not due:
@@ -210,19 +200,13 @@ class CanLink(Link):
 
     def _send(self, msg: can.Message, now: float) -> None:
         try:
-            self._bus.send(msg, timeout=0.0)
+            self.device.send(msg, timeout=0.0)
         except can.CanOperationError:
             self._count_error("send_failed")  # transmit buffer full: drop, the next cycle follows
             return
         except (can.CanError, OSError):
-            self._lost(now)
+            self._lost(now, "bus_lost")
             return
         self._health.outputs += 1
         if self.record:
             self.record.can_frame(msg)
-
-    def close(self) -> None:
-        if self._bus is not None:
-            self._bus.shutdown()
-            self._bus = None
-        self._health.connected = False

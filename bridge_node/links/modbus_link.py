@@ -22,9 +22,9 @@ from bridge_node.links.link_settings import ModbusLinkSettings, RegisterSpec, Wr
 from bridge_node.links.nmea0183 import ETL_POSITIONS, RUDDER_ORDER_LIMIT_DEG
 from bridge_node.links.reconnect import Backoff
 from bridge_node.links.session_record import SessionRecord
+from sim_core.manoeuvring_trials import KNOT
 from sim_core.ship_outputs import ShipOutputs
 
-KNOT = 1852.0 / 3600.0
 # the link counts and reports its own errors; pymodbus would also print every refused
 # connection and, at some levels, every frame
 logging.getLogger("pymodbus").setLevel(logging.CRITICAL)

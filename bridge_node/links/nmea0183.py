@@ -13,9 +13,9 @@ import math
 import pynmea2
 
 from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, Alarm, ControlInput
+from sim_core.manoeuvring_trials import KNOT
 from sim_core.ship_outputs import ShipOutputs
 
-KNOT = 1852.0 / 3600.0
 MAX_LENGTH = 82  # characters including $ and CR LF
 RUDDER_ORDER_LIMIT_DEG = 90.0  # beyond this an ROR field is nonsense, not an order to clamp
 # ETL position codes (IEC 61162-1) -> telegraph positions of the ship model

@@ -9,7 +9,7 @@ import time
 
 import serial
 
-from bridge_node.links.base import Alarm, ControlInput, Link, RateSchedule
+from bridge_node.links.base import Alarm, ControlInput, DeviceLink, RateSchedule
 from bridge_node.links.link_settings import NmeaLinkSettings
 from bridge_node.links.nmea0183 import SentenceError, parse_order, render_alarm, render_outputs
 from bridge_node.links.session_record import SessionRecord
@@ -18,14 +18,15 @@ from sim_core.ship_outputs import ShipOutputs
 MAX_PENDING = 1024  # characters of a line without its end: beyond this it is noise
 
 
-class NmeaLink(Link):
+class NmeaLink(DeviceLink):
     """Serial NMEA 0183 (pyserial; any ``serial_for_url`` port) plus a UDP output mirror."""
+
+    device_errors = (serial.SerialException, OSError, ValueError)
 
     def __init__(self, settings: NmeaLinkSettings, record: SessionRecord | None = None) -> None:
         super().__init__(settings.name)
         self.settings = settings
         self.record = record
-        self._port: serial.SerialBase | None = None
         self._udp: socket.socket | None = None
         self._pending = b""
         self._schedule = RateSchedule(settings.output_rates())
@@ -43,35 +44,23 @@ class NmeaLink(Link):
         else:
             self._health.connected = True  # UDP output only
 
-    def _connect(self, now: float) -> None:
-        try:
-            self._port = serial.serial_for_url(self.settings.port, baudrate=self.settings.baudrate, timeout=0,
-                                               write_timeout=0)
-            self._up()
-        except (serial.SerialException, OSError, ValueError):
-            self._port = None
-            self._down(now, "open_failed")
+    def _open_device(self) -> serial.SerialBase:
+        return serial.serial_for_url(self.settings.port, baudrate=self.settings.baudrate, timeout=0, write_timeout=0)
 
-    def _lost(self, now: float) -> None:
-        try:
-            self._port.close()
-        except (serial.SerialException, OSError):
-            pass
-        self._port = None
-        self._down(now, "port_lost")
+    def _close_device(self, port: serial.SerialBase) -> None:
+        port.close()
 
     def poll(self, now: float) -> list[ControlInput]:
         if not self.settings.port:
             return []
-        if self._port is None:
-            if self._retry_due(now):
-                self._connect(now)
+        if self.device is None:
+            self._reconnect_if_due(now)
             return []
         try:
-            waiting = self._port.in_waiting
-            chunk = self._port.read(waiting) if waiting else b""
+            waiting = self.device.in_waiting
+            chunk = self.device.read(waiting) if waiting else b""
         except (serial.SerialException, OSError):
-            self._lost(now)
+            self._lost(now, "port_lost")
             return []
         lines = (self._pending + chunk).split(b"\n")
         self._pending = lines.pop()
@@ -101,17 +90,17 @@ class NmeaLink(Link):
                     self._udp.sendto(data, (self.settings.udp_host, self.settings.udp_port))
                 except OSError:
                     self._count_error("udp_send_failed")
-            if self._port is not None:
+            if self.device is not None:
                 if len(data) > self._tokens:
                     self._count_error("baud_budget_skipped")
                     continue
                 try:
-                    self._port.write(data)
+                    self.device.write(data)
                 except serial.SerialTimeoutException:
                     self._count_error("write_blocked")
                     continue
                 except (serial.SerialException, OSError):
-                    self._lost(now)
+                    self._lost(now, "port_lost")
                     continue
                 self._tokens -= len(data)
             if self.record:
@@ -128,10 +117,7 @@ class NmeaLink(Link):
         self._send([render_alarm(alarm, dt.datetime.now(dt.timezone.utc), talker)], now)
 
     def close(self) -> None:
-        if self._port is not None:
-            self._port.close()
-            self._port = None
+        super().close()
         if self._udp is not None:
             self._udp.close()
             self._udp = None
-        self._health.connected = False
