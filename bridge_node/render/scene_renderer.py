@@ -242,10 +242,12 @@ class SceneRenderer:
         self._ensure_pose_capacity(st.n)
         if len(tiles.template) != self._placed:
             self._upload_placements(data)
-        self._append_broken(st)
-        # rows of tiles live now or at the last upload (a tile frozen since then gets its final pose)
+        # rows of tiles live now or at the last upload (a tile frozen since then gets its final
+        # pose): only there can cells have broken or floes have moved
         live = [tiles.row_start[data.scene.placement[int(t)]] for t in data.scene.live if int(t) in data.scene.placement]
-        self._upload_poses(st, min([self._uploaded_rows, *live, *self._live_rows]))
+        first = min([self._uploaded_rows, *live, *self._live_rows])
+        self._append_broken(st, first)
+        self._upload_poses(st, first)
         self._live_rows = live
         self._uploaded_rows = st.n
 
@@ -257,12 +259,12 @@ class SceneRenderer:
                 self.tile_info.write(info.tobytes(), viewport=(tile % nx, tile // nx, 1, 1))
         self._placed = len(tiles.template)
 
-    def _append_broken(self, st) -> None:
-        """Append the template triangles of cells broken since the last call to their
-        tile's buffers (tops and sides apart, for the level of detail)."""
+    def _append_broken(self, st, first_row: int) -> None:
+        """Append the template triangles of cells broken since the last call (at or after
+        first_row) to their tile's buffers (tops and sides apart, for the level of detail)."""
         if len(self._drawn) < st.n:
             self._drawn = np.concatenate([self._drawn, np.zeros(st.n - len(self._drawn), bool)])
-        new = np.nonzero((st.status != INTACT) & ~self._drawn[: st.n])[0]
+        new = first_row + np.nonzero((st.status[first_row:] != INTACT) & ~self._drawn[first_row:st.n])[0]
         self._drawn[new] = True
         for k in np.unique(st.tile[new]):
             rows = new[st.tile[new] == k]
