@@ -16,12 +16,13 @@ import time
 import numpy as np
 from rich.progress import Progress
 
-from sim_core.buoyancy import submerged_volume_centre, submerged_volume_centre_reference
-from sim_core.floe_state import BY_HULL, FREE, INTACT
-from sim_core.hull_contour import waterline_contour
-from sim_core.ice_dynamics import HullMotion, break_cells, ice_step, new_ice_data, place_tile
-from sim_core.ice_model import compile_ice_model
-from sim_core.tile_template import build_tile
+from sim_core.fracture.tile_template import build_tile
+from sim_core.frames.hull_contour import waterline_contour
+from sim_core.ice.buoyancy import submerged_volume_centre, submerged_volume_centre_reference
+from sim_core.ice.floes import BreakCause, FloeStatus
+from sim_core.ice.model import compile_ice_model
+from sim_core.ice.step import HullMotion, ice_step
+from sim_core.ice.tiles import break_cells, new_ice_data, place_tile
 
 DT = 1 / 60
 SPEED = 4.0  # m/s
@@ -36,12 +37,12 @@ def live_field(target: int):
     model = compile_ice_model([build_tile(0.5, 11), build_tile(0.5, 12)])
     data = new_ice_data(model, waterline_contour(150.0, 24.0), 0.1)
     st, row = data.state, 0
-    while st.count(FREE) < target:
+    while st.count(FloeStatus.FREE) < target:
         for col in range(3):
             place_tile(model, data, (row + col) % 2, (col * 100.0, row * 100.0), (row * 3 + col) % 4)
-        rows = np.nonzero((st.status == INTACT) & (np.abs(st.home[:, 0] - 150.0) < 30.0))[0]
-        rows = rows[np.argsort(st.home[rows, 1])][: target - st.count(FREE)]
-        break_cells(data, rows, BY_HULL)
+        rows = np.nonzero((st.status == FloeStatus.INTACT) & (np.abs(st.home[:, 0] - 150.0) < 30.0))[0]
+        rows = rows[np.argsort(st.home[rows, 1])][: target - st.count(FloeStatus.FREE)]
+        break_cells(data, rows, BreakCause.HULL)
         row += 1
     for col in range(3):  # intact ice ahead of the channel
         place_tile(model, data, (row + col) % 2, (col * 100.0, row * 100.0), col)
@@ -86,7 +87,7 @@ def main() -> None:
         for target in progress.track((1000, 3000, 10000), description="ice step at 1000/3000/10000 floes"):
             model, data, pose = live_field(target)
             ms = time_steps(model, data, pose)
-            rows.append((data.state.count(FREE), data.state.n, ms))
+            rows.append((data.state.count(FloeStatus.FREE), data.state.n, ms))
     for live, total, ms in rows:
         print(f"ice step, {live:6d} live floes ({total} cells placed so far): median {np.median(ms):6.2f} ms, "
               f"p99 {np.percentile(ms, 99):6.2f} ms")

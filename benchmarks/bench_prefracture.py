@@ -18,9 +18,9 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import ConvexHull, Voronoi
 
-from bridge_node.template_library import load_template, save_template
-from sim_core.fragment_count import seed_count_range
-from sim_core.tile_template import FractureSettings, build_tile
+from bridge_node.library.templates import load_template, save_template
+from sim_core.fracture.fragment_count import seed_count_range
+from sim_core.fracture.tile_template import FractureSettings, build_tile
 
 SIDE = 100.0
 

@@ -12,20 +12,22 @@ Run: .venv/bin/python benchmarks/bench_render.py [--frames N]
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 
 import numpy as np
 
-from bridge_node.config import load_config
-from bridge_node.render.channel_output import ChannelSet, create_context
-from bridge_node.render.render_settings import ChannelSettings, RenderSettings
-from bridge_node.render.scene_renderer import SceneRenderer
-from bridge_node.world_setup import build_world, start_world
-from sim_core.floe_state import BY_HULL, FREE, INTACT
-from sim_core.hull_contour import ship_to_world
-from sim_core.ice_dynamics import break_cells
-from sim_core.ice_scene import update_scene
-from sim_core.world import apply_swaps
+from bridge_node.node.config import load_config
+from bridge_node.node.world_setup import build_world, start_world
+from bridge_node.render.channels import ChannelSet, create_context
+from bridge_node.render.renderer import SceneRenderer
+from bridge_node.render.settings import ChannelSettings, RenderSettings
+from bridge_node.render.world_view import WorldView
+from sim_core.frames.ship_frame import ship_to_world
+from sim_core.ice.floes import BreakCause, FloeStatus
+from sim_core.ice.tiles import break_cells
+from sim_core.scene.scene import update_scene
+from sim_core.world import apply_swaps, snapshot
 
 
 def world_with_floes(target: int):
@@ -37,15 +39,17 @@ def world_with_floes(target: int):
     data = start_world(model, cfg)
     east, north = data.ship.eta[1], 0.0
     st = data.ice.state
-    while st.count(FREE) < target:
+    while st.count(FloeStatus.FREE) < target:
         pts = ship_to_world(model.contour, north, east, 0.0)
         apply_swaps(model, data, update_scene(model.scene, data.scene, pts, np.array([east, north])))
-        rows = np.nonzero((st.status == INTACT) & (np.abs(st.home[:, 0] - east) < 18.0)
+        rows = np.nonzero((st.status == FloeStatus.INTACT) & (np.abs(st.home[:, 0] - east) < 18.0)
                           & (st.home[:, 1] < north + 50.0))[0]
-        break_cells(data.ice, rows[: target - st.count(FREE)], BY_HULL)
+        break_cells(data.ice, rows[: target - st.count(FloeStatus.FREE)], BreakCause.HULL)
         north += 50.0
     data.ship.eta[0] = -80.0
-    return model, data
+    view = WorldView()
+    view.apply(snapshot(model, data))
+    return model, data, view
 
 
 def channels(n: int, width: int, height: int) -> list[ChannelSettings]:
@@ -55,13 +59,13 @@ def channels(n: int, width: int, height: int) -> list[ChannelSettings]:
             for k, y in enumerate(yaws)]
 
 
-def fps(cs: ChannelSet, data, frames: int) -> tuple[float, float]:
-    cs.render(data)  # warm-up: compile shaders, first upload
+def fps(cs: ChannelSet, view: WorldView, frames: int) -> tuple[float, float]:
+    cs.render(view)  # warm-up: compile shaders, first upload
     times = []
     for _ in range(frames):
-        data.ship.eta[5] += 1e-4  # the view moves a little every frame
+        view.ship = dataclasses.replace(view.ship, heading=view.ship.heading + 1e-4)  # the view moves a little
         t0 = time.perf_counter()
-        cs.render(data)
+        cs.render(view)
         times.append(time.perf_counter() - t0)
     ms = np.array(times) * 1e3
     return 1e3 / float(np.median(ms)), float(np.percentile(ms, 99))
@@ -74,17 +78,17 @@ def main() -> None:
     ctx = create_context()
     print(f"render benchmark on {ctx.info['GL_RENDERER']} ({ctx.info['GL_VERSION']})")
     for target in (3000, 10000):
-        model, data = world_with_floes(target)
-        print(f"{data.ice.state.count(FREE)} live floes, {data.ice.state.n} cells placed")
+        model, data, view = world_with_floes(target)
+        print(f"{data.ice.state.count(FloeStatus.FREE)} live floes, {data.ice.state.n} cells placed")
         for width, height in ((1280, 720), (1920, 1080)):
             for n in (1, 3, 5):
                 chans = channels(n, width, height)
                 cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=chans)), chans)
-                f, p99 = fps(cs, data, args.frames)
+                f, p99 = fps(cs, view, args.frames)
                 line = f"  {n} channel(s) {width}x{height}: {f:6.1f} FPS (p99 frame {p99:6.1f} ms)"
                 if n == 3 and width == 1280:
                     flat = RenderSettings(channels=chans, lod_distance_m=1.0e6)
-                    base, _ = fps(ChannelSet(SceneRenderer(ctx, model, flat), chans), data, args.frames)
+                    base, _ = fps(ChannelSet(SceneRenderer(ctx, model, flat), chans), view, args.frames)
                     line += f"; baseline without level of detail {base:6.1f} FPS ({f / base:4.2f}x)"
                 print(line)
     print(f"(median of {args.frames} frames per setup)")

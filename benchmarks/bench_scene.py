@@ -20,14 +20,15 @@ from pathlib import Path
 import numpy as np
 from rich.progress import Progress
 
-from bridge_node.config import load_config
-from bridge_node.transit_report import plot_series
-from bridge_node.world_setup import build_world, start_world
-from sim_core.hull_contour import ship_to_world, waterline_contour
-from sim_core.ice_dynamics import freeze_tile, new_ice_data, place_tile, thaw_tile
-from sim_core.ice_scene import SceneSettings, compile_scene, new_scene_data, update_scene
-from sim_core.tile_quadtree import tiles_near_brute_force
-from sim_core.transit_experiment import run_transit
+from bridge_node.node.config import load_config
+from bridge_node.node.world_setup import build_world, start_world
+from bridge_node.reports.transit import plot_series
+from sim_core.frames.hull_contour import waterline_contour
+from sim_core.frames.ship_frame import ship_to_world
+from sim_core.ice.tiles import freeze_tile, new_ice_data, place_tile, thaw_tile
+from sim_core.scene.quadtree import tiles_near_brute_force
+from sim_core.scene.scene import SceneSettings, compile_scene, new_scene_data, update_scene
+from sim_core.studies.transit import run_transit
 
 B, L = 100.0, 150.0
 CONTOUR = waterline_contour(L, 24.0)

@@ -17,8 +17,8 @@ import numpy as np
 from rich.progress import track
 from scipy.integrate import solve_ivp
 
-from bridge_node.config import load_ship
-from sim_core.ship_model import state_derivatives, compile_ship, new_ship_data, order_rudder, step
+from bridge_node.node.config import load_ship
+from sim_core.ship.model import compile_ship, new_ship_data, order_rudder, state_derivatives, step
 
 DT = 1.0 / 60.0
 

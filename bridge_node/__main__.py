@@ -1,5 +1,5 @@
 import sys
 
-from bridge_node.cli import main
+from bridge_node.commands.cli import main
 
 sys.exit(main())

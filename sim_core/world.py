@@ -1,35 +1,50 @@
 """The world step: controls -> ship -> scene swaps -> contact and breaking -> floating floes.
 
 ``WorldModel`` holds everything static (the compiled ship, the compiled ice templates, the
-scene's tile grid); ``WorldData`` everything that changes per step. ``step(model, data,
-dt, controls)`` advances it all by dt seconds and returns a ``WorldEvents`` report that
-renderers and outputs consume. No I/O, no GL.
+scene's tile grid, the exercise origin); ``WorldData`` everything that changes per step,
+with the one clock, ``WorldData.time``. ``step(model, data, dt, controls)`` advances it all
+by dt seconds and returns the ``WorldEvents`` it publishes: the one thing outputs,
+renderers and recorders read. ``snapshot(model, data)`` publishes the whole current state
+in the same form, for a consumer that joins late. No I/O, no GL.
 
-Frames: the ship model works in north/east with the heading clockwise from north; the ice
-world in x east, y north with angles counter-clockwise from east; the field's south-west
-corner is the origin of both. The ice's contact load on the hull (from the last ice step)
-enters the ship as its external load, and the ship's Lindqvist resistance is set from
-where the bow is: level ice while the hull is breaking cells, a broken channel in
-breakable or frozen tiles, open water off the field.
+Frames (see ``sim_core.frames``): the ship model works in north/east with the heading
+clockwise from north; the ice world in x east, y north with angles counter-clockwise from
+east. The ice's contact load on the hull (from the last ice step) enters the ship as its
+external load, and the ship's Lindqvist resistance is set from where the bow is: level ice
+while the hull is breaking cells, a broken channel in breakable or frozen tiles, open water
+off the field.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from sim_core import ship_model
-from sim_core.hull_contour import ship_to_world, waterline_contour, world_heading
-from sim_core.ice_dynamics import HullMotion, IceData, freeze_tile, ice_step, new_ice_data, place_tile, thaw_tile
-from sim_core.ice_model import IceModel
-from sim_core.ice_resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
-from sim_core.ice_scene import (BREAKABLE, FROZEN, SceneData, SceneModel, SceneUpdate, new_scene_data, tile_corner,
-                                tile_layout, update_scene)
-from sim_core.ship_model import ShipData, ShipModel
-from sim_core.tile_quadtree import tile_under
+from sim_core.frames.hull_contour import waterline_contour
+from sim_core.frames.ship_frame import ship_to_world, ship_vector_to_world, world_heading, world_vector_to_ship
+from sim_core.ice.floes import BreakCause, FloeStatus, TilePlacement
+from sim_core.ice.model import IceModel
+from sim_core.ice.step import HullMotion, ice_step
+from sim_core.ice.tiles import IceData, freeze_tile, new_ice_data, place_tile, thaw_tile
+from sim_core.scene.quadtree import tile_under
+from sim_core.scene.scene import (
+    SceneData,
+    SceneModel,
+    SceneUpdate,
+    TileState,
+    new_scene_data,
+    tile_corner,
+    tile_layout,
+    update_scene,
+)
+from sim_core.ship import model as ship_model
+from sim_core.ship.model import OrderRejection, ShipData, ShipModel
+from sim_core.ship.outputs import ShipOutputs, ship_outputs
+from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
 
 BREAKING_MEMORY = 2.0  # s: the bow counts as in level ice this long after it last broke a cell
+_NO_ROWS = np.zeros(0, dtype=np.int64)
 
 
 @dataclass(frozen=True)
@@ -40,17 +55,20 @@ class WorldModel:
     ice: IceModel
     scene: SceneModel
     contour: np.ndarray  # (34, 2) hull waterline contour, ship frame (x forward, y starboard), m
+    origin: tuple[float, float]  # latitude, longitude of the field's south-west corner, rad
 
 
 @dataclass
 class WorldData:
-    """Dynamic half of the world."""
+    """Dynamic half of the world; ``time`` is its one clock."""
 
     ship: ShipData
     ice: IceData
     scene: SceneData
-    time: float = 0.0
+    time: float = 0.0  # s
+    seq: int = 0  # steps taken
     last_hull_break: float = -math.inf  # s
+    live_rows: np.ndarray = field(default_factory=lambda: _NO_ROWS)  # rows of the breakable tiles
 
 
 @dataclass
@@ -63,23 +81,54 @@ class Controls:
     lever: float | None = None
 
 
-@dataclass
+@dataclass(frozen=True)
+class PlacedTiles:
+    """Tiles laid in the ice world, one entry each: flat index in the field, placement index
+    in the ice world, template, quarter turns (CCW), south-west corner (m), first floe row
+    and row count (rows of one tile are contiguous)."""
+
+    tile: np.ndarray
+    placement: np.ndarray
+    template: np.ndarray
+    quarter_turns: np.ndarray
+    corner: np.ndarray  # (k, 2)
+    row_start: np.ndarray
+    row_count: np.ndarray
+
+
+@dataclass(frozen=True)
 class WorldEvents:
-    """What one world step did: tiles swapped (flat indices), cells broken (floe rows), and
-    the ice load on the hull in the ship frame (X, Y in N; N in N m, + to starboard)."""
+    """What the world publishes after a step (or, with ``snapshot`` set, the whole state).
 
-    tiles_placed: np.ndarray
-    tiles_thawed: np.ndarray
-    tiles_frozen: np.ndarray
-    broken_by_hull: np.ndarray
-    broken_by_contact: np.ndarray
-    ice_load: np.ndarray
-    rejected: list[str]  # reasons for orders that were clamped or refused
+    Floe rows are only ever appended (``sim_core.ice.floes``), so consumers can keep them
+    by number. ``floe_rows`` are the rows whose pose or status may have changed: those of
+    the tiles live in this step, including tiles frozen in it (their final pose); in a
+    snapshot, every row. Poses are (x, y, heave, yaw, roll, pitch) in world m and rad.
+    """
+
+    seq: int
+    time: float  # s, simulated
+    ship: ShipOutputs
+    placed: PlacedTiles
+    thawed: np.ndarray  # placement indices thawed this step
+    frozen: np.ndarray  # placement indices frozen this step (snapshot: every frozen placement)
+    broken_by_hull: np.ndarray  # rows
+    broken_by_contact: np.ndarray  # rows
+    floe_rows: np.ndarray  # (m,)
+    floe_pose: np.ndarray  # (m, 6)
+    floe_status: np.ndarray  # (m,) FloeStatus
+    floes_free: int
+    floes_frozen: int
+    ice_load: np.ndarray  # X, Y N (ship frame); N N m (+ to starboard)
+    rejected: tuple[OrderRejection, ...]
+    snapshot: bool = False
 
 
-def compile_world(ship: ShipModel, ice: IceModel, scene: SceneModel) -> WorldModel:
+def compile_world(ship: ShipModel, ice: IceModel, scene: SceneModel,
+                  origin: tuple[float, float] = (0.0, 0.0)) -> WorldModel:
+    """The static world; origin: latitude and longitude (rad) of the field's corner."""
     p = ship.particulars
-    return WorldModel(ship, ice, scene, waterline_contour(p.length, p.beam))
+    return WorldModel(ship, ice, scene, waterline_contour(p.length, p.beam), origin)
 
 
 def new_world_data(model: WorldModel, north: float, east: float, heading: float, speed: float,
@@ -89,15 +138,15 @@ def new_world_data(model: WorldModel, north: float, east: float, heading: float,
     ship = ship_model.new_ship_data(model.ship, speed, heading=heading)
     ship.eta[0], ship.eta[1] = north, east
     if telegraph is not None:
-        reason = ship_model.order_telegraph(model.ship, ship, telegraph)
-        if reason:
-            raise ValueError(reason)
-    ice = new_ice_data(model.ice, model.contour, model.ship.ice.hull_friction)
+        refused = ship_model.order_telegraph(model.ship, ship, telegraph)
+        if refused:
+            raise ValueError(refused.text)
+    ice = new_ice_data(model.ice, model.contour, model.ship.material.hull_friction)
     return WorldData(ship, ice, new_scene_data(model.scene))
 
 
-def apply_controls(ship: ShipModel, data: ShipData, controls: Controls) -> list[str]:
-    """Give the orders to the ship; returns the reasons of clamped or refused orders."""
+def apply_controls(ship: ShipModel, data: ShipData, controls: Controls) -> list[OrderRejection]:
+    """Give the orders to the ship; returns the orders it clamped or refused."""
     out = []
     if controls.rudder is not None:
         out.append(ship_model.order_rudder(ship, data, controls.rudder))
@@ -111,24 +160,48 @@ def apply_controls(ship: ShipModel, data: ShipData, controls: Controls) -> list[
 def hull_world(model: WorldModel, ship: ShipData) -> tuple[np.ndarray, HullMotion]:
     """The hull's contour points (34, 2) and motion in the ice world."""
     north, east, psi = ship.eta[0], ship.eta[1], ship.eta[5]
-    u, v, r = ship.nu[0], ship.nu[1], ship.nu[5]
-    s, c = math.sin(psi), math.cos(psi)
-    velocity = np.array([u * s + v * c, u * c - v * s])
+    velocity = np.array(ship_vector_to_world((ship.nu[0], ship.nu[1]), psi))
     return (ship_to_world(model.contour, north, east, psi),
-            HullMotion(np.array([east, north]), world_heading(psi), velocity, -r))
+            HullMotion(np.array([east, north]), world_heading(psi), velocity, -ship.nu[5]))
 
 
-def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate) -> None:
-    """Carry out a scene update in the ice world: place, thaw and freeze tiles."""
+def _tile_rows(tiles: TilePlacement, placements: list[int]) -> np.ndarray:
+    """Rows of the given placements, concatenated."""
+    if not placements:
+        return _NO_ROWS
+    return np.concatenate([tiles.rows(k) for k in placements])
+
+
+def _placed_tiles(tiles: TilePlacement, field_tiles: list[int], placements: list[int]) -> PlacedTiles:
+    """The published record of placements (their field tiles given alongside)."""
+    return PlacedTiles(
+        np.array(field_tiles, dtype=np.int64), np.array(placements, dtype=np.int64),
+        np.array([tiles.template[k] for k in placements], dtype=np.int64),
+        np.array([tiles.quarter_turns[k] for k in placements], dtype=np.int64),
+        np.array([tiles.corner[k] for k in placements], dtype=float).reshape(-1, 2),
+        np.array([tiles.row_start[k] for k in placements], dtype=np.int64),
+        np.array([tiles.row_count[k] for k in placements], dtype=np.int64))
+
+
+def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate) -> tuple[PlacedTiles, np.ndarray, np.ndarray]:
+    """Carry out a scene update in the ice world: place, thaw and freeze tiles. Returns the
+    tiles placed and the placement indices thawed and frozen."""
     scene, placement = model.scene, data.scene.placement
-    for tile in update.place:
+    new = []
+    for tile in update.place.tolist():
         template, turns = tile_layout(scene, tile)
-        placement[int(tile)] = len(data.ice.tiles.template)
-        place_tile(model.ice, data.ice, template, tile_corner(scene, tile), turns)
-    for tile in update.thaw:
-        thaw_tile(data.ice, placement[int(tile)])
-    for tile in update.freeze:
-        freeze_tile(data.ice, placement[int(tile)])
+        placement[tile] = place_tile(model.ice, data.ice, template, tile_corner(scene, tile), turns)
+        new.append(placement[tile])
+    thawed = [placement[tile] for tile in update.thaw.tolist()]
+    frozen = [placement[tile] for tile in update.freeze.tolist()]
+    for k in thawed:
+        thaw_tile(data.ice, k)
+    for k in frozen:
+        freeze_tile(data.ice, k)
+    if new or thawed or frozen:
+        data.live_rows = _tile_rows(data.ice.tiles, [placement[t] for t in data.scene.live.tolist()])
+    return (_placed_tiles(data.ice.tiles, update.place.tolist(), new),
+            np.array(thawed, dtype=np.int64), np.array(frozen, dtype=np.int64))
 
 
 def _ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple[float, int]:
@@ -138,29 +211,53 @@ def _ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple
         return 0.0, OPEN_WATER
     h = scene.thickness_at(bow)
     breaking = data.time - data.last_hull_break < BREAKING_MEMORY
-    if breaking or data.scene.tile_state[tile] not in (BREAKABLE, FROZEN):
+    if breaking or data.scene.tile_state[tile] not in (TileState.BREAKABLE, TileState.FROZEN):
         return h, LEVEL_ICE
     return h, BROKEN_CHANNEL
 
 
+def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> WorldEvents:
+    """Events with the ship's outputs, the given rows' poses and statuses, and counts."""
+    st = data.ice.state
+    pose = np.column_stack([st.xy[rows], st.heave[rows], st.yaw[rows], st.roll[rows], st.pitch[rows]])
+    return WorldEvents(seq=data.seq, time=data.time, ship=ship_outputs(data.ship, data.time, *model.origin),
+                       floe_rows=rows, floe_pose=pose, floe_status=st.status[rows].copy(),
+                       floes_free=st.count(FloeStatus.FREE), floes_frozen=st.count(FloeStatus.FROZEN), **fields)
+
+
 def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | None = None) -> WorldEvents:
-    """Advance the world by dt seconds."""
+    """Advance the world by dt seconds; returns what it publishes."""
     rejected = apply_controls(model.ship, data.ship, controls) if controls is not None else []
     ship = data.ship
     contour, _ = hull_world(model, ship)
     ship.ice_h, ship.ice_condition = _ice_condition(model, data, contour[0])  # contour[0] is the stem
     ship_model.step(model.ship, ship, dt)
     contour, hull = hull_world(model, ship)
-    update = update_scene(model.scene, data.scene, contour, hull.xy)
-    apply_swaps(model, data, update)
+    placed, thawed, frozen = apply_swaps(model, data, update_scene(model.scene, data.scene, contour, hull.xy))
     report = ice_step(model.ice, data.ice, hull, dt)
-    psi = ship.eta[5]
-    fx, fy = report.hull_force
-    load = np.array([fx * math.sin(psi) + fy * math.cos(psi), fx * math.cos(psi) - fy * math.sin(psi),
-                     -report.hull_moment])
+    load = np.array([*world_vector_to_ship(report.hull_force, ship.eta[5]), -report.hull_moment])
     ship.external[:] = load
     data.time += dt
+    data.seq += 1
     if len(report.broken_by_hull):
         data.last_hull_break = data.time
-    return WorldEvents(update.place, update.thaw, update.freeze, report.broken_by_hull,
-                       report.broken_by_contact, load, rejected)
+    rows = np.concatenate([data.live_rows, _tile_rows(data.ice.tiles, frozen.tolist())]) if len(frozen) \
+        else data.live_rows
+    return _publish(model, data, rows, placed=placed, thawed=thawed, frozen=frozen,
+                    broken_by_hull=report.broken_by_hull, broken_by_contact=report.broken_by_contact,
+                    ice_load=load, rejected=tuple(rejected))
+
+
+def snapshot(model: WorldModel, data: WorldData) -> WorldEvents:
+    """The whole published state now, as events with ``snapshot`` set: every placed tile,
+    every floe row (frozen channel included), every broken cell, the frozen placements."""
+    tiles, st = data.ice.tiles, data.ice.state
+    by_tile = sorted(data.scene.placement.items(), key=lambda kv: kv[1])
+    frozen = [k for t, k in by_tile if data.scene.tile_state[t] == TileState.FROZEN]
+    broken = st.status != FloeStatus.INTACT
+    placed = _placed_tiles(tiles, [t for t, _ in by_tile], [k for _, k in by_tile])
+    return _publish(model, data, np.arange(st.n), placed=placed,
+                    thawed=_NO_ROWS, frozen=np.array(frozen, dtype=np.int64),
+                    broken_by_hull=np.nonzero(broken & (st.cause == BreakCause.HULL))[0],
+                    broken_by_contact=np.nonzero(broken & (st.cause == BreakCause.CONTACT))[0],
+                    ice_load=data.ship.external.copy(), rejected=(), snapshot=True)

@@ -3,7 +3,7 @@ from pathlib import Path
 
 import pytest
 
-from sim_core.tile_template import FractureSettings, build_tile
+from sim_core.fracture.tile_template import FractureSettings, build_tile
 
 REPO = Path(__file__).resolve().parent.parent
 

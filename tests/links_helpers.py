@@ -1,13 +1,50 @@
-"""Shared pieces of the link tests: pty pairs from socat, configs, a paced console writer."""
+"""Shared pieces of the link tests: a ship state, console frames, pty pairs from socat,
+configs, a paced console writer, and hub ticks."""
 from __future__ import annotations
 
+import math
 import shutil
 import subprocess
 import time
 from contextlib import contextmanager
 from pathlib import Path
 
-from bridge_node.config import NodeConfig
+import can
+import cantools
+
+from bridge_node.links.arbiter import Decision
+from bridge_node.links.hub import LinkHub
+from bridge_node.links.n2k_frames import identifier
+from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig
+from sim_core.ship.outputs import ShipOutputs
+
+CONSOLE = cantools.database.load_file(str(DEFAULT_CONFIG.parent / "console.dbc"))
+STATE = ShipOutputs(time=10.0, north=100.0, east=50.0, latitude=math.radians(74.0012345),
+                    longitude=math.radians(20.0054321), heading=math.radians(123.4),
+                    course_over_ground=math.radians(125.0), speed_over_ground=4.321, speed_longitudinal=4.3,
+                    speed_transverse=-0.2, rate_of_turn=math.radians(0.35), rudder_angle=math.radians(-12.3),
+                    shaft_rps=1.234, ice_resistance=1.5e5)
+
+
+def console_frame(name: str, source: int = 0x42, **values) -> can.Message:
+    """A console frame of the shipped console.dbc (HelmOrder or EngineOrder) with these signals."""
+    spec = CONSOLE.get_message_by_name(name)
+    pgn = {"HelmOrder": 0xFF50, "EngineOrder": 0xFF51}[name]
+    return can.Message(arbitration_id=identifier(6, pgn, source), data=spec.encode(values), is_extended_id=True)
+
+
+def rudder_order_pgn(angle_rad: float, source: int = 0x10) -> can.Message:
+    """An NMEA 2000 helm's PGN 127245 carrying a rudder angle order, rad."""
+    raw = int(round(angle_rad / 1e-4)) & 0xFFFF
+    data = bytes([0, 0xF8 | (1 if angle_rad > 0 else 2), raw & 0xFF, raw >> 8, 0xFF, 0x7F, 0xFF, 0xFF])
+    return can.Message(arbitration_id=identifier(2, 127245, source), data=data, is_extended_id=True)
+
+
+def tick(hub: LinkHub, state: ShipOutputs, now: float) -> Decision:
+    """One loop tick: poll (phase 1), then publish ``state`` (phase 2)."""
+    decision = hub.poll(now)
+    hub.publish(state, now)
+    return decision
 
 
 @contextmanager
@@ -56,12 +93,11 @@ def wait_for(predicate, timeout: float = 3.0, poll=None):
     return time.monotonic() - t0
 
 
-
-def order_collector(hub, state):
+def order_collector(hub: LinkHub, state: ShipOutputs):
     """(orders seen so far by kind, a function ticking the hub once and adding its orders)."""
     got = {}
 
-    def tick() -> None:
-        controls = hub.tick(state, time.monotonic()).controls
+    def tick_once() -> None:
+        controls = tick(hub, state, time.monotonic()).controls
         got.update({k: v for k, v in vars(controls).items() if v is not None})
-    return got, tick
+    return got, tick_once

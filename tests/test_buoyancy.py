@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from sim_core.buoyancy import posed_vertices, submerged_volume_centre, submerged_volume_centre_reference
-from sim_core.floe_vertical import vertical_step
-from sim_core.ice_model import compile_ice_model, vertical_substeps
-from sim_core.tile_template import build_tile
+from sim_core.fracture.tile_template import build_tile
+from sim_core.ice.buoyancy import posed_vertices, submerged_volume_centre, submerged_volume_centre_reference
+from sim_core.ice.model import compile_ice_model, vertical_substeps
+from sim_core.ice.vertical import vertical_step
 
 
 @pytest.fixture(scope="module")

@@ -1,5 +1,4 @@
 import trimesh
-
 from conftest import run_cli
 
 

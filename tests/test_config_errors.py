@@ -1,9 +1,9 @@
 """A user's config mistake gives one clear message naming file, key, value and the allowed
 range, a non-zero exit, and no traceback."""
 import pytest
-
-from bridge_node.config import DEFAULT_CONFIG, ConfigError, load_config
 from conftest import run_cli
+
+from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, load_config
 
 
 def write_config(tmp_path, replace: dict[str, str]):

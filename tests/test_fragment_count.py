@@ -3,9 +3,9 @@ import math
 import numpy as np
 import pytest
 
-from sim_core.fragment_count import seed_count_range
-from sim_core.ice_material import IceMaterial, characteristic_length
-from sim_core.tile_template import FractureSettings, build_tile, plan_areas
+from sim_core.fracture.fragment_count import seed_count_range
+from sim_core.fracture.tile_template import FractureSettings, build_tile, plan_areas
+from sim_core.material import IceMaterial, characteristic_length
 
 
 def test_paper_data_points_exact():

@@ -4,14 +4,15 @@ import math
 import numpy as np
 import pytest
 
-from sim_core.breaking_experiment import channel_and_band, run_breaking
-from sim_core.floe_state import BY_HULL, FREE, INTACT
-from sim_core.hull_contour import CONTOUR_POINTS, waterline_contour
-from sim_core.ice_breaking import impact_constant
-from sim_core.ice_dynamics import HullMotion, ice_step, new_ice_data, place_tile
-from sim_core.ice_material import IceMaterial
-from sim_core.ice_model import compile_ice_model
-from sim_core.tile_template import FractureSettings, build_tile
+from sim_core.fracture.tile_template import FractureSettings, build_tile
+from sim_core.frames.hull_contour import CONTOUR_POINTS, waterline_contour
+from sim_core.ice.breaking import impact_constant
+from sim_core.ice.floes import BreakCause, FloeStatus
+from sim_core.ice.model import compile_ice_model
+from sim_core.ice.step import HullMotion, ice_step
+from sim_core.ice.tiles import break_cells, new_ice_data, place_tile
+from sim_core.material import IceMaterial
+from sim_core.studies.breaking import channel_and_band, run_breaking
 
 KN = 1852 / 3600
 SIDE = 50.0
@@ -37,14 +38,14 @@ def test_channel_opened_no_intact_cell_left_in_swept_path(runs):
     r = runs[("sphere", 3)]
     st, m = r.data.state, r.model
     half_beam, centre = 12.0, SIDE / 2
-    for i in np.nonzero(st.status == INTACT)[0]:
+    for i in np.nonzero(st.status == FloeStatus.INTACT)[0]:
         g = st.gcell[i]
         ring = m.outline[m.outline_start[g]:m.outline_start[g + 1]]
         c, s = math.cos(st.yaw[i]), math.sin(st.yaw[i])
         world = ring @ np.array([[c, s], [-s, c]]) + st.xy[i]
         in_path = (np.abs(world[:, 0] - centre) < half_beam - 0.05) & (world[:, 1] > 0) & (world[:, 1] < 3 * SIDE)
         assert not in_path.any(), f"intact cell {i} inside the hull's swept path"
-    assert np.any(st.cause == BY_HULL)
+    assert np.any(st.cause == BreakCause.HULL)
 
 
 def test_collider_setups_give_papers_ordering(runs):
@@ -81,7 +82,7 @@ def test_broken_pieces_float_at_equilibrium_when_left_alone(runs):
     for _ in range(int(40 / (1 / 30))):
         ice_step(r.model, r.data, far, 1 / 30)
     st = r.data.state
-    free = st.status == FREE
+    free = st.status == FloeStatus.FREE
     assert free.sum() > 100
     assert np.allclose(st.heave[free], r.model.z_equilibrium[st.gcell[free]], atol=2e-3)
     assert np.abs(st.roll[free]).max() < 2e-3 and np.abs(st.pitch[free]).max() < 2e-3
@@ -93,11 +94,10 @@ def test_no_floe_accelerates_without_contact_and_energy_decays():
     t = build_tile(0.5, 4, FractureSettings(tile_side=40.0, colliders="sphere"))
     m = compile_ice_model([t])
     data = new_ice_data(m, waterline_contour(150, 24), 0.1)
-    rows = np.arange(place_tile(m, data, 0, (0.0, 0.0)).stop)
-    keep = rows[::7]  # every 7th cell: free them, delete the rest so none touch
+    rows = data.tiles.rows(place_tile(m, data, 0, (0.0, 0.0)))
+    keep = rows[::7]  # every 7th cell: free them, take the rest out of the contact space so none touch
     data.contacts.remove(data.state, np.setdiff1d(rows, keep))
-    data.state.status[np.setdiff1d(rows, keep)] = 3  # out of play
-    data.contacts.free(data.state, keep)
+    break_cells(data, keep, BreakCause.HULL)
     rng = np.random.default_rng(2)
     data.contacts.set_velocity(keep, rng.uniform(-0.05, 0.05, (len(keep), 2)), np.zeros(len(keep)))
     far = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
@@ -136,7 +136,7 @@ def test_floes_pushed_under_the_hull_surface_and_right_themselves(runs):
     for _ in range(int(30 / (1 / 30))):
         ice_step(r.model, r.data, onward, 1 / 30)
     assert not st.submerged.any()  # the hull has gone: everything surfaced
-    by_hull = (st.cause == BY_HULL) & (st.status == FREE)
+    by_hull = (st.cause == BreakCause.HULL) & (st.status == FloeStatus.FREE)
     g = st.gcell[by_hull]
     assert np.allclose(st.heave[by_hull], r.model.z_equilibrium[g], atol=0.05)
     assert np.abs(st.roll[by_hull]).max() < 0.25  # all were tilted 0.25 rad going under

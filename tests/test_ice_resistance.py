@@ -2,7 +2,7 @@ import math
 
 import pytest
 
-from sim_core.ice_resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER, ice_resistance, lindqvist_terms
+from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER, ice_resistance, lindqvist_terms
 
 # Reference case: B = 24 m, L = 150 m, T = 9 m, stem phi = 25 deg, waterline alpha = 30 deg,
 # mu = 0.1, sigma_f = 500 kPa, E = 3 GPa, nu = 0.33, rho_i = 900, rho_w = 1027, g = 9.826,

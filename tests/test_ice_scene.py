@@ -4,13 +4,13 @@ import math
 import numpy as np
 import pytest
 
-from bridge_node.config import load_config
-from bridge_node.world_setup import build_world, start_world
-from sim_core.floe_state import FREE, FROZEN
-from sim_core.hull_contour import ship_to_world, waterline_contour
-from sim_core.ice_scene import (BREAKABLE, FROZEN as TILE_FROZEN, UNBREAKABLE, SceneSettings, compile_scene,
-                                new_scene_data, update_scene)
-from sim_core.tile_quadtree import detection_radius, tile_under, tiles_near, tiles_near_brute_force
+from bridge_node.node.config import load_config
+from bridge_node.node.world_setup import build_world, start_world
+from sim_core.frames.hull_contour import waterline_contour
+from sim_core.frames.ship_frame import ship_to_world
+from sim_core.ice.floes import FloeStatus
+from sim_core.scene.quadtree import detection_radius, tile_under, tiles_near, tiles_near_brute_force
+from sim_core.scene.scene import SceneSettings, TileState, compile_scene, new_scene_data, update_scene
 from sim_core.world import step
 
 L, BEAM, B = 150.0, 24.0, 100.0
@@ -22,9 +22,19 @@ def scene(n: int, **settings):
                          [np.array([0])], B, L)
 
 
-def test_detection_radius_is_the_papers_formula():
-    assert detection_radius(100.0, 150.0) == math.sqrt(2) / 2 * 100.0 + 150.0 / 10
-    assert scene(4).radius == detection_radius(B, L)
+def test_detection_radius_covers_the_tile_and_the_corner_buffer():
+    """Any point of a tile lies within R_T - L/10 of its centre (the fragmentation buffer
+    reaches its corners and no farther), so a contour point anywhere on a tile detects it
+    with L/10 to spare: for B = 100 m, L = 150 m that is 85.7 m."""
+    radius = detection_radius(B, L)
+    assert radius == pytest.approx(85.71, abs=0.01)
+    rng = np.random.default_rng(3)
+    pts = rng.uniform(0.0, B, (2000, 2))
+    reach = np.hypot(*(pts - B / 2).T)
+    assert reach.max() <= radius - L / 10 and reach.max() > 0.97 * (radius - L / 10)
+    assert 0 in tiles_near(np.array([[B - 1e-6, B - 1e-6]]), radius - L / 10 + 1e-6, 4, 4, B)
+    assert 0 not in tiles_near(np.array([[B + 1e-3, B + 1e-3]]), radius - L / 10, 4, 4, B)
+    assert scene(4).radius == radius
 
 
 @pytest.mark.parametrize("n", [64, 640])
@@ -88,14 +98,14 @@ def test_no_contour_point_touches_unbreakable_ice_in_10km_zigzag(detection):
         frozen += len(up.freeze)
         thawed += len(up.thaw)
         tiles = [tile_under(p, 96, 96, B) for p in pts]
-        touched += sum(1 for t in tiles if t >= 0 and data.tile_state[t] != BREAKABLE)
+        touched += sum(1 for t in tiles if t >= 0 and data.tile_state[t] != TileState.BREAKABLE)
         assert len(data.live) < 100  # reverse replacement bounds the live tiles
     if detection == "contour":
         assert touched == 0
         assert frozen > 50 and thawed > 0  # the track doubled back over frozen tiles
     else:
         assert touched > 1000  # the traditional test lets the bow into intact tiles
-    assert set(np.unique(data.tile_state)) <= {UNBREAKABLE, BREAKABLE, TILE_FROZEN}
+    assert set(np.unique(data.tile_state)) <= set(TileState)
 
 
 def test_reverse_distance_shorter_than_the_ship_is_rejected():
@@ -121,7 +131,7 @@ def transits(tmp_path_factory):
         series = []
         while data.ship.eta[0] < 520.0:
             ev = step(model, data, 0.1)
-            series.append((data.ship.eta[0], data.ice.state.count(FREE), data.ice.state.count(FROZEN),
+            series.append((data.ship.eta[0], data.ice.state.count(FloeStatus.FREE), data.ice.state.count(FloeStatus.FROZEN),
                            len(ev.broken_by_hull)))
         out[reverse] = (model, data, np.array(series))
     return out
@@ -144,14 +154,14 @@ def test_live_fragments_grow_without_reverse_replacement_and_stay_bounded_with_i
 def test_frozen_channel_stays_in_the_scene(transits):
     model, data, series = transits[True]
     st = data.ice.state
-    frozen = st.status == FROZEN
+    frozen = st.status == FloeStatus.FROZEN
     assert series[-1, 2] > 100
     # the frozen floes are the broken channel astern: near the track, south of the ship
     assert np.all(st.xy[frozen, 1] < data.ship.eta[0] - 150.0)
     track = (model.scene.nx // 2 + 0.5) * model.scene.side  # the start_world default
     assert np.abs(np.median(st.xy[frozen, 0]) - track) < 10.0
     assert np.all(np.isfinite(st.xy[frozen]))
-    assert (data.scene.tile_state == TILE_FROZEN).sum() >= 2
+    assert (data.scene.tile_state == TileState.FROZEN).sum() >= 2
 
 
 def test_world_step_reports_swaps_and_breaking(transits):

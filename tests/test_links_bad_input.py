@@ -4,16 +4,15 @@ import math
 import time
 
 import can
-import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from bridge_node.links.base import ControlInput
+from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, ControlInput
 from bridge_node.links.can_link import CanLink
-from bridge_node.links.link_settings import CanLinkSettings, RegisterSpec
-from bridge_node.config import DEFAULT_CONFIG
 from bridge_node.links.modbus_link import register_order
 from bridge_node.links.n2k_frames import fast_packet_frames, identifier
 from bridge_node.links.nmea0183 import ETL, PRC, ROR, SentenceError, parse_order
+from bridge_node.links.settings import CanLinkSettings, RegisterSpec
 
 ORDERS = [str(ROR("RC", "ROR", ("-22.0", "A", "34.0", "A", "B"))),
           str(ETL("RC", "ETL", ("120000.00", "O", "14", "30", "B", "1"))),
@@ -65,29 +64,35 @@ def test_nan_and_infinite_fields_are_rejected(value):
     assert outcome(str(ROR("RC", "ROR", (value, "A", "", "V", "B")))) in ("bad_field", "out_of_range")
 
 
-@pytest.fixture(scope="module")
-def can_link():
-    link = CanLink(CanLinkSettings(type="can", name="fuzz", channel="icebridge-fuzz"), DEFAULT_CONFIG.parent / "console.dbc")
-    return link
+def fresh_can_link() -> CanLink:
+    """A new, unopened CAN link: its error counts start at zero in every example."""
+    return CanLink(CanLinkSettings(type="can", name="fuzz", channel="icebridge-fuzz"))
+
+
+def decoded_or_one_error(msg: can.Message) -> list[ControlInput]:
+    """Decode one frame on a fresh link: valid orders, or none and exactly one counted error."""
+    link = fresh_can_link()
+    out = link._decode(msg, time.monotonic())
+    assert sum(link.health().errors.values()) == (0 if out else 1)
+    for o in out:
+        assert o.kind in (RUDDER, TELEGRAPH, LEVER)
+        assert isinstance(o.value, str) or math.isfinite(o.value)
+        assert o.kind != RUDDER or abs(o.value) <= math.pi / 2
+        assert o.kind != LEVER or abs(o.value) <= 100.0
+    return out
 
 
 @settings(max_examples=3000, deadline=None)
 @given(st.integers(0, 0x1FFFFFFF), st.binary(max_size=8), st.booleans(), st.booleans())
-def test_random_can_frames_are_orders_or_counted(can_link, can_id, data, extended, error_frame):
-    msg = can.Message(arbitration_id=can_id if extended else can_id & 0x7FF, data=data, is_extended_id=extended,
-                      is_error_frame=error_frame)
-    before = sum(can_link.health().errors.values())
-    out = can_link._decode(msg, time.monotonic())
-    assert len(out) > 0 or sum(can_link.health().errors.values()) == before + 1
-    for o in out:
-        assert isinstance(o.value, str) or math.isfinite(o.value)
+def test_random_can_frames_are_orders_or_counted(can_id, data, extended, error_frame):
+    decoded_or_one_error(can.Message(arbitration_id=can_id if extended else can_id & 0x7FF, data=data,
+                                     is_extended_id=extended, is_error_frame=error_frame))
 
 
 @settings(max_examples=2000, deadline=None)
-@given(st.sampled_from([0xFF50, 0xFF51, 127245]), st.binary(max_size=8))
-def test_console_pgns_with_any_payload_never_crash(can_link, pgn, data):
-    msg = can.Message(arbitration_id=identifier(6, pgn, 0x42), data=data, is_extended_id=True)
-    can_link._decode(msg, time.monotonic())
+@given(st.sampled_from([0xFF50, 0xFF51, 127245]), st.binary(max_size=8), st.integers(0, 0xFF))
+def test_console_pgns_with_any_payload_are_orders_or_counted(pgn, data, source):
+    decoded_or_one_error(can.Message(arbitration_id=identifier(6, pgn, source), data=data, is_extended_id=True))
 
 
 @settings(max_examples=2000, deadline=None)

@@ -4,33 +4,12 @@ import math
 import time
 
 import can
-import cantools
 import pytest
+from links_helpers import CONSOLE, STATE, console_frame, node_config, pty_pair, rudder_order_pgn, tick, wait_for
 from nmea2000.decoder import NMEA2000Decoder
 
-from bridge_node.config import DEFAULT_CONFIG
-from bridge_node.link_hub import LinkHub
+from bridge_node.links.hub import LinkHub
 from bridge_node.links.n2k_frames import identifier
-from links_helpers import node_config, pty_pair, wait_for
-from sim_core.ship_outputs import ShipOutputs
-
-CONSOLE = cantools.database.load_file(str(DEFAULT_CONFIG.parent / "console.dbc"))
-STATE = ShipOutputs(time=10.0, north=100.0, east=50.0, latitude=math.radians(74.0012345),
-                    longitude=math.radians(20.0054321), heading=math.radians(123.4), course_over_ground=math.radians(125.0),
-                    speed_over_ground=4.321, speed_longitudinal=4.3, speed_transverse=-0.2, rate_of_turn=math.radians(0.35),
-                    rudder_angle=math.radians(-12.3), shaft_rps=1.234, ice_resistance=1.5e5)
-
-
-def console_frame(name: str, source: int = 0x42, **values) -> can.Message:
-    spec = CONSOLE.get_message_by_name(name)
-    pgn = {"HelmOrder": 0xFF50, "EngineOrder": 0xFF51}[name]
-    return can.Message(arbitration_id=identifier(6, pgn, source), data=spec.encode(values), is_extended_id=True)
-
-
-def rudder_order_pgn(angle_rad: float, source: int = 0x10) -> can.Message:
-    raw = int(round(angle_rad / 1e-4)) & 0xFFFF
-    data = bytes([0, 0xF8 | (1 if angle_rad > 0 else 2), raw & 0xFF, raw >> 8, 0xFF, 0x7F, 0xFF, 0xFF])
-    return can.Message(arbitration_id=identifier(2, 127245, source), data=data, is_extended_id=True)
 
 
 @pytest.fixture
@@ -38,12 +17,10 @@ def can_hub(request):
     channel = f"icebridge-test-{request.node.name}"
     cfg = node_config([{"type": "can", "name": "helm_can", "channel": channel}], rudder=["helm_can"],
                       engine=["helm_can"])
-    hub = LinkHub(cfg, None)
-    hub.open()
-    peer = can.Bus(interface="virtual", channel=channel)
-    yield hub, peer
-    peer.shutdown()
-    hub.close()
+    with LinkHub(cfg.links, cfg.arbitration) as hub:
+        peer = can.Bus(interface="virtual", channel=channel)
+        yield hub, peer
+        peer.shutdown()
 
 
 def test_identifier_matches_the_protocol_reference():
@@ -54,12 +31,12 @@ def test_console_orders_over_virtual_can(can_hub):
     hub, peer = can_hub
     peer.send(console_frame("HelmOrder", RudderOrder=-22.5, Status=1, Counter=1))
     peer.send(console_frame("EngineOrder", Engine=0, Lever=0, TelegraphPosition=3, Mode=1))
-    d = hub.tick(STATE, time.monotonic())
+    d = tick(hub, STATE, time.monotonic())
     assert d.controls.rudder == pytest.approx(math.radians(-22.5))
     assert d.controls.telegraph == "half_ahead"
     peer.send(console_frame("EngineOrder", Engine=0, Lever=-40, TelegraphPosition=0, Mode=0))
     peer.send(rudder_order_pgn(math.radians(10.0)))  # an NMEA 2000 helm: PGN 127245 angle order
-    d = hub.tick(STATE, time.monotonic())
+    d = tick(hub, STATE, time.monotonic())
     assert d.controls.lever == -40.0
     assert d.controls.rudder == pytest.approx(math.radians(10.0), abs=1e-4)
 
@@ -72,7 +49,7 @@ def test_bad_frames_are_counted_and_dropped(can_hub):
     peer.send(can.Message(arbitration_id=identifier(6, 0xFF50, 0x42), data=b"\x10\x27" + raw[2:],
                           is_extended_id=True))  # 1000.0 deg: out of range
     peer.send(can.Message(arbitration_id=0x123, data=b"\x00", is_extended_id=False))
-    d = hub.tick(STATE, time.monotonic())
+    d = tick(hub, STATE, time.monotonic())
     assert d.controls.rudder is None
     errors = hub.links[0].health().errors
     assert errors["wrong_dlc"] == 1 and errors["invalid_status"] == 1 and errors["out_of_range"] == 1
@@ -90,7 +67,7 @@ def decoded_outputs(peer: can.BusABC) -> dict:
 
 def test_outputs_decode_with_an_independent_decoder(can_hub):
     hub, peer = can_hub
-    hub.tick(STATE, time.monotonic())
+    tick(hub, STATE, time.monotonic())
     out = decoded_outputs(peer)
     assert set(out) == {127245, 127488, 127489, 127250, 127251, 129025, 129026}
     assert out[127245][1] == 0x09F10D23  # priority 2, our source address 0x23
@@ -110,7 +87,7 @@ def test_output_rates_are_kept(can_hub):
     hub, peer = can_hub
     t0 = time.monotonic()
     for k in range(21):  # 2 s of 20 Hz ticks on a simulated clock
-        hub.tick(STATE, t0 + 0.1 * k)
+        tick(hub, STATE, t0 + 0.1 * k)
     counts = {}
     while (msg := peer.recv(timeout=0.05)) is not None:
         pgn = (msg.arbitration_id >> 8) & 0x3FFFF
@@ -126,14 +103,14 @@ def test_console_over_slcan_on_a_pty(tmp_path):
     with pty_pair(tmp_path) as (node_end, console_end):
         cfg = node_config([{"type": "can", "name": "slcan", "interface": "slcan", "channel": node_end}],
                           rudder=["slcan"], engine=["slcan"])
-        hub = LinkHub(cfg, None)
+        hub = LinkHub(cfg.links, cfg.arbitration)
         hub.open()
         console = can.Bus(interface="slcan", channel=console_end, bitrate=250000)
         try:
             console.send(console_frame("HelmOrder", RudderOrder=7.5, Status=1, Counter=2))
             got = []
             wait_for(lambda: got, poll=lambda: got.extend(
-                [c for c in [hub.tick(STATE, time.monotonic()).controls.rudder] if c is not None]))
+                [c for c in [tick(hub, STATE, time.monotonic()).controls.rudder] if c is not None]))
             assert got[0] == pytest.approx(math.radians(7.5))
             heading = None
             dec = NMEA2000Decoder()

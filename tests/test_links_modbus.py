@@ -5,12 +5,11 @@ import time
 from contextlib import ExitStack
 
 import pytest
+from links_helpers import STATE, node_config, order_collector, pty_pair, tick, wait_for
+from modbus_console import ModbusConsole, free_port
 
-from bridge_node.link_hub import LINK_DOWN_ALARM, LinkHub
-from bridge_node.order_arbiter import ALARM_NUMBERS
-from links_helpers import node_config, order_collector, pty_pair, wait_for
-from modbus_console import ModbusConsole
-from test_links_can import STATE
+from bridge_node.links.arbiter import ALARM_NUMBERS
+from bridge_node.links.hub import LINK_DOWN_ALARM, LinkHub
 
 REGISTERS = [{"order": "rudder", "address": 0, "scale": 0.1}, {"order": "lever", "address": 1},
              {"order": "telegraph", "address": 2, "type": "uint16"}]
@@ -31,7 +30,7 @@ def modbus_setup(stack: ExitStack, transport: str, tmp_path):
     stack.callback(console.stop)
     cfg = node_config([link | {"registers": REGISTERS, "writes": WRITES, "poll_hz": 20, "timeout_s": 0.5}],
                       rudder=["io"], engine=["io"], fail_safe="midships_stop", fail_safe_after_s=0.5)
-    hub = LinkHub(cfg, None)
+    hub = LinkHub(cfg.links, cfg.arbitration)
     hub.open()
     stack.callback(hub.close)
     return console, hub
@@ -41,11 +40,11 @@ def modbus_setup(stack: ExitStack, transport: str, tmp_path):
 def test_console_registers_read_and_indicators_written(tmp_path, transport):
     with ExitStack() as stack:
         console, hub = modbus_setup(stack, transport, tmp_path)
-        got, tick = order_collector(hub, STATE)
-        wait_for(lambda: "rudder" in got and "telegraph" in got, poll=tick)
+        got, collect = order_collector(hub, STATE)
+        wait_for(lambda: "rudder" in got and "telegraph" in got, poll=collect)
         assert got["rudder"] == pytest.approx(math.radians(-15.5))
         assert got["telegraph"] == "full_ahead"
-        wait_for(lambda: console.get(10) != 0, poll=tick)
+        wait_for(lambda: console.get(10) != 0, poll=collect)
         assert console.get(10) == (-123) & 0xFFFF  # -12.3 deg in 0.1 deg
         assert console.get(11) == round(STATE.shaft_rps * 60)
 
@@ -56,20 +55,42 @@ def test_server_lost_alarm_fail_safe_and_recovery(tmp_path, transport):
         console, hub = modbus_setup(stack, transport, tmp_path)
         decisions = []
 
-        def tick():
-            decisions.append(hub.tick(STATE, time.monotonic()))
-        wait_for(lambda: decisions and decisions[-1].active["rudder"] == "io", poll=tick)
+        def tick_once():
+            decisions.append(tick(hub, STATE, time.monotonic()))
+        wait_for(lambda: decisions and decisions[-1].active["rudder"] == "io", poll=tick_once)
         console.stop()
-        wait_for(lambda: any(d.controls.rudder == 0.0 for d in decisions), timeout=5.0, poll=tick)
+        wait_for(lambda: any(d.controls.rudder == 0.0 for d in decisions), timeout=5.0, poll=tick_once)
         fail_safe = [d for d in decisions if d.controls.rudder == 0.0][0]
         assert fail_safe.controls.telegraph == "stop"  # midships and stop
         stale, failed = ALARM_NUMBERS["rudder"]
         assert {stale, failed, LINK_DOWN_ALARM} <= set(hub.active_alarms)
         console.set(0, 100)  # the console came back with a new order: 10 deg to starboard
         console.start()
-        took = wait_for(lambda: decisions[-1].controls.rudder is not None and decisions[-1].controls.rudder > 0,
-                        timeout=5.0, poll=tick)
-        assert took < 2.0
+        # back in use: how soon is the back-off's cap (test_links_base), not timed here
+        wait_for(lambda: decisions[-1].controls.rudder is not None and decisions[-1].controls.rudder > 0,
+                 timeout=10.0, poll=tick_once)
         assert decisions[-1].controls.rudder == pytest.approx(math.radians(10.0))
         assert not hub.active_alarms  # every alarm cleared
         assert hub.links[0].health().reconnects >= 1
+
+
+def test_worker_errors_reach_health_only_through_the_loop():
+    """The worker counts connect failures against a dead server; the loop reads consistent
+    snapshots in a tight loop, and counts change only when the loop polls."""
+    cfg = node_config([{"type": "modbus", "name": "io", "port": free_port(), "poll_hz": 100,
+                        "registers": REGISTERS}], rudder=["io"])
+    with LinkHub(cfg.links, cfg.arbitration) as hub:
+        link = hub.links[0]
+
+        def poll_and_read() -> None:
+            hub.poll(time.monotonic())
+            for _ in range(200):
+                hub.errors()
+                link.health()
+        wait_for(lambda: hub.errors()["connect_failed"] >= 3, poll=poll_and_read)
+        before = hub.errors()
+        wait_for(lambda: not link.device.events.empty())  # the worker has counted another failure
+        assert hub.errors() == before  # not applied until the loop polls
+        hub.poll(time.monotonic())
+        assert hub.errors()["connect_failed"] > before["connect_failed"]
+        assert not link.health().connected

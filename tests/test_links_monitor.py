@@ -7,10 +7,10 @@ import sys
 import time
 
 import serial
-
-from bridge_node.links.nmea0183 import PRC, ROR
 from conftest import REPO, run_cli
 from links_helpers import pty_pair
+
+from bridge_node.links.nmea0183 import PRC, ROR
 
 
 def write_config(tmp_path, port: str, udp_port: int | None = None) -> str:
@@ -113,7 +113,7 @@ def test_link_config_errors_name_the_key(tmp_path):
 
 
 def test_shipped_console_example_config_is_valid():
-    from bridge_node.config import DEFAULT_CONFIG, load_config
+    from bridge_node.node.config import DEFAULT_CONFIG, load_config
 
     cfg = load_config(DEFAULT_CONFIG.parent / "bridge_console.toml")
     assert [link.type for link in cfg.links] == ["can", "nmea0183", "modbus"]

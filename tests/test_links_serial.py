@@ -7,11 +7,10 @@ import time
 import pynmea2
 import pytest
 import serial
+from links_helpers import STATE, node_config, order_collector, paced_write, pty_pair, tick, wait_for
 
-from bridge_node.link_hub import LinkHub
+from bridge_node.links.hub import LinkHub
 from bridge_node.links.nmea0183 import ETL, PRC, ROR
-from links_helpers import node_config, order_collector, paced_write, pty_pair, wait_for
-from test_links_can import STATE
 
 KNOT = 1852 / 3600
 
@@ -31,24 +30,24 @@ def test_console_orders_and_instrument_outputs_over_a_pty(tmp_path, baud):
                             "udp_port": udp.getsockname()[1], "rates": {"RMC": 1, "GGA": 1, "VTG": 0, "ZDA": 0,
                             "HDT": 5, "ROT": 1, "RSA": 1, "RPM": 1, "VBW": 0, "XDR": 0}}],
                           rudder=["nmea"], engine=["nmea"])
-        hub = LinkHub(cfg, None)
+        hub = LinkHub(cfg.links, cfg.arbitration)
         hub.open()
         console = serial.Serial(console_end, baud, timeout=0)
         try:
             paced_write(console, [str(ROR("RC", "ROR", ("-22.0", "A", "", "V", "B"))),
                                   str(ETL("RC", "ETL", ("120000.00", "O", "02", "30", "B", "0")))], baud)
-            got, tick = order_collector(hub, STATE)
-            wait_for(lambda: "rudder" in got and "telegraph" in got, poll=tick)
+            got, collect = order_collector(hub, STATE)
+            wait_for(lambda: "rudder" in got and "telegraph" in got, poll=collect)
             assert got["rudder"] == pytest.approx(math.radians(-22.0))
             assert got["telegraph"] == "slow_ahead"
             paced_write(console, [str(PRC("RC", "PRC", ("-45.0", "A", "", "V", "", "V", "B", "0")))], baud)
-            wait_for(lambda: "lever" in got, poll=tick)
+            wait_for(lambda: "lever" in got, poll=collect)
             assert got["lever"] == -45.0
             # instrument sentences on the line: parse every one with pynmea2 (checksums checked)
             text = b""
             deadline = time.monotonic() + 1.5
             while time.monotonic() < deadline:
-                hub.tick(STATE, time.monotonic())
+                tick(hub, STATE, time.monotonic())
                 text += console.read(4096)
                 time.sleep(0.02)
         finally:
@@ -82,7 +81,7 @@ def test_bad_sentences_on_the_line_are_counted_not_fatal(tmp_path):
     with pty_pair(tmp_path) as (node_end, console_end):
         cfg = node_config([{"type": "nmea0183", "name": "nmea", "port": node_end, "udp_port": None,
                             "allowed_talkers": ["RC"]}], rudder=["nmea"])
-        hub = LinkHub(cfg, None)
+        hub = LinkHub(cfg.links, cfg.arbitration)
         hub.open()
         console = serial.Serial(console_end, 38400, timeout=0)
         try:
@@ -94,7 +93,7 @@ def test_bad_sentences_on_the_line_are_counted_not_fatal(tmp_path):
                           + good.encode() + b"\r\n")
             got = []
             wait_for(lambda: got, poll=lambda: got.extend(
-                [r for r in [hub.tick(STATE, time.monotonic()).controls.rudder] if r is not None]))
+                [r for r in [tick(hub, STATE, time.monotonic()).controls.rudder] if r is not None]))
         finally:
             console.close()
             hub.close()

@@ -1,18 +1,20 @@
 """Projector channels rendered offscreen through EGL (Mesa llvmpipe here): what each channel
 shows, where its horizon sits, blending between neighbours, and floe poses in the pixels."""
+import dataclasses
 import math
 
 import numpy as np
 import pytest
-
-from bridge_node.config import load_config
-from bridge_node.render.channel_output import ChannelSet, blend_ramp, create_context
-from bridge_node.render.render_settings import ChannelSettings, RenderSettings
-from bridge_node.render.scene_renderer import SceneRenderer
-from bridge_node.world_setup import build_world, start_world
 from conftest import run_cli
-from sim_core.floe_state import FREE
-from sim_core.world import step
+
+from bridge_node.node.config import load_config
+from bridge_node.node.world_setup import build_world, start_world
+from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
+from bridge_node.render.renderer import SceneRenderer
+from bridge_node.render.settings import ChannelSettings, RenderSettings
+from bridge_node.render.world_view import WorldView
+from sim_core.ice.floes import FloeStatus
+from sim_core.world import snapshot, step
 
 W, H = 192, 108
 
@@ -38,18 +40,26 @@ def exercise(tmp_path_factory):
     return model, data
 
 
+def view_of(model, data, **ship) -> WorldView:
+    """A fresh view of the world's published state, optionally with the ship moved."""
+    view = WorldView()
+    view.apply(snapshot(model, data))
+    view.ship = dataclasses.replace(view.ship, **ship)
+    return view
+
+
 @pytest.fixture(scope="module")
 def ctx():
     return create_context()
 
 
-def render(ctx, model, data, channels, visibility=8000.0, blended=True):
+def render(ctx, model, data, channels, visibility=8000.0, blended=True, view=None):
     """Images of the channels; unblended: the same channels with their blend bands off."""
     if not blended:
         channels = [c.model_copy(update={"blend_left_deg": 0.0, "blend_right_deg": 0.0}) for c in channels]
     settings = RenderSettings(channels=channels, visibility_m=visibility)
     cs = ChannelSet(SceneRenderer(ctx, model, settings), channels)
-    cs.render(data)
+    cs.render(view or view_of(model, data))
     return [t.image() for t in cs.targets]
 
 
@@ -67,12 +77,8 @@ def is_ice(px):
 
 def test_open_water_view_shows_sky_and_water(ctx, exercise):
     model, data = exercise
-    north = data.ship.eta[0]
-    data.ship.eta[0] = -3000.0  # 3 km south of the field, looking south: open water
-    try:
-        img, = render(ctx, model, data, [channel(yaw_deg=180.0)])
-    finally:
-        data.ship.eta[0] = north
+    south = view_of(model, data, north=-3000.0)  # 3 km south of the field, looking south: open water
+    img, = render(ctx, model, data, [channel(yaw_deg=180.0)], view=south)
     assert is_sky(img[: H // 3]).mean() > 0.95
     assert is_water(img[-H // 4:]).mean() > 0.95
 
@@ -147,15 +153,14 @@ def test_floe_heave_roll_and_pitch_change_its_pixels(ctx, exercise):
     psi = data.ship.eta[5]
     stern = np.array([data.ship.eta[1] - 75 * math.sin(psi), data.ship.eta[0] - 75 * math.cos(psi)])
     spot = stern - 20.0 / math.tan(math.radians(35.0)) * np.array([math.sin(psi), math.cos(psi)])
-    free = np.nonzero(st.status == FREE)[0]
+    free = np.nonzero(st.status == FloeStatus.FREE)[0]
     row = free[np.argmin(np.linalg.norm(st.xy[free] - spot, axis=1))]
     before, = render(ctx, model, data, [c])
-    saved = st.heave[row], st.roll[row], st.pitch[row]
     changed = []
-    for field, value in (("heave", saved[0] + 0.4), ("roll", 0.35), ("pitch", 0.35)):
-        getattr(st, field)[row] = value
-        after, = render(ctx, model, data, [c])
-        getattr(st, field)[row] = saved[("heave", "roll", "pitch").index(field)]
+    for column, value in ((2, st.heave[row] + 0.4), (4, 0.35), (5, 0.35)):  # heave, roll, pitch
+        view = view_of(model, data)
+        view.pose[row, column] = value
+        after, = render(ctx, model, data, [c], view=view)
         changed.append(int((np.abs(after.astype(int) - before.astype(int)).sum(axis=-1) > 30).sum()))
     assert min(changed) >= 3, changed
 

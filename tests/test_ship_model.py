@@ -4,16 +4,28 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
-
-from sim_core.ice_resistance import LEVEL_ICE, OPEN_WATER
-from sim_core.manoeuvring_trials import (
-    KNOT, crash_stop_trial, imo_limits, steady_speed, turning_trial, zigzag_trial,
-)
-from sim_core.ship_model import (
-    mmg_forces, new_ship_data, order_lever, order_rudder, order_telegraph, propeller_thrust, step,
-)
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from ships import ship
+
+from sim_core.frames.units import KNOT
+from sim_core.ship.model import (
+    mmg_forces,
+    new_ship_data,
+    order_lever,
+    order_rudder,
+    order_telegraph,
+    propeller_thrust,
+    step,
+)
+from sim_core.ship.resistance import LEVEL_ICE, OPEN_WATER
+from sim_core.studies.trials import (
+    crash_stop_trial,
+    imo_limits,
+    steady_speed,
+    turning_trial,
+    zigzag_trial,
+)
 
 KVLCC2_SPEED = 15.5 * KNOT
 
@@ -203,14 +215,16 @@ def test_bad_orders_rejected_or_clamped_with_reason():
     d = new_ship_data(m, 5.0)
     assert order_rudder(m, d, math.radians(10.0)) is None
     reason = order_rudder(m, d, float("nan"))
-    assert "rejected" in reason and d.rudder_order == pytest.approx(math.radians(10.0))
-    assert "clamped" in order_rudder(m, d, math.radians(50.0)) and d.rudder_order == m.rudder_limit
+    assert reason.refused and "rejected" in reason.text and d.rudder_order == pytest.approx(math.radians(10.0))
+    reason = order_rudder(m, d, math.radians(50.0))
+    assert not reason.refused and "clamped" in reason.text and d.rudder_order == m.rudder_limit
     reason = order_lever(m, d, 250.0)
-    assert "clamped to 100 %" in reason and d.rps_order == m.rps_ahead_max
-    assert "rejected" in order_lever(m, d, float("inf"))
+    assert not reason.refused and "clamped to 100 %" in reason.text and d.rps_order == m.rps_ahead_max
+    assert order_lever(m, d, float("inf")).refused
     before = d.rps_order
     reason = order_telegraph(m, d, "warp_nine")
-    assert "unknown telegraph position" in reason and d.rps_order == before
+    assert reason.refused and reason.order == "telegraph" and "unknown telegraph position" in reason.text
+    assert d.rps_order == before
     assert order_lever(m, d, -100.0) is None and d.rps_order == m.rps_astern_max
     with pytest.raises(ValueError):
         step(m, d, float("nan"))

@@ -2,12 +2,12 @@ import json
 import math
 
 import pytest
-
 from conftest import run_cli
-from sim_core.geodesy import geodetic_to_local, local_to_geodetic
-from sim_core.ship_model import new_ship_data, order_rudder, step
-from sim_core.ship_outputs import ship_outputs
 from ships import ship
+
+from sim_core.frames.geodesy import geodetic_to_local, local_to_geodetic
+from sim_core.ship.model import new_ship_data, order_rudder, step
+from sim_core.ship.outputs import ship_outputs
 
 
 def test_geodesy_round_trip_and_scale():
@@ -24,7 +24,8 @@ def test_outputs_of_a_turning_ship():
     order_rudder(m, d, math.radians(35.0))
     for _ in range(60 * 60):
         step(m, d, 1 / 60)
-    out = ship_outputs(d, math.radians(74.0), math.radians(20.0))
+    out = ship_outputs(d, 60.0, math.radians(74.0), math.radians(20.0))
+    assert out.time == 60.0
     assert 0 <= out.heading < 2 * math.pi and 0 <= out.course_over_ground < 2 * math.pi
     assert out.rate_of_turn > 0 and out.rudder_angle == pytest.approx(math.radians(35.0))
     assert out.speed_transverse != 0.0

@@ -4,10 +4,10 @@ import struct
 import numpy as np
 import trimesh
 
-from bridge_node.gltf_export import cell_name, export_glb
-from bridge_node.template_library import load_template, save_template, template_path
-from sim_core.ice_material import IceMaterial
-from sim_core.tile_template import FractureSettings
+from bridge_node.library.gltf import cell_name, export_glb
+from bridge_node.library.templates import load_template, save_template, template_path
+from sim_core.fracture.tile_template import FractureSettings
+from sim_core.material import IceMaterial
 
 
 def test_stored_and_reloaded_tile_identical(tmp_path, prism_tile):

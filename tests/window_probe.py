@@ -8,13 +8,14 @@ from pathlib import Path
 
 import numpy as np
 
-from bridge_node.config import load_config
-from bridge_node.render.channel_output import ChannelSet, context_for
-from bridge_node.render.channel_windows import WindowError
-from bridge_node.render.render_settings import ChannelSettings, RenderSettings
-from bridge_node.render.scene_renderer import SceneRenderer
-from bridge_node.world_setup import build_world, start_world
-from sim_core.world import step
+from bridge_node.node.config import load_config
+from bridge_node.node.world_setup import build_world, start_world
+from bridge_node.render.channels import ChannelSet, context_for
+from bridge_node.render.renderer import SceneRenderer
+from bridge_node.render.settings import ChannelSettings, RenderSettings
+from bridge_node.render.windows import WindowError
+from bridge_node.render.world_view import WorldView
+from sim_core.world import snapshot, step
 
 
 def main(cache: str) -> None:
@@ -33,7 +34,9 @@ def main(cache: str) -> None:
                 ChannelSettings(name="stern", width=160, height=90, yaw_deg=180.0)]
     ctx, hidden = context_for(channels)
     cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=channels)), channels, hidden)
-    cs.render(data)
+    view = WorldView()
+    view.apply(snapshot(model, data))
+    cs.render(view)
     shown, rendered = cs.windows[0].shown(), cs.targets[0].image()
     try:
         missing = [ChannelSettings(name="wing", width=64, height=36, output="window", monitor=3)]

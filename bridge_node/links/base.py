@@ -1,22 +1,40 @@
-"""The one interface every hardware link implements, like python-can's ``can.Bus``.
+"""The link family, modelled on python-can: ``Link`` is the console links' ``BusABC``.
 
-A link is opened, polled once per tick for the console's orders (timestamped
-``ControlInput`` rows), given the ship state to publish to bridge instruments (it sends what
-is due at its own rates), told about alarms, and closed. ``health()`` reports whether it is
-connected, when it last heard its peer, and its error counts by kind. A link never raises
-for bad input from the wire: it counts the error and drops the input.
+A link is built from its settings alone, opened, polled once per tick for the console's
+orders (timestamped ``ControlInput`` rows), given the ship state to publish to bridge
+instruments (it sends what is due at its own rates), told about alarms, and closed; it is a
+context manager, and closing twice is safe. ``Link.poll`` is written once, here: it reopens
+a lost device after a back-off and counts errors, and calls the protocol's small hook
+``_poll_device``. A link never raises for bad input from the wire: it counts the error and
+drops the input. Raw traffic (frames, sentences, register accesses) goes to the link's
+listeners, like python-can's ``Listener``; the session record is one.
+
+Link types register themselves by their settings' ``type`` with ``@register_link``.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
+import time
 from abc import ABC, abstractmethod
 from collections import Counter
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, ClassVar
 
-from bridge_node.links.reconnect import Backoff
-from sim_core.ship_outputs import ShipOutputs
+from sim_core.ship.outputs import ShipOutputs
 
-RUDDER, TELEGRAPH, LEVER = "rudder", "telegraph", "lever"
+if TYPE_CHECKING:
+    from bridge_node.links.settings import LinkSettings
+
+RUDDER, TELEGRAPH, LEVER = "rudder", "telegraph", "lever"  # the kinds of order
+RUDDER_ORDER_LIMIT_DEG = 90.0  # beyond this a rudder order is nonsense, not an order to clamp
+# ETL position codes (IEC 61162-1; also the console's CAN and Modbus codes) -> telegraph positions
+ETL_POSITIONS = {
+    "00": "stop", "01": "dead_slow_ahead", "02": "slow_ahead", "03": "half_ahead", "04": "full_ahead",
+    "05": "navigation_full_ahead", "11": "dead_slow_astern", "12": "slow_astern", "13": "half_astern",
+    "14": "full_astern", "15": "crash_astern",
+}
 
 
 @dataclass(frozen=True)
@@ -42,11 +60,10 @@ class Alarm:
 
 @dataclass
 class LinkHealth:
-    """What a link reports about itself."""
+    """What a link reports about itself; ``Link.health()`` hands out a copy."""
 
     name: str
     connected: bool = False
-    last_input: float = -math.inf  # monotonic s of the last valid input
     inputs: int = 0
     outputs: int = 0
     reconnects: int = 0
@@ -57,100 +74,51 @@ class LinkHealth:
                 "reconnects": self.reconnects, "errors": dict(self.errors)}
 
 
-class Link(ABC):
-    """A hardware link to the console and instruments."""
+@dataclass(frozen=True)
+class Traffic:
+    """Raw traffic of one link as it went over the wire: a ``can.Message``, an NMEA sentence
+    (str without CR LF), or a Modbus ``RegisterAccess``."""
 
-    def __init__(self, name: str) -> None:
-        self.name = name
-        self._health = LinkHealth(name)
+    unix_time: float  # wall clock, s
+    link: str  # link name
+    protocol: str  # the link's registry key: "can", "nmea0183", "modbus"
+    direction: str  # "rx" / "tx"; Modbus: "read" / "write"
+    data: object
 
-    @abstractmethod
-    def open(self) -> None:
-        """Open the port, bus or connection. A peer that is not there yet is not an error:
-        the link reports itself disconnected and keeps trying."""
 
-    @abstractmethod
-    def poll(self, now: float) -> list[ControlInput]:
-        """Orders received since the last poll; never blocks."""
-
-    @abstractmethod
-    def publish(self, state: ShipOutputs, now: float) -> None:
-        """Send the outputs that are due at ``now`` (monotonic s); never blocks."""
-
-    def publish_alarm(self, alarm: Alarm, now: float) -> None:
-        """Announce an alarm on this link, where its protocol has a way to (default: none)."""
+class Listener(ABC):
+    """Receives the raw traffic of the links it is added to, like python-can's ``Listener``.
+    Called on the loop's thread; ``flush`` once per tick, ``stop`` when the hub closes."""
 
     @abstractmethod
-    def close(self) -> None:
-        """Release the port, bus or connection."""
+    def on_traffic(self, traffic: Traffic) -> None:
+        """One frame, sentence or register access in or out."""
 
-    def health(self) -> LinkHealth:
-        return self._health
+    def flush(self) -> None:
+        """Called once per tick (default: nothing)."""
 
-    def _count_error(self, kind: str) -> None:
-        self._health.errors[kind] += 1
-
-
-    def _received(self, inputs: list[ControlInput], now: float) -> list[ControlInput]:
-        if inputs:
-            self._health.inputs += len(inputs)
-            self._health.last_input = now
-        return inputs
+    def stop(self) -> None:
+        """Release what the listener holds (default: nothing)."""
 
 
-class DeviceLink(Link):
-    """A link over one port or bus (``self.device``) that may fail at any time: a failure
-    to open or a lost device is counted, and the device is reopened after a back-off."""
+class Backoff:
+    """Delay before the next reconnect attempt: ``first`` s, doubling per failure up to ``cap`` s."""
 
-    device_errors: tuple[type[Exception], ...] = (OSError,)  # what opening or using the device raises
+    def __init__(self, first: float = 0.1, cap: float = 1.0) -> None:
+        self.first, self.cap = first, cap
+        self.delay = first
+        self.next_try = -math.inf
 
-    def __init__(self, name: str) -> None:
-        super().__init__(name)
-        self.device = None
-        self._backoff = Backoff()
+    def ready(self, now: float) -> bool:
+        return now >= self.next_try
 
-    @abstractmethod
-    def _open_device(self):
-        """Open and return the port or bus."""
+    def failed(self, now: float) -> None:
+        self.next_try = now + self.delay
+        self.delay = min(self.cap, 2.0 * self.delay)
 
-    @abstractmethod
-    def _close_device(self, device) -> None:
-        """Release the port or bus."""
-
-    def _connect(self, now: float) -> None:
-        try:
-            self.device = self._open_device()
-            self._health.connected = True
-            self._backoff.succeeded()
-        except self.device_errors:
-            self.device = None
-            self._down(now, "open_failed")
-
-    def _lost(self, now: float, kind: str) -> None:
-        """The device failed in use (kind counted): close it and retry after the back-off."""
-        try:
-            self._close_device(self.device)
-        except self.device_errors:
-            pass
-        self.device = None
-        self._down(now, kind)
-
-    def _down(self, now: float, kind: str) -> None:
-        self._health.connected = False
-        self._count_error(kind)
-        self._backoff.failed(now)
-
-    def _reconnect_if_due(self, now: float) -> None:
-        """For a link whose device is down: try to reopen it once the back-off has passed."""
-        if self._backoff.ready(now):
-            self._health.reconnects += 1
-            self._connect(now)
-
-    def close(self) -> None:
-        if self.device is not None:
-            self._close_device(self.device)
-            self.device = None
-        self._health.connected = False
+    def succeeded(self) -> None:
+        self.delay = self.first
+        self.next_try = -math.inf
 
 
 class RateSchedule:
@@ -161,8 +129,8 @@ class RateSchedule:
         self.next_due = {k: -math.inf for k in self.period}
 
     def due(self, now: float) -> list[str]:
-        """Outputs due at ``now``, each rescheduled one period on (not drifting with jitter,
-        and not bursting after a stall)."""
+        """Outputs due at ``now`` (monotonic s), each rescheduled one period on (not drifting
+        with jitter, and not bursting after a stall)."""
         out = []
         for k, t in self.next_due.items():
             if now >= t:
@@ -170,3 +138,150 @@ class RateSchedule:
                 nxt = t + self.period[k]
                 self.next_due[k] = nxt if nxt > now else now + self.period[k]
         return out
+
+
+class Link(ABC):
+    """A link to the console and instruments over one device (port, bus, or worker thread)
+    held in ``self.device``, which may fail at any time: a failure to open it or its loss in
+    use is counted, and it is reopened after a back-off (0.1 s doubling to 1 s)."""
+
+    type_name: ClassVar[str] = ""  # the settings' ``type``; set by ``register_link``
+    open_errors: ClassVar[tuple[type[Exception], ...]] = (OSError,)  # opening the device raises these
+    lost_errors: ClassVar[tuple[type[Exception], ...]] = (OSError,)  # a device that failed in use raises these
+    lost_kind: ClassVar[str] = "device_lost"  # error kind counted for a device lost in use
+    up_when_open: ClassVar[bool] = True  # False: ``connected`` waits for the peer to answer
+
+    def __init__(self, settings: LinkSettings) -> None:
+        self.settings = settings
+        self.name: str = settings.name
+        self.device = None
+        self.listeners: list[Listener] = []
+        self._health = LinkHealth(self.name)
+        self._backoff = Backoff()
+        self._active = False  # between open() and close()
+
+    def open(self) -> None:
+        """Open the device. A peer that is not there yet is not an error: the link reports
+        itself disconnected and keeps trying. Opening an open link does nothing."""
+        if self._active:
+            return
+        self._active = True
+        self._connect(time.monotonic())
+
+    def close(self) -> None:
+        """Release the device; safe to call twice."""
+        self._active = False
+        device, self.device = self.device, None
+        if device is not None:
+            self._close_device(device)
+        self._health.connected = False
+
+    def __enter__(self) -> Link:
+        self.open()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def poll(self, now: float) -> list[ControlInput]:
+        """Orders received since the last poll (``now``: monotonic s); never blocks. Reopens
+        a lost device once its back-off has passed."""
+        if not self._active:
+            return []
+        if self.device is None:
+            if self._backoff.ready(now):
+                self._health.reconnects += 1
+                self._connect(now)
+            return []
+        inputs = []
+        try:
+            for order in self._poll_device(now):  # orders before a failure are kept
+                inputs.append(order)
+        except self.lost_errors:
+            self._lost(now)
+        self._health.inputs += len(inputs)
+        return inputs
+
+    @abstractmethod
+    def publish(self, state: ShipOutputs, now: float) -> None:
+        """Send the outputs that are due at ``now`` (monotonic s); never blocks."""
+
+    def publish_alarm(self, alarm: Alarm, now: float) -> None:
+        """Announce an alarm on this link, where its protocol has a way to (default: none)."""
+
+    @property
+    def connected(self) -> bool:
+        """Whether the device is open (or, for a link with ``up_when_open`` False, the peer answers)."""
+        return self._health.connected
+
+    def health(self) -> LinkHealth:
+        """A snapshot of the link's state and counters."""
+        return dataclasses.replace(self._health, errors=Counter(self._health.errors))
+
+    def add_listener(self, listener: Listener) -> None:
+        self.listeners.append(listener)
+
+    def remove_listener(self, listener: Listener) -> None:
+        self.listeners.remove(listener)
+
+    # --- for the protocols ---
+
+    @abstractmethod
+    def _open_device(self):
+        """Open and return the port, bus or worker; raises one of ``open_errors``."""
+
+    @abstractmethod
+    def _close_device(self, device) -> None:
+        """Release the port, bus or worker."""
+
+    @abstractmethod
+    def _poll_device(self, now: float) -> Iterable[ControlInput]:
+        """The orders waiting on the open device; raises one of ``lost_errors`` if it failed."""
+
+    def _count_error(self, kind: str) -> None:
+        self._health.errors[kind] += 1
+
+    def _report(self, direction: str, data: object, unix_time: float | None = None) -> None:
+        """Hand raw traffic to the listeners (``unix_time`` default: now)."""
+        if self.listeners:
+            t = Traffic(time.time() if unix_time is None else unix_time, self.name, self.type_name, direction, data)
+            for listener in self.listeners:
+                listener.on_traffic(t)
+
+    def _connect(self, now: float) -> None:
+        try:
+            self.device = self._open_device()
+        except self.open_errors:
+            self.device = None
+            self._down(now, "open_failed")
+            return
+        self._health.connected = self.up_when_open
+        self._backoff.succeeded()
+
+    def _lost(self, now: float, kind: str | None = None) -> None:
+        """The device failed in use (``kind`` counted, default ``lost_kind``): close it and
+        reopen it after the back-off."""
+        try:
+            self._close_device(self.device)
+        except self.lost_errors + self.open_errors:
+            pass
+        self.device = None
+        self._down(now, kind or self.lost_kind)
+
+    def _down(self, now: float, kind: str) -> None:
+        self._health.connected = False
+        self._count_error(kind)
+        self._backoff.failed(now)
+
+
+LINK_TYPES: dict[str, type[Link]] = {}  # settings ``type`` -> link class
+
+
+def register_link(type_name: str) -> Callable[[type[Link]], type[Link]]:
+    """Class decorator: links of settings ``type = type_name`` are built with this class."""
+
+    def register(cls: type[Link]) -> type[Link]:
+        cls.type_name = type_name
+        LINK_TYPES[type_name] = cls
+        return cls
+    return register

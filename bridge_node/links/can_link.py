@@ -3,21 +3,31 @@
 127245, 127488, 127489 (fast packet), 127250, 127251, 129025, 129026 at their rates."""
 from __future__ import annotations
 
+import functools
 import math
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import can
 import cantools
 
-from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, ControlInput, DeviceLink, RateSchedule
-from bridge_node.links.link_settings import CanLinkSettings
+from bridge_node.links.base import (
+    ETL_POSITIONS,
+    LEVER,
+    RUDDER,
+    TELEGRAPH,
+    ControlInput,
+    Link,
+    RateSchedule,
+    register_link,
+)
 from bridge_node.links.n2k_frames import fast_packet_frames, identifier, parse_identifier
-from bridge_node.links.nmea0183 import ETL_POSITIONS
-from bridge_node.links.session_record import SessionRecord
-from sim_core.ship_outputs import ShipOutputs
+from bridge_node.links.settings import CanLinkSettings
+from sim_core.ship.outputs import ShipOutputs
 
-N2K_DBC = Path(__file__).resolve().parents[2] / "config" / "nmea2000.dbc"
+CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"  # the project's config folder
+N2K_DBC = CONFIG_DIR / "nmea2000.dbc"
 ID_MASK = 0x03FFFF00  # match any priority and source
 MAX_FRAMES_PER_POLL = 1000
 RUDDER_PGN = 127245
@@ -26,11 +36,18 @@ OUTPUTS = {"rudder": ("Rudder", 127245, 2), "engine_rapid": ("EngineRapid", 1274
            "engine_dynamic": ("EngineDynamic", 127489, 3), "heading": ("VesselHeading", 127250, 2),
            "rate_of_turn": ("RateOfTurn", 127251, 2), "position": ("PositionRapid", 129025, 2),
            "cog_sog": ("CogSogRapid", 129026, 2)}
-DIRECTION_TO_STBD, DIRECTION_TO_PORT = 1, 2
 
 
+@functools.cache
 def load_dbc(path: Path) -> cantools.database.can.Database:
+    """A DBC whose frames match any priority and source address (loaded once per path; read only)."""
     return cantools.database.load_file(str(path), frame_id_mask=ID_MASK, strict=False)
+
+
+def dbc_path(value: str) -> Path:
+    """The console DBC of the settings: an absolute path as is, a relative one in ``config/``."""
+    path = Path(value).expanduser()
+    return path if path.is_absolute() else CONFIG_DIR / path
 
 
 def _n2k_fields(name: str, s: ShipOutputs, sid: int) -> dict:
@@ -57,24 +74,22 @@ def _n2k_fields(name: str, s: ShipOutputs, sid: int) -> dict:
             "Sog": s.speed_over_ground, "Reserved2": 65535}
 
 
-class CanLink(DeviceLink):
-    """Any python-can interface; the console's DBC from config."""
+@register_link("can")
+class CanLink(Link):
+    """Any python-can interface; the console's frames from the DBC of the settings."""
 
-    device_errors = (can.CanError, OSError, ValueError, ImportError)
+    open_errors = (can.CanError, OSError, ValueError, ImportError)
+    lost_errors = (can.CanError, OSError)
+    lost_kind = "bus_lost"
 
-    def __init__(self, settings: CanLinkSettings, dbc_path: Path, record: SessionRecord | None = None) -> None:
-        super().__init__(settings.name)
-        self.settings = settings
-        self.record = record
-        self.console = load_dbc(dbc_path)
+    def __init__(self, settings: CanLinkSettings) -> None:
+        super().__init__(settings)
+        self.console = load_dbc(dbc_path(settings.dbc))
         self.n2k = load_dbc(N2K_DBC)
         self._schedule = RateSchedule(settings.output_rates())
         self._allowed = frozenset(settings.allowed_sources)
         self._sid = 0
         self._fast_seq: dict[int, int] = {}
-
-    def open(self) -> None:
-        self._connect(time.monotonic())
 
     def _open_device(self) -> can.BusABC:
         s = self.settings
@@ -83,23 +98,13 @@ class CanLink(DeviceLink):
     def _close_device(self, bus: can.BusABC) -> None:
         bus.shutdown()
 
-    def poll(self, now: float) -> list[ControlInput]:
-        if self.device is None:
-            self._reconnect_if_due(now)
-            return []
-        out = []
+    def _poll_device(self, now: float) -> Iterator[ControlInput]:
         for _ in range(MAX_FRAMES_PER_POLL):
-            try:
-                msg = self.device.recv(timeout=0.0)
-            except (can.CanError, OSError):
-                self._lost(now, "bus_lost")
-                break
+            msg = self.device.recv(timeout=0.0)
             if msg is None:
-                break
-            if self.record:
-                self.record.can_frame(msg)
-            out.extend(self._decode(msg, now))
-        return self._received(out, now)
+                return
+            self._report("rx", msg, msg.timestamp)
+            yield from self._decode(msg, now)
 
     def _decode(self, msg: can.Message, now: float) -> list[ControlInput]:
         """Orders in one frame; errors counted, never raised."""
@@ -180,33 +185,33 @@ class CanLink(DeviceLink):
         if self.device is None:
             return
         due = self._schedule.due(now)
-        if not due:
-            return
-        self._sid = (self._sid + 1) % 253
+        if due:
+            self._sid = (self._sid + 1) % 253
         for name in due:
             message, pgn, priority = OUTPUTS[name]
-            spec = self.n2k.get_message_by_name(message)
-            payload = spec.encode(_n2k_fields(name, state, self._sid), strict=False)
-            can_id = identifier(priority, pgn, self.settings.source_address)
+            payload = self.n2k.get_message_by_name(message).encode(_n2k_fields(name, state, self._sid), strict=False)
             if len(payload) > 8:
                 seq = self._fast_seq.get(pgn, -1) + 1
                 self._fast_seq[pgn] = seq % 8
                 frames = fast_packet_frames(payload, seq)
             else:
                 frames = [payload]
+            can_id = identifier(priority, pgn, self.settings.source_address)
             for data in frames:
-                self._send(can.Message(timestamp=time.time(), arbitration_id=can_id, data=data,
-                                       is_extended_id=True, is_rx=False), now)
+                if not self._send(can.Message(timestamp=time.time(), arbitration_id=can_id, data=data,
+                                              is_extended_id=True, is_rx=False), now):
+                    return
 
-    def _send(self, msg: can.Message, now: float) -> None:
+    def _send(self, msg: can.Message, now: float) -> bool:
+        """Send one frame; False if the bus was lost (the rest of this cycle is dropped)."""
         try:
             self.device.send(msg, timeout=0.0)
         except can.CanOperationError:
             self._count_error("send_failed")  # transmit buffer full: drop, the next cycle follows
-            return
-        except (can.CanError, OSError):
-            self._lost(now, "bus_lost")
-            return
+            return True
+        except self.lost_errors:
+            self._lost(now)
+            return False
         self._health.outputs += 1
-        if self.record:
-            self.record.can_frame(msg)
+        self._report("tx", msg, msg.timestamp)
+        return True

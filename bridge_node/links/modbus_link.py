@@ -1,10 +1,14 @@
 """Modbus link (pymodbus 3.x): the node polls the console's I/O registers as a TCP client or
 RTU master, and optionally writes indicator values (rudder angle, RPM) back.
 
-A Modbus request blocks until the reply or the timeout, so the polling runs in its own
-thread and hands orders to the real-time loop through a queue; ``poll`` never blocks. A
-failed request drops the connection, and the thread reconnects with back-off (capped at
-1 s), so a console that comes back is in use again within about a second.
+A Modbus request blocks until the reply or the timeout, so the polling runs in a worker
+thread (the link's device). The worker shares nothing mutable with the loop but two
+hand-overs: everything it learns (orders, errors, register traffic, console up or down)
+goes to the loop through a queue, which ``poll`` drains on the loop's thread, so health and
+errors change only there; the indicator values to write come the other way under a lock.
+A failed request drops the connection, and the worker reconnects with back-off (capped at
+1 s), so a console that comes back is in use again within about a second. A worker that
+dies is restarted by ``Link.poll`` like any lost device.
 """
 from __future__ import annotations
 
@@ -13,21 +17,46 @@ import math
 import queue
 import threading
 import time
+from collections.abc import Iterator
+from dataclasses import dataclass
 
 from pymodbus.client import ModbusSerialClient, ModbusTcpClient
 from pymodbus.exceptions import ModbusException
 
-from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, ControlInput, Link
-from bridge_node.links.link_settings import ModbusLinkSettings, RegisterSpec, WriteSpec
-from bridge_node.links.nmea0183 import ETL_POSITIONS, RUDDER_ORDER_LIMIT_DEG
-from bridge_node.links.reconnect import Backoff
-from bridge_node.links.session_record import SessionRecord
-from sim_core.manoeuvring_trials import KNOT
-from sim_core.ship_outputs import ShipOutputs
+from bridge_node.links.base import (
+    ETL_POSITIONS,
+    LEVER,
+    RUDDER,
+    RUDDER_ORDER_LIMIT_DEG,
+    TELEGRAPH,
+    Backoff,
+    ControlInput,
+    Link,
+    register_link,
+)
+from bridge_node.links.settings import ModbusLinkSettings, RegisterSpec, WriteSpec
+from sim_core.frames.units import KNOT
+from sim_core.ship.outputs import ShipOutputs
 
 # the link counts and reports its own errors; pymodbus would also print every refused
 # connection and, at some levels, every frame
 logging.getLogger("pymodbus").setLevel(logging.CRITICAL)
+ORDER, ERROR, UP, DOWN, TRAFFIC = "order", "error", "up", "down", "traffic"  # worker -> loop events
+
+
+@dataclass(frozen=True)
+class RegisterAccess:
+    """One register read or written: table, address, raw 16-bit value, and the engineering
+    value (reads; nan for writes)."""
+
+    table: str
+    address: int
+    raw: int
+    value: float
+
+
+class WorkerDied(RuntimeError):
+    """The polling thread of an open link has ended."""
 
 
 def register_value(raw: int, kind: str) -> int:
@@ -67,19 +96,34 @@ def indicator_value(spec: WriteSpec, s: ShipOutputs) -> float:
             "heading": math.degrees(s.heading), "speed": s.speed_longitudinal / KNOT}[spec.value]
 
 
-class ModbusLink(Link):
-    """Polls the configured registers in a worker thread."""
+class _Worker:
+    """The polling thread: owns the Modbus client, reconnects it with back-off, and puts
+    ``(event, payload)`` pairs on ``events`` for the loop."""
 
-    def __init__(self, settings: ModbusLinkSettings, record: SessionRecord | None = None) -> None:
-        super().__init__(settings.name)
-        self.settings = settings
-        self.record = record
-        self._inputs: queue.SimpleQueue = queue.SimpleQueue()
+    def __init__(self, settings: ModbusLinkSettings, name: str) -> None:
+        self.settings, self.name = settings, name
+        self.events: queue.SimpleQueue = queue.SimpleQueue()
         self._indicators: dict[int, int] = {}  # address -> raw, latest values to write
         self._lock = threading.Lock()
         self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
         self._client = None
+        self.thread = threading.Thread(target=self._run, name=f"modbus-{name}", daemon=True)
+
+    def set_indicators(self, values: dict[int, int]) -> None:
+        with self._lock:
+            self._indicators.update(values)
+
+    def drain(self) -> Iterator[tuple[str, object]]:
+        while True:
+            try:
+                yield self.events.get_nowait()
+            except queue.Empty:
+                return
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self.thread.is_alive():
+            self.thread.join(timeout=2.0)
 
     def _new_client(self):
         s = self.settings
@@ -89,46 +133,41 @@ class ModbusLink(Link):
         return ModbusSerialClient(s.serial_port, baudrate=s.baudrate, timeout=s.request_timeout_s, retries=0,
                                   reconnect_delay=0.0)
 
-    def open(self) -> None:
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name=f"modbus-{self.name}", daemon=True)
-        self._thread.start()
+    def _connect(self) -> bool:
+        client = self._new_client()
+        if client.connect():
+            self._client = client
+            return True
+        client.close()
+        self.events.put((ERROR, "connect_failed"))
+        return False
 
     def _run(self) -> None:
         period = 1.0 / self.settings.poll_hz
         backoff = Backoff(first=0.1, cap=1.0)
         next_poll = time.monotonic()
-        answered_before = False
+        answering = False  # connected means the console answers, not that a port is open
         while not self._stop.is_set():
-            now = time.monotonic()
             if self._client is None:
-                if backoff.ready(now):
-                    client = self._new_client()
-                    if client.connect():
-                        self._client = client
-                    else:
-                        client.close()
-                        self._count_error("connect_failed")
-                        backoff.failed(now)
+                if backoff.ready(time.monotonic()) and not self._connect():
+                    backoff.failed(time.monotonic())
                 self._stop.wait(0.02)
                 continue
             try:
-                orders = self._poll_once()
-                self._write_indicators()
+                events = self._poll_once() + self._write_indicators()
             except (ModbusException, OSError, ValueError) as exc:
-                self._count_error("request_failed" if not isinstance(exc, ValueError) else "bad_reply")
+                self.events.put((DOWN, "bad_reply" if isinstance(exc, ValueError) else "request_failed"))
                 self._client.close()
                 self._client = None
-                self._health.connected = False
+                answering = False
                 backoff.failed(time.monotonic())
                 continue
-            if not self._health.connected:  # connected means the console answers, not a port is open
-                self._health.connected = True
-                self._health.reconnects += answered_before
-                answered_before = True
+            if not answering:  # up before the first orders, as the loop sees it
+                answering = True
+                events.insert(0, (UP, None))
                 backoff.succeeded()
-            for order in orders:
-                self._inputs.put(order)
+            for event in events:
+                self.events.put(event)
             next_poll = max(next_poll + period, time.monotonic())
             self._stop.wait(max(0.0, next_poll - time.monotonic()))
         if self._client is not None:
@@ -145,10 +184,9 @@ class ModbusLink(Link):
             raise ValueError("short reply")
         return reply.registers
 
-    def _poll_once(self) -> list[ControlInput]:
-        """Read every configured register once; the orders they hold."""
-        now = time.monotonic()
-        out = []
+    def _poll_once(self) -> list[tuple[str, object]]:
+        """Read every configured register once: events for the orders they hold and the reads."""
+        now, events = time.monotonic(), []
         for table in ("holding", "input"):
             specs = [r for r in self.settings.registers if r.table == table]
             if not specs:
@@ -158,48 +196,67 @@ class ModbusLink(Link):
             for spec in specs:
                 raw = regs[spec.address - start]
                 order = register_order(spec, raw, now, self.name)
-                if isinstance(order, str):
-                    self._count_error(order)
-                else:
-                    out.append(order)
-                if self.record:
-                    self.record.modbus(self.name, "read", table, spec.address, raw,
-                                       register_value(raw, spec.type) * spec.scale)
-        return out
+                events.append((ERROR, order) if isinstance(order, str) else (ORDER, order))
+                access = RegisterAccess(table, spec.address, raw, register_value(raw, spec.type) * spec.scale)
+                events.append((TRAFFIC, ("read", access, time.time())))
+        return events
 
-    def _write_indicators(self) -> None:
+    def _write_indicators(self) -> list[tuple[str, object]]:
+        """Write the latest indicator values: events for the writes."""
         with self._lock:
             pending, self._indicators = self._indicators, {}
+        events = []
         for address, raw in pending.items():
             reply = self._client.write_register(address, raw, device_id=self.settings.device_id)
             if reply.isError():
                 raise ModbusException(f"exception reply {reply}")
-            self._health.outputs += 1
-            if self.record:
-                self.record.modbus(self.name, "write", "holding", address, raw, float("nan"))
+            events.append((TRAFFIC, ("write", RegisterAccess("holding", address, raw, math.nan), time.time())))
+        return events
 
-    def poll(self, now: float) -> list[ControlInput]:
-        out = []
-        while True:
-            try:
-                out.append(self._inputs.get_nowait())
-            except queue.Empty:
-                break
-        if out:
-            self._health.inputs += len(out)
-            self._health.last_input = out[-1].time
-        return out
+
+@register_link("modbus")
+class ModbusLink(Link):
+    """Polls the configured registers in a worker thread (the link's device)."""
+
+    lost_errors = (WorkerDied,)
+    lost_kind = "worker_died"
+    up_when_open = False  # up once the console answers
+
+    def __init__(self, settings: ModbusLinkSettings) -> None:
+        super().__init__(settings)
+        self._answered_before = False
+
+    def _open_device(self) -> _Worker:
+        worker = _Worker(self.settings, self.name)
+        worker.thread.start()
+        return worker
+
+    def _close_device(self, worker: _Worker) -> None:
+        worker.stop()
+
+    def _poll_device(self, now: float) -> Iterator[ControlInput]:
+        """Drain the worker's events: orders yielded, the rest applied to health and listeners."""
+        alive = self.device.thread.is_alive()  # read first: events put before it ended are drained below
+        for event, payload in self.device.drain():
+            if event == ORDER:
+                yield payload
+            elif event == TRAFFIC:
+                direction, access, unix_time = payload
+                self._report(direction, access, unix_time)
+                if direction == "write":
+                    self._health.outputs += 1
+            elif event == UP:
+                self._health.connected = True
+                self._health.reconnects += self._answered_before
+                self._answered_before = True
+            else:  # ERROR, or DOWN: a failed request dropped the connection
+                self._count_error(payload)
+                if event == DOWN:
+                    self._health.connected = False
+        if not alive:
+            raise WorkerDied(f"modbus link {self.name}: polling thread ended")
 
     def publish(self, state: ShipOutputs, now: float) -> None:
-        if not self.settings.writes:
-            return
-        values = {w.address: raw_register(indicator_value(w, state) / w.scale, w.type) for w in self.settings.writes}
-        with self._lock:
-            self._indicators.update(values)
-
-    def close(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=2.0)
-            self._thread = None
-        self._health.connected = False
+        if self.settings.writes and self.device is not None:
+            self.device.set_indicators({w.address: raw_register(indicator_value(w, state) / w.scale, w.type)
+                                        for w in self.settings.writes})

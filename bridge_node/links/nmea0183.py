@@ -12,18 +12,11 @@ import math
 
 import pynmea2
 
-from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, Alarm, ControlInput
-from sim_core.manoeuvring_trials import KNOT
-from sim_core.ship_outputs import ShipOutputs
+from bridge_node.links.base import ETL_POSITIONS, LEVER, RUDDER, RUDDER_ORDER_LIMIT_DEG, TELEGRAPH, Alarm, ControlInput
+from sim_core.frames.units import KNOT
+from sim_core.ship.outputs import ShipOutputs
 
 MAX_LENGTH = 82  # characters including $ and CR LF
-RUDDER_ORDER_LIMIT_DEG = 90.0  # beyond this an ROR field is nonsense, not an order to clamp
-# ETL position codes (IEC 61162-1) -> telegraph positions of the ship model
-ETL_POSITIONS = {
-    "00": "stop", "01": "dead_slow_ahead", "02": "slow_ahead", "03": "half_ahead", "04": "full_ahead",
-    "05": "navigation_full_ahead", "11": "dead_slow_astern", "12": "slow_astern", "13": "half_astern",
-    "14": "full_astern", "15": "crash_astern",
-}
 # sentence -> default talker, as a real installation would send them
 DEFAULT_TALKERS = {"RMC": "GP", "GGA": "GP", "VTG": "GP", "ZDA": "GP", "HDT": "HE", "ROT": "HE", "RSA": "II",
                    "RPM": "II", "VBW": "II", "XDR": "II", "ALR": "II"}
@@ -91,7 +84,8 @@ def _finite(value, what: str, limit: float) -> float:
     return float(value)
 
 
-def parse_order(line: str, now: float, source: str, allowed_talkers: frozenset[str] = frozenset()) -> list[ControlInput]:
+def parse_order(line: str, now: float, source: str,
+                allowed_talkers: frozenset[str] = frozenset()) -> list[ControlInput]:
     """The orders in one console sentence. Raises SentenceError (with a kind for the
     counters) for anything malformed, unchecked, out of range or not an order."""
     line = line.strip()

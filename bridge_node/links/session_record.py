@@ -1,4 +1,5 @@
-"""Append-only session record of every link input and output, for replay and post-mortem.
+"""Append-only session record of every link input and output, for replay and post-mortem: a
+``Listener`` the hub adds to every link when it is given a record folder.
 
 One folder per session: ``can.log`` in python-can's candump log format (written by
 ``can.Logger``, read back by ``can.LogReader``), ``nmea.log`` with one raw sentence per line
@@ -14,10 +15,12 @@ from pathlib import Path
 
 import can
 
+from bridge_node.links.base import Listener, Traffic
+
 FLUSH_PERIOD = 0.5  # s
 
 
-class SessionRecord:
+class SessionRecord(Listener):
     """Writers for one session folder (created if missing; existing files are appended to)."""
 
     def __init__(self, folder: str | Path) -> None:
@@ -31,18 +34,24 @@ class SessionRecord:
         if new_csv:
             self._modbus.writerow(["unix_time", "link", "op", "table", "address", "raw", "value"])
         self._last_flush = time.monotonic()
+        self._writers = {"can": self._can_frame, "nmea0183": self._sentence, "modbus": self._register}
+        self._stopped = False
 
-    def can_frame(self, msg: can.Message) -> None:
-        """A CAN frame in or out (its timestamp should be wall-clock unix time)."""
-        self._can(msg)
+    def on_traffic(self, traffic: Traffic) -> None:
+        self._writers[traffic.protocol](traffic)
 
-    def nmea(self, link: str, direction: str, sentence: str) -> None:
-        self._nmea.write(f"{time.time():.3f} {link} {direction} {sentence.strip()}\n")
+    def _can_frame(self, t: Traffic) -> None:
+        self._can(t.data)  # the frame's own timestamp, wall-clock unix time
 
-    def modbus(self, link: str, op: str, table: str, address: int, raw: int, value: float) -> None:
-        self._modbus.writerow([f"{time.time():.3f}", link, op, table, address, raw, value])
+    def _sentence(self, t: Traffic) -> None:
+        self._nmea.write(f"{t.unix_time:.3f} {t.link} {t.direction} {t.data.strip()}\n")
+
+    def _register(self, t: Traffic) -> None:
+        a = t.data  # a modbus_link.RegisterAccess
+        self._modbus.writerow([f"{t.unix_time:.3f}", t.link, t.direction, a.table, a.address, a.raw, a.value])
 
     def flush(self, force: bool = False) -> None:
+        """Write buffered lines to the OS if ``FLUSH_PERIOD`` has passed (or ``force``)."""
         now = time.monotonic()
         if force or now - self._last_flush >= FLUSH_PERIOD:
             self._can.file.flush()
@@ -50,7 +59,11 @@ class SessionRecord:
             self._modbus_file.flush()
             self._last_flush = now
 
-    def close(self) -> None:
+    def stop(self) -> None:
+        """Flush and close the files; safe to call twice."""
+        if self._stopped:
+            return
+        self._stopped = True
         self.flush(force=True)
         self._can.stop()
         self._nmea.close()

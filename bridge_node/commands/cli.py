@@ -1,0 +1,82 @@
+"""The ``icebridge`` command: argument parsing and user-facing errors.
+
+Each subcommand lives in its own module with ``add_arguments(parser)`` and ``run(args)``.
+A user's mistake (bad config, bad argument) prints one clear message and exits with status
+2; it never shows a traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+from types import ModuleType
+
+from bridge_node.commands import (
+    experiment_breaking,
+    experiment_transit,
+    links_monitor,
+    prefracture,
+    render_snapshot,
+    run,
+    trial,
+)
+from bridge_node.node.errors import UserError
+
+# name -> (module, help) or (help, {sub-name: (module, help)})
+COMMANDS: dict[str, tuple] = {
+    "run": (run, "run the node in real time: console links, ship, ice world, instrument outputs"),
+    "prefracture": (prefracture, "build the pre-fractured tile templates (paper §2.1)"),
+    "trial": (trial, "run a standard manoeuvring trial (turning, zig-zag, crash stop)"),
+    "experiment": ("run the paper's ice experiments", {
+        "breaking": (experiment_breaking, "channel and conduction-band widths per thickness, colliders, speed"),
+        "transit": (experiment_transit, "a straight transit: live and frozen fragments, step time (Fig. 18, 19)"),
+    }),
+    "render-snapshot": (render_snapshot, "render the projector channels of the exercise to PNGs"),
+    "links": ("commission the console links", {
+        "monitor": (links_monitor, "show orders and link health live, publish an open-water ship"),
+    }),
+}
+
+
+def _add(sub, name: str, module: ModuleType, help_text: str) -> None:
+    p = sub.add_parser(name, help=help_text, description=help_text)
+    p.add_argument("--config", default=None, help="TOML config file (default: config/default.toml)")
+    module.add_arguments(p)
+    p.set_defaults(handler=module.run)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="icebridge", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, (first, second) in COMMANDS.items():
+        if isinstance(second, dict):
+            group = sub.add_parser(name, help=first, description=first)
+            inner = group.add_subparsers(dest="action", required=True, metavar="ACTION")
+            for action, (module, help_text) in second.items():
+                _add(inner, action, module, help_text)
+        else:
+            _add(sub, name, first, second)
+    return parser
+
+
+def _interrupt(*_) -> None:
+    raise KeyboardInterrupt
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    # SIGTERM ends a command as Ctrl-C does: the long-running ones close their links and
+    # flush their session record on the way out
+    signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        return int(args.handler(args) or 0)
+    except UserError as exc:
+        print(f"icebridge {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"icebridge {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,53 @@
+"""``icebridge render-snapshot``: the configured channels at one moment of the default
+exercise, as PNGs (to set up a bridge's projectors). The exercise is first run, as fast as
+it goes, for ``--time`` simulated seconds so there is a broken channel to see."""
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from rich.console import Console
+from rich.progress import Progress
+
+from bridge_node.node.config import load_config
+from bridge_node.node.errors import UserError
+from bridge_node.node.world_setup import build_world, start_world
+from bridge_node.render.open_channels import open_channels
+from bridge_node.render.world_view import WorldView
+from sim_core.world import snapshot, step
+
+DT = 1 / 30
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--time", type=float, default=120.0, help="simulated seconds before the snapshot (default 120)")
+    p.add_argument("--out", default="out", help="folder for the PNGs (default: out)")
+
+
+def run(args: argparse.Namespace) -> int:
+    cfg = load_config(args.config)
+    if not 0.0 <= args.time <= 3600.0:
+        raise UserError(f"--time {args.time} s is outside the allowed range [0, 3600]")
+    console = Console()
+    with Progress(console=console, transient=True) as progress:
+        model = build_world(cfg, args.config, progress)
+        data = start_world(model, cfg)
+        steps = round(args.time / DT)
+        task = progress.add_task(f"running the exercise to t = {args.time:g} s", total=steps)
+        for _ in range(steps):
+            step(model, data, DT)
+            progress.advance(task)
+    channels = open_channels(cfg, model)
+    view = WorldView()
+    view.apply(snapshot(model, data))
+    t0 = time.perf_counter()
+    channels.render(view)
+    ms = (time.perf_counter() - t0) * 1e3
+    paths = channels.save_png(Path(args.out), "snapshot_")
+    for t, path in zip([t for t in channels.targets if t.channel.output == "png"], paths):
+        c = t.channel
+        console.print(f"{c.name}: yaw {c.yaw_deg:+.0f} deg, pitch {c.pitch_deg:+.0f} deg, hfov {c.hfov_deg:.0f} deg, "
+                      f"{c.width}x{c.height} -> {path}")
+    console.print(f"{len(channels.targets)} channels in {ms:.0f} ms (first frame, uploads included)")
+    return 0

@@ -1,0 +1,134 @@
+"""All configured links together, fanned out like python-can's ``Notifier``.
+
+Each tick has two phases. ``poll`` polls every link, arbitrates the orders, and collects the
+alarm changes (the arbiter's, and a link-down alarm per link). ``publish`` sends the ship
+state on every link, announces the pending alarm changes (and every active alarm again each
+``ALARM_REPEAT_S``), and flushes the listeners. The links' raw traffic goes to the hub's
+listeners; given a record folder, the hub adds a ``SessionRecord``.
+"""
+from __future__ import annotations
+
+import logging
+import math
+from collections import Counter
+from collections.abc import Sequence
+from pathlib import Path
+
+from bridge_node.links.arbiter import Decision, OrderArbiter
+from bridge_node.links.base import Alarm, ControlInput, Listener
+from bridge_node.links.registry import make_link
+from bridge_node.links.session_record import SessionRecord
+from bridge_node.links.settings import ArbitrationSettings, LinkSettings
+from sim_core.ship.outputs import ShipOutputs
+
+log = logging.getLogger("icebridge.links")
+LINK_DOWN_ALARM = 200  # + the link's index
+ALARM_REPEAT_S = 10.0  # active alarms are announced again this often, s
+
+
+class LinkHub:
+    """The node's links, the arbiter, the alarms and the traffic listeners."""
+
+    def __init__(self, links: Sequence[LinkSettings], arbitration: ArbitrationSettings,
+                 record_dir: Path | None = None) -> None:
+        self.links = [make_link(s) for s in links]
+        self.arbiter = OrderArbiter(arbitration, {s.name: s.timeout_s for s in links})
+        self.record_dir = record_dir
+        self.record: SessionRecord | None = None  # while open with a record folder
+        self.listeners: list[Listener] = []
+        self.active_alarms: dict[int, Alarm] = {}
+        self.alarm_log: list[tuple[float, Alarm]] = []  # (monotonic s, alarm change)
+        self.last_orders: dict[str, ControlInput] = {}  # "source/kind/engine" -> latest order
+        self.order_counts: Counter = Counter()  # "source/kind/engine" -> orders received
+        self._pending: list[Alarm] = []  # alarm changes not yet announced
+        self._last_announce = -math.inf
+
+    def add_listener(self, listener: Listener) -> None:
+        """Give ``listener`` the raw traffic of every link; it is stopped when the hub closes."""
+        self.listeners.append(listener)
+        for link in self.links:
+            link.add_listener(listener)
+
+    def open(self) -> None:
+        """Start the session record (with a record folder), then open every link."""
+        if self.record_dir is not None and self.record is None:
+            self.record = SessionRecord(self.record_dir)
+            self.add_listener(self.record)
+        for link in self.links:
+            link.open()
+
+    def close(self) -> None:
+        """Close every link, then stop and drop the listeners; safe to call twice."""
+        try:
+            for link in self.links:
+                link.close()
+        finally:
+            listeners, self.listeners, self.record = self.listeners, [], None
+            for listener in listeners:
+                for link in self.links:
+                    link.remove_listener(listener)
+                listener.stop()
+
+    def __enter__(self) -> LinkHub:
+        try:
+            self.open()
+        except BaseException:
+            self.close()
+            raise
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def poll(self, now: float) -> Decision:
+        """Phase 1 at ``now`` (monotonic s): poll every link, arbitrate, collect alarm changes;
+        returns the orders for the ship."""
+        inputs = []
+        for link in self.links:
+            got = link.poll(now)
+            inputs.extend(got)
+            for order in got:
+                key = f"{order.source}/{order.kind}/{order.engine}"
+                self.last_orders[key] = order
+                self.order_counts[key] += 1
+        self.arbiter.feed(inputs)
+        decision = self.arbiter.decide(now)
+        for alarm in decision.alarms:
+            self.raise_alarm(alarm, now)
+        for i, link in enumerate(self.links):
+            number, up = LINK_DOWN_ALARM + i, link.connected
+            if up == (number in self.active_alarms):
+                self.raise_alarm(Alarm(number, f"link {link.name} {'up' if up else 'down'}", not up), now)
+        return decision
+
+    def raise_alarm(self, alarm: Alarm, now: float) -> None:
+        """Raise (``alarm.active``) or clear an alarm; it is announced at the next ``publish``."""
+        self.alarm_log.append((now, alarm))
+        self._pending.append(alarm)
+        if alarm.active:
+            self.active_alarms[alarm.number] = alarm
+            log.warning("alarm %03d: %s", alarm.number, alarm.text)
+        else:
+            self.active_alarms.pop(alarm.number, None)
+            log.info("alarm %03d cleared: %s", alarm.number, alarm.text)
+
+    def publish(self, state: ShipOutputs, now: float) -> None:
+        """Phase 2 at ``now`` (monotonic s): send the state and the alarm changes on every
+        link, and flush the listeners."""
+        changes, self._pending = self._pending, []
+        if now - self._last_announce >= ALARM_REPEAT_S:
+            self._last_announce = now
+            changes += [a for a in self.active_alarms.values() if a not in changes]
+        for link in self.links:
+            link.publish(state, now)
+            for alarm in changes:
+                link.publish_alarm(alarm, now)
+        for listener in self.listeners:
+            listener.flush()
+
+    def errors(self) -> Counter:
+        """Error counts by kind, summed over the links."""
+        total = Counter()
+        for link in self.links:
+            total.update(link.health().errors)
+        return total

@@ -1,0 +1,161 @@
+"""Node configuration: TOML files loaded into typed, validated parameter blocks.
+
+Every error names the file, the key, the bad value and what is allowed; the CLI prints it
+and exits non-zero, without a traceback.
+"""
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Literal
+
+from pydantic import Field, ValidationError, model_validator
+
+from bridge_node.links.settings import ArbitrationSettings, LinkSettings
+from bridge_node.node.errors import UserError
+from bridge_node.render.settings import RenderSettings
+from sim_core.fracture.tile_template import FractureSettings
+from sim_core.ice.model import IceDynamicsSettings
+from sim_core.material import IceMaterial
+from sim_core.params import Params, repeated
+from sim_core.scene.field import IceFieldSettings
+from sim_core.scene.scene import SceneSettings
+from sim_core.ship.particulars import TELEGRAPH_POSITIONS, ShipParticulars
+
+DEFAULT_CONFIG = Path(__file__).resolve().parents[2] / "config" / "default.toml"
+
+
+class PathSettings(Params):
+    """Where the node keeps its files. Relative paths are relative to the config file."""
+
+    cache_dir: str = Field("~/.cache/icebridge", description="template library")
+    session_dir: str = Field("~/.cache/icebridge/sessions", description="session records of link traffic")
+
+
+class ShipChoice(Params):
+    """Which ship: ``config/ships/<name>.toml`` beside the config (or the built-in one)."""
+
+    name: str = Field(min_length=1)
+
+
+class ExerciseSettings(Params):
+    """Where the exercise takes place and how the ship starts. The local north/east frame
+    has its origin at the ice field's south-west corner, at the given latitude/longitude.
+    Unset start positions put the ship one ship length south of the ice edge, on the centre
+    line of the middle tile column."""
+
+    origin_latitude_deg: float = Field(74.0, ge=-89.0, le=89.0)
+    origin_longitude_deg: float = Field(20.0, ge=-180.0, le=180.0)
+    start_north: float | None = Field(None, ge=-1.0e5, le=1.0e6, description="m from the field's south edge")
+    start_east: float | None = Field(None, ge=-1.0e5, le=1.0e6, description="m from the field's west edge")
+    start_heading_deg: float = Field(0.0, ge=0.0, lt=360.0, description="true heading, deg")
+    start_speed_kn: float = Field(6.0, ge=0.0, le=25.0, description="speed through the water, kn")
+    start_telegraph: Literal[TELEGRAPH_POSITIONS] | None = Field("full_ahead", description="engine order at the start")
+
+
+class RealtimeSettings(Params):
+    """The real-time loop."""
+
+    rate_hz: float = Field(30.0, ge=5.0, le=120.0, description="world steps per second")
+
+
+class NodeConfig(Params):
+    """The whole node's configuration. ``ice_field`` and ``ship`` are required."""
+
+    ship: ShipChoice
+    exercise: ExerciseSettings = ExerciseSettings()
+    ice_material: IceMaterial = IceMaterial()
+    fracture: FractureSettings = FractureSettings()
+    ice_field: IceFieldSettings
+    ice_dynamics: IceDynamicsSettings = IceDynamicsSettings()
+    scene: SceneSettings = SceneSettings()
+    realtime: RealtimeSettings = RealtimeSettings()
+    render: RenderSettings = RenderSettings()
+    links: list[LinkSettings] = Field(default_factory=list)
+    arbitration: ArbitrationSettings = ArbitrationSettings()
+    paths: PathSettings = PathSettings()
+
+    @model_validator(mode="after")
+    def _link_names(self) -> "NodeConfig":
+        names = [link.name for link in self.links]
+        doubled = repeated(names)
+        if doubled:
+            raise ValueError(f"links: names must be unique, repeated: {doubled}")
+        for order in ("rudder", "engine"):
+            unknown = [n for n in getattr(self.arbitration, order) if n not in names]
+            if unknown:
+                raise ValueError(f"arbitration.{order}: unknown link(s) {unknown}; links: {names}")
+        return self
+
+
+class ConfigError(UserError):
+    """A user's configuration mistake; the message is complete and meant to be printed."""
+
+
+def _describe(err: dict) -> str:
+    key = ".".join(str(p) for p in err["loc"]) or "(top level)"
+    kind = err["type"]
+    if kind == "missing":
+        return f"{key}: required key is missing"
+    if kind == "extra_forbidden":
+        return f"{key} = {err['input']!r}: unknown key (check the spelling)"
+    msg = err["msg"].removeprefix("Value error, ")
+    if kind == "value_error":
+        return f"{key}: {msg}"
+    return f"{key} = {err['input']!r}: {msg}"
+
+
+def load_config(path: str | Path | None = None) -> NodeConfig:
+    """Read and validate a TOML config (default: config/default.toml). Raises ConfigError.
+    A CAN link's relative DBC path is taken from the config file's folder when the file is
+    there, else from the project's ``config/`` folder."""
+    path = Path(path) if path is not None else DEFAULT_CONFIG
+    cfg = _load_validated(path, NodeConfig)
+    links = [link.model_copy(update={"dbc": str(path.resolve().parent / link.dbc)})
+             if getattr(link, "dbc", None) and (path.resolve().parent / link.dbc).is_file() else link
+             for link in cfg.links]
+    return cfg.model_copy(update={"links": links})
+
+
+def load_ship(name: str, config_path: str | Path | None = None) -> ShipParticulars:
+    """Particulars of the named ship, from ``ships/<name>.toml`` beside the config file, or
+    from the built-in ``config/ships``. Raises ConfigError."""
+    folders = [resolve_path(config_path, "ships"), DEFAULT_CONFIG.parent / "ships"]
+    for folder in folders:
+        path = folder / f"{name}.toml"
+        if path.is_file():
+            return _load_validated(path, ShipParticulars)
+    known = sorted({p.stem for f in folders if f.is_dir() for p in f.glob("*.toml")})
+    raise ConfigError(f"unknown ship {name!r}; ships available: {', '.join(known) or 'none'}")
+
+
+def _load_validated(path: Path, schema: type[Params]) -> Params:
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: config file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot read config file: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    try:
+        return schema.model_validate(data)
+    except ValidationError as exc:
+        lines = "\n  ".join(_describe(e) for e in exc.errors())
+        raise ConfigError(f"{path}: invalid configuration:\n  {lines}") from None
+
+
+def new_session_dir(cfg: NodeConfig, config_path: str | Path | None) -> Path:
+    """A new session record folder under ``paths.session_dir``, named by the UTC time."""
+    from datetime import datetime, timezone
+
+    return resolve_path(config_path, cfg.paths.session_dir) / datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+
+
+def resolve_path(config_path: str | Path | None, value: str) -> Path:
+    """A path from the config: ~ expanded, relative paths taken from the config's folder."""
+    p = Path(value).expanduser()
+    if p.is_absolute():
+        return p
+    base = Path(config_path).resolve().parent if config_path else DEFAULT_CONFIG.parent
+    return base / p

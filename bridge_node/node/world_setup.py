@@ -1,0 +1,83 @@
+"""Build the simulated world of a configured exercise: ship, tile templates, scene.
+
+Templates come from the template library (built and stored on first use, with progress
+shown by the caller's ``rich`` progress bar when one is given).
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from rich.progress import Progress
+
+from bridge_node.library.templates import library_template
+from bridge_node.node.config import NodeConfig, load_ship, resolve_path
+from bridge_node.node.errors import UserError
+from sim_core.frames.units import KNOT
+from sim_core.ice.model import compile_ice_model
+from sim_core.scene.field import tile_classes
+from sim_core.scene.scene import compile_scene
+from sim_core.ship.model import compile_ship
+from sim_core.world import WorldData, WorldModel, compile_world, new_world_data, step
+
+
+def field_tile_classes(cfg: NodeConfig, config_path: str | None) -> tuple[np.ndarray, np.ndarray]:
+    """Thickness class of every tile of the configured field, and the class thicknesses (m)."""
+    grid = None
+    if cfg.ice_field.thickness_profile == "grid":
+        grid_path = resolve_path(config_path, cfg.ice_field.thickness_grid)
+        try:
+            grid = np.loadtxt(grid_path, delimiter=",", ndmin=2)
+        except (OSError, ValueError) as exc:
+            raise UserError(f"{config_path}: ice_field.thickness_grid = {str(grid_path)!r}: {exc}") from None
+    try:
+        return tile_classes(cfg.ice_field, cfg.fracture.tile_side, grid)
+    except ValueError as exc:
+        raise UserError(f"{config_path}: ice_field: {exc}") from None
+
+
+def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | None = None) -> WorldModel:
+    """Compile the configured exercise's world. Dynamics need prism cells."""
+    if cfg.fracture.cells != "prism":
+        raise UserError(f"{config_path}: fracture.cells = {cfg.fracture.cells!r}: the simulated world needs "
+                        "'prism' cells (voronoi3d cells overlap in plan view)")
+    ship = compile_ship(load_ship(cfg.ship.name, config_path), cfg.ice_material)
+    tile_class, class_h = field_tile_classes(cfg, config_path)
+    cache = resolve_path(config_path, cfg.paths.cache_dir)
+    jobs = [(h, v) for h in class_h for v in range(cfg.fracture.variants)]
+    task = progress.add_task("loading tile templates", total=len(jobs)) if progress else None
+    templates = []
+    for h, v in jobs:
+        templates.append(library_template(Path(cache), float(h), v, cfg.fracture, cfg.ice_material)[0])
+        if progress:
+            progress.advance(task)
+    ice = compile_ice_model(templates, cfg.ice_material, cfg.ice_dynamics)
+    per_class = [np.arange(k * cfg.fracture.variants, (k + 1) * cfg.fracture.variants) for k in range(len(class_h))]
+    try:
+        scene = compile_scene(cfg.scene, tile_class, class_h, per_class, cfg.fracture.tile_side,
+                              ship.particulars.length)
+    except ValueError as exc:
+        raise UserError(f"{config_path}: scene: {exc}") from None
+    origin = math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg)
+    return compile_world(ship, ice, scene, origin)
+
+
+def warm_up(model: WorldModel, cfg: NodeConfig) -> None:
+    """Compile the numba kernels (or load them from numba's cache) before a real-time run,
+    by stepping a throwaway copy of the exercise with its bow in the ice for a few ticks;
+    otherwise the first ice contact would stall the loop for seconds."""
+    data = start_world(model, cfg)
+    data.ship.eta[0] = 0.0  # the stem 75 m into the ice: tiles placed, cells broken, floes floating
+    for _ in range(3):
+        step(model, data, 1.0 / 30.0)
+
+
+def start_world(model: WorldModel, cfg: NodeConfig) -> WorldData:
+    """World data at the configured start: by default one ship length south of the ice
+    edge, on the centre line of the middle tile column, heading north."""
+    ex, length, scene = cfg.exercise, model.ship.particulars.length, model.scene
+    north = ex.start_north if ex.start_north is not None else -length
+    east = ex.start_east if ex.start_east is not None else (scene.nx // 2 + 0.5) * scene.side
+    return new_world_data(model, north, east, math.radians(ex.start_heading_deg), ex.start_speed_kn * KNOT,
+                          ex.start_telegraph)

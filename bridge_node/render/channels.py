@@ -1,0 +1,102 @@
+"""Channel targets: render each channel at its resolution into a framebuffer, then show it
+in its window, write it as a PNG frame, or read it back (tests)."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import moderngl
+import numpy as np
+
+from bridge_node.render.renderer import SceneRenderer
+from bridge_node.render.settings import ChannelSettings
+from bridge_node.render.windows import ChannelWindow, window_context
+from bridge_node.render.world_view import WorldView
+
+
+def create_context() -> moderngl.Context:
+    """A headless OpenGL 3.3 context through EGL (Mesa's llvmpipe works without a GPU)."""
+    return moderngl.create_standalone_context(backend="egl")
+
+
+def context_for(channels: list[ChannelSettings]) -> tuple[moderngl.Context, object | None]:
+    """The context to draw these channels in: a hidden glfw window's if any channel is shown
+    in a window (the channel windows share it), else headless EGL. Returns it with the
+    hidden window (None for EGL)."""
+    if any(c.output == "window" for c in channels):
+        return window_context()
+    return create_context(), None
+
+
+def blend_ramp(channel: ChannelSettings, azimuth: np.ndarray) -> np.ndarray:
+    """Light share (linear, 0..1) the channel gives at azimuths (rad from its centre). In
+    each blend band the light falls linearly with azimuth, so where two channels overlap
+    their light sums to one."""
+    half = math.radians(channel.hfov_deg) / 2.0
+    ramp = np.ones_like(azimuth)
+    if channel.blend_left_deg > 0:
+        ramp *= np.clip((azimuth + half) / math.radians(channel.blend_left_deg), 0.0, 1.0)
+    if channel.blend_right_deg > 0:
+        ramp *= np.clip((half - azimuth) / math.radians(channel.blend_right_deg), 0.0, 1.0)
+    return ramp
+
+
+def column_factors(channel: ChannelSettings) -> np.ndarray:
+    """The factor each pixel column's colour is scaled by: the blend ramp at the column's
+    azimuth, with the projector's gamma undone (the projector raises it to gamma again)."""
+    x = (np.arange(channel.width) + 0.5) / channel.width * 2.0 - 1.0
+    azimuth = np.arctan(x * math.tan(math.radians(channel.hfov_deg) / 2.0))
+    return (blend_ramp(channel, azimuth) ** (1.0 / channel.gamma)).astype("f4")
+
+
+class ChannelTarget:
+    """The framebuffer of one channel."""
+
+    def __init__(self, ctx: moderngl.Context, channel: ChannelSettings) -> None:
+        size = (channel.width, channel.height)
+        self.channel = channel
+        self.colour = ctx.texture(size, 3)  # a texture, so that a channel window can show it
+        self.fbo = ctx.framebuffer([self.colour], ctx.depth_renderbuffer(size))
+        self.blend = ctx.texture((channel.width, 1), 1, column_factors(channel).tobytes(), dtype="f4")
+        self.blend.filter = moderngl.NEAREST, moderngl.NEAREST
+
+    def render(self, renderer: SceneRenderer, view: WorldView) -> None:
+        self.fbo.use()
+        renderer.draw(view, self.channel, self.blend)
+
+    def image(self) -> np.ndarray:
+        """The last frame as (height, width, 3) uint8, top row first."""
+        raw = self.fbo.read(components=3, alignment=1)
+        return np.frombuffer(raw, dtype=np.uint8).reshape(self.channel.height, self.channel.width, 3)[::-1]
+
+
+class ChannelSet:
+    """All channels of a projection system over one scene renderer."""
+
+    def __init__(self, renderer: SceneRenderer, channels: list[ChannelSettings], hidden_window=None) -> None:
+        self.renderer = renderer
+        self.targets = [ChannelTarget(renderer.ctx, c) for c in channels]
+        self.windows = [ChannelWindow(renderer.ctx, hidden_window, t.channel, t.colour)
+                        for t in self.targets if t.channel.output == "window"]
+
+    def render(self, view: WorldView) -> None:
+        """Draw every channel of the view's state, and show the window channels."""
+        self.renderer.update(view)
+        for t in self.targets:
+            t.render(self.renderer, view)
+        self.renderer.ctx.finish()
+        for w in self.windows:
+            w.present()
+
+    def save_png(self, folder: Path, stem: str = "") -> list[Path]:
+        from PIL import Image
+
+        folder.mkdir(parents=True, exist_ok=True)
+        paths = []
+        for t in self.targets:
+            if t.channel.output != "png":
+                continue
+            path = folder / f"{stem}{t.channel.name}.png"
+            Image.fromarray(t.image()).save(path)
+            paths.append(path)
+        return paths

@@ -1,0 +1,72 @@
+"""Static GPU geometry of a world: template cells as triangles and as cell rasters, and the
+own ship's hull."""
+from __future__ import annotations
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+from sim_core.world import WorldModel
+
+
+def cell_vertices(model: WorldModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Triangles of every template cell that can be seen from above the water (bottom faces
+    left out), wound counter-clockwise from outside: (position 3f, normal 3f) per vertex,
+    each cell's tops first, then its sides. Returns the vertices, each global cell's first
+    vertex (G + 1,) and its first side vertex (G,)."""
+    ice = model.ice
+    tris = ice.tris.copy()
+    owner = np.repeat(np.arange(len(ice.mass)), np.diff(ice.tri_start))
+    n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    inward = (n * tris.mean(axis=1)).sum(axis=1) < 0.0  # the centroid is the origin
+    n[inward] *= -1.0
+    tris[inward] = tris[inward][:, ::-1]
+    keep = n[:, 2] > -0.5
+    tris, n, owner = tris[keep], n[keep], owner[keep]
+    side = n[:, 2] < 0.5
+    order = np.lexsort((side, owner))  # by cell, tops before sides
+    tris, n, owner, side = tris[order], n[order], owner[order], side[order]
+    out = np.zeros((len(tris) * 3, 6), dtype="f4")
+    out[:, :3] = tris.reshape(-1, 3)
+    out[:, 3:] = np.repeat(n, 3, axis=0)
+    cells = len(ice.mass)
+    start = np.concatenate([[0], np.cumsum(3 * np.bincount(owner, minlength=cells))])
+    side_start = start[:-1] + 3 * np.bincount(owner[~side], minlength=cells)
+    return out, start, side_start
+
+
+def cell_rasters(model: WorldModel, size: int) -> np.ndarray:
+    """Per template, which cell covers each pixel of the tile: (templates * size, size)
+    uint16, 1 + the cell's index within its template, 0 in the cracks between cells."""
+    ice = model.ice
+    out = []
+    for k, t in enumerate(ice.templates):
+        img = Image.new("I", (size, size), 0)
+        draw = ImageDraw.Draw(img)
+        scale = size / t.side
+        g0 = ice.template_start[k]
+        for c in range(t.n_cells):
+            g = g0 + c
+            ring = ice.outline[ice.outline_start[g]:ice.outline_start[g + 1]] + ice.centroid[g, :2]
+            draw.polygon([tuple(p) for p in ring * scale], fill=c + 1)
+        out.append(np.asarray(img, dtype=np.int64).astype(np.uint16))
+    return np.vstack(out)
+
+
+def ship_vertices(contour: np.ndarray, freeboard: float) -> np.ndarray:
+    """Hull sides from the waterline contour up to the deck, and the deck, ship frame."""
+    tri, nrm = [], []
+    centre = contour.mean(axis=0)
+    for a, b in zip(contour, np.roll(contour, -1, axis=0)):
+        tri.append([[*centre, freeboard], [*a, freeboard], [*b, freeboard]])
+        nrm.append([0.0, 0.0, 1.0])
+        side = [[*a, 0.0], [*b, 0.0], [*b, freeboard], [*a, 0.0], [*b, freeboard], [*a, freeboard]]
+        out = np.array([b[1] - a[1], -(b[0] - a[0])])
+        out /= max(np.linalg.norm(out), 1e-12)
+        if out @ ((a + b) / 2 - centre) < 0:
+            out = -out
+        tri += [side[:3], side[3:]]
+        nrm += [[*out, 0.0]] * 2
+    p = np.array(tri, dtype="f4").reshape(-1, 3)
+    n = np.repeat(np.array(nrm, dtype="f4"), 3, axis=0)
+    return np.hstack([p, n]).astype("f4")

@@ -1,0 +1,29 @@
+"""Open the configured projector channels: an OpenGL context (EGL headless, or a hidden glfw
+window when a channel is shown in a window), the scene renderer and the channel targets.
+A missing display or EGL is the user's to fix, and said so."""
+from __future__ import annotations
+
+from bridge_node.node.config import NodeConfig
+from bridge_node.node.errors import UserError
+from bridge_node.render.channels import ChannelSet, context_for
+from bridge_node.render.renderer import SceneRenderer
+from bridge_node.render.windows import WindowError
+from sim_core.world import WorldModel
+
+
+def open_channels(cfg: NodeConfig, model: WorldModel) -> ChannelSet:
+    """Context, scene renderer and channel set (with the channel windows); a missing display
+    or EGL is a clear error."""
+    no_display = "set the channels' output to \"png\" on a node without a display"
+    try:
+        ctx, hidden = context_for(cfg.render.channels)
+    except WindowError as exc:
+        raise UserError(f"render: {exc}; {no_display}") from None
+    except Exception as exc:  # moderngl raises plain Exception when EGL cannot start
+        raise UserError(f"cannot open a headless OpenGL context through EGL ({exc}); install the EGL and "
+                        "Mesa libraries (scripts/setup.sh installs libegl1, libgl1, libegl-mesa0, "
+                        "libgl1-mesa-dri)") from None
+    try:
+        return ChannelSet(SceneRenderer(ctx, model, cfg.render), cfg.render.channels, hidden)
+    except WindowError as exc:
+        raise UserError(f"render: {exc}; {no_display}") from None

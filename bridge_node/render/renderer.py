@@ -1,0 +1,291 @@
+"""Draw the world state to the projector channels with moderngl.
+
+GPU data mirrors the MuJoCo-style split of the simulation. Static: every template cell's
+triangles about its centroid (seen from above the water: no bottom faces), each template's
+cell raster (which cell covers each 0.1 m of the tile), the own ship's mesh. Dynamic: two
+float textures holding every floe row's pose (x, y, heave, yaw; roll, pitch, status) and a
+byte texture of each row's status, a tile table (each placed tile's first floe row,
+template and rotation; -1 for the unbreakable slab), and per tile the vertex buffers of its
+broken floes (tops and sides apart), to which a cell's template triangles are appended
+once, when it breaks; the vertex shader places them by the pose texture. A tile's floes
+are drawn only when its box is in the channel's view, their side faces only within the
+level-of-detail distance. Level ice (unbreakable tiles and the intact cells
+of breakable ones) is drawn per pixel by the environment pass from the cell raster, so it
+costs no triangles: on a software rasteriser the vertex work of thousands of intact cells
+would dominate the frame. Per frame only the poses of tiles placed or simulated since the
+last frame are uploaded; frozen tiles cost nothing.
+"""
+from __future__ import annotations
+
+import math
+
+import moderngl
+import numpy as np
+
+from bridge_node.render import shaders
+from bridge_node.render.camera import Camera, channel_camera, set_matrix, ship_matrix, visible_boxes
+from bridge_node.render.meshes import cell_rasters, cell_vertices, ship_vertices
+from bridge_node.render.settings import ChannelSettings, RenderSettings
+from bridge_node.render.world_view import WorldView
+from sim_core.csr import gather_ranges
+from sim_core.world import WorldModel
+
+GL_CLIP_DISTANCE0 = 0x3000
+FLOE_DRIFT_MARGIN = 30.0  # m: broken floes may drift this far out of their tile
+POSE_WIDTH = 2048  # texels per line of the pose textures
+MAX_TILES = 4096 * 4096  # tile table of 8 bytes per tile: 134 MB of texture at most
+RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m tiles)
+SKY_HORIZON, SKY_ZENITH = (0.78, 0.84, 0.90), (0.38, 0.55, 0.78)
+FOG = (0.70, 0.74, 0.78)
+WATER = (0.10, 0.17, 0.22)
+ICE_INTACT, ICE_BROKEN, ICE_EDGE = (0.93, 0.95, 0.97), (0.60, 0.68, 0.75), (0.52, 0.68, 0.78)
+DECK, HULL = (0.35, 0.38, 0.36), (0.55, 0.12, 0.10)
+
+
+class _FloeBuffer:
+    """Triangles of one tile's broken floes (tops or sides), appended to as cells break;
+    the storage doubles when full."""
+
+    STRIDE = 28  # bytes: position 3f, normal 3f, floe row i4
+
+    def __init__(self, ctx: moderngl.Context, program: moderngl.Program) -> None:
+        self.ctx, self.program = ctx, program
+        self.vbo = self.vao = None
+        self.vertices = 0
+
+    def append(self, verts: np.ndarray, rows: np.ndarray) -> None:
+        data = np.zeros(len(verts), dtype=[("v", "f4", 6), ("row", "i4")])
+        data["v"], data["row"] = verts, rows
+        size = (self.vertices + len(verts)) * self.STRIDE
+        if self.vbo is None or size > self.vbo.size:
+            old = self.vbo
+            self.vbo = self.ctx.buffer(reserve=max(size, 2 * (old.size if old else 0), 1 << 16))
+            if old is not None:
+                self.ctx.copy_buffer(self.vbo, old, self.vertices * self.STRIDE)
+                old.release()
+            self.vao = self.ctx.vertex_array(self.program, [(self.vbo, "3f 3f i", "in_pos", "in_normal", "in_row")])
+        self.vbo.write(data.tobytes(), offset=self.vertices * self.STRIDE)
+        self.vertices += len(verts)
+
+    def render(self) -> None:
+        if self.vertices:
+            self.vao.render(vertices=self.vertices)
+
+
+class SceneRenderer:
+    """GPU resources of one world; draws it for any channel."""
+
+    def __init__(self, ctx: moderngl.Context, model: WorldModel, settings: RenderSettings) -> None:
+        self.ctx, self.model, self.settings = ctx, model, settings
+        scene = model.scene
+        self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=shaders.ENV_FS)
+        self.floe = ctx.program(vertex_shader=shaders.FLOE_VS, fragment_shader=shaders.FLOE_FS)
+        self.ship = ctx.program(vertex_shader=shaders.SHIP_VS, fragment_shader=shaders.SHIP_FS)
+        self.band = ctx.program(vertex_shader=shaders.BAND_VS, fragment_shader=shaders.BAND_FS)
+        self.band_buf = ctx.buffer(reserve=2 * 6 * 2 * 4)
+        self.band_vao = ctx.vertex_array(self.band, [(self.band_buf, "2f", "in_ndc")])
+        self.env_buf = ctx.buffer(reserve=3 * 5 * 4)
+        self.env_vao = ctx.vertex_array(self.env, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
+        if scene.nx * scene.ny > MAX_TILES:
+            raise ValueError(f"the renderer draws fields of up to {MAX_TILES} tiles; this one has {scene.nx * scene.ny}")
+        info = np.tile(np.array([-1, 0], "i4"), scene.nx * scene.ny)
+        self.tile_info = ctx.texture((scene.nx, scene.ny), 2, info.tobytes(), dtype="i4")
+        self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST
+        hull = ship_vertices(model.contour, settings.freeboard_m)
+        self.ship_vao = ctx.vertex_array(self.ship, [(ctx.buffer(hull.tobytes()), "3f 3f", "in_pos", "in_normal")])
+        self.cell_verts, self.cell_vert_start, self.cell_side_start = cell_vertices(model)
+        self.raster_size = RASTER_SIZE if len(model.ice.templates) <= 4 else RASTER_SIZE // 2
+        raster = cell_rasters(model, self.raster_size)
+        self.cell_raster = ctx.texture((self.raster_size, raster.shape[0]), 1, raster.tobytes(), dtype="u2")
+        self.cell_raster.filter = moderngl.NEAREST, moderngl.NEAREST
+        self.tile_floes: dict[int, tuple[_FloeBuffer, _FloeBuffer]] = {}  # placement -> (tops, sides)
+        self._drawn = np.zeros(0, dtype=bool)
+        self.pose_a = self.pose_b = self.status = None
+        self._pose_lines = 0
+        h = model.ice.thickness.mean() if len(model.ice.thickness) else 0.0
+        mat = model.ice.material
+        self.slab_z = float(h * (1.0 - mat.density / mat.water_density))
+        az, el = math.radians(settings.sun_azimuth_deg), math.radians(settings.sun_elevation_deg)
+        self.sun = (math.sin(az) * math.cos(el), math.cos(az) * math.cos(el), math.sin(el))
+
+    # -- per frame uploads ----------------------------------------------------------------
+    def update(self, view: WorldView) -> None:
+        """Upload what changed in the view since the last call: new placements, the
+        triangles of newly broken floes, and the poses of the rows that changed."""
+        changes = view.take_changes()
+        full = self._ensure_pose_capacity(view.rows)
+        self._upload_placements(view, list(view.placements) if full else changes.placements)
+        self._append_broken(view, changes.broken)
+        self._upload_poses(view, 0 if full else changes.rows_from, view.rows if full else changes.rows_to)
+
+    def _upload_placements(self, view: WorldView, placements: list[int]) -> None:
+        nx = self.model.scene.nx
+        for k in placements:
+            p = view.placements[k]
+            info = np.array([p.row_start, p.template | (p.quarter_turns << 16)], "i4")
+            self.tile_info.write(info.tobytes(), viewport=(p.tile % nx, p.tile // nx, 1, 1))
+
+    def _append_broken(self, view: WorldView, broken: np.ndarray) -> None:
+        """Append the template triangles of newly broken cells to their tile's buffers (tops
+        and sides apart, for the level of detail)."""
+        if len(self._drawn) < view.rows:
+            self._drawn = np.concatenate([self._drawn, np.zeros(view.rows - len(self._drawn), bool)])
+        new = np.unique(broken)
+        new = new[~self._drawn[new]]
+        self._drawn[new] = True
+        tile = self._row_tile(view, new)
+        for k in np.unique(tile).tolist():
+            rows = new[tile == k]
+            g = self._row_gcell(view, rows)
+            if k not in self.tile_floes:
+                self.tile_floes[k] = (_FloeBuffer(self.ctx, self.floe), _FloeBuffer(self.ctx, self.floe))
+            for buf, a, b in zip(self.tile_floes[k], (self.cell_vert_start[g], self.cell_side_start[g]),
+                                 (self.cell_side_start[g], self.cell_vert_start[g + 1])):
+                buf.append(self.cell_verts[gather_ranges(a, b)], np.repeat(rows, b - a))
+
+    @staticmethod
+    def _row_tile(view: WorldView, rows: np.ndarray) -> np.ndarray:
+        """Placement index of each row (rows of a placement are contiguous)."""
+        keys = sorted(view.placements, key=lambda k: view.placements[k].row_start)
+        starts = np.array([view.placements[k].row_start for k in keys], dtype=np.int64)
+        return np.array(keys, dtype=np.int64)[np.searchsorted(starts, rows, side="right") - 1]
+
+    def _row_gcell(self, view: WorldView, rows: np.ndarray) -> np.ndarray:
+        """Global template cell of each row: its template's first cell plus its place in the tile."""
+        tile = self._row_tile(view, rows)
+        start = np.array([view.placements[k].row_start for k in tile.tolist()], dtype=np.int64)
+        template = np.array([view.placements[k].template for k in tile.tolist()], dtype=np.int64)
+        return self.model.ice.template_start[template] + rows - start
+
+    def _ensure_pose_capacity(self, rows: int) -> bool:
+        """Grow the pose textures to hold the rows; True if they were (re)made, so that
+        everything must be uploaded again."""
+        lines = max(1, math.ceil(rows / POSE_WIDTH))
+        if lines <= self._pose_lines:
+            return False
+        lines = max(lines, 2 * self._pose_lines)
+        for name, components, dtype in (("pose_a", 4, "f4"), ("pose_b", 4, "f4"), ("status", 1, "u1")):
+            old = getattr(self, name)
+            if old is not None:
+                old.release()
+            tex = self.ctx.texture((POSE_WIDTH, lines), components, dtype=dtype)
+            tex.filter = moderngl.NEAREST, moderngl.NEAREST
+            setattr(self, name, tex)
+        self._pose_lines = lines
+        return True
+
+    def _upload_poses(self, view: WorldView, first_row: int, end_row: int) -> None:
+        """Upload the poses and statuses of rows [first_row, end_row), whole texture lines."""
+        line0 = first_row // POSE_WIDTH
+        r0, r1 = line0 * POSE_WIDTH, end_row
+        if r1 <= r0:
+            return
+        lines = math.ceil((r1 - r0) / POSE_WIDTH)
+        n = min(lines * POSE_WIDTH, view.rows - r0)
+        a = np.zeros((lines * POSE_WIDTH, 4), dtype="f4")
+        b = np.zeros_like(a)
+        a[:n] = view.pose[r0:r0 + n, :4]  # x, y, heave, yaw
+        b[:n, :2] = view.pose[r0:r0 + n, 4:6]  # roll, pitch
+        b[:n, 2] = view.status[r0:r0 + n]
+        viewport = (0, line0, POSE_WIDTH, lines)
+        self.pose_a.write(a.tobytes(), viewport=viewport)
+        self.pose_b.write(b.tobytes(), viewport=viewport)
+        status = np.zeros(lines * POSE_WIDTH, dtype=np.uint8)
+        status[:n] = view.status[r0:r0 + n]
+        self.status.write(status.tobytes(), viewport=viewport)
+
+    # -- drawing --------------------------------------------------------------------------
+    def draw(self, view: WorldView, channel: ChannelSettings, blend: moderngl.Texture) -> Camera:
+        """Draw the scene for one channel into the bound framebuffer, its columns scaled by
+        the blend texture (width x 1 float: the channel's edge-blend factors)."""
+        ctx, s = self.ctx, self.settings
+        north, east, psi = view.ship.north, view.ship.east, view.ship.heading
+        cam = channel_camera(channel, north, east, psi, s.far_m)
+        vp = cam.view_proj
+        half = math.radians(channel.hfov_deg) / 2
+        common = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "fog_colour": FOG}
+        ctx.clear(*FOG, depth=1.0)
+        self.tile_info.use(0)
+        self.cell_raster.use(3)
+        if self.pose_b is not None:
+            self.pose_a.use(4)
+            self.pose_b.use(5)
+            self.status.use(7)
+        # near to far: ship, floes, then the environment behind them, so that the depth test
+        # spares the full-screen pass every pixel already covered
+        ctx.enable(moderngl.DEPTH_TEST)
+        self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), sun=self.sun,
+                  top_colour=DECK, side_colour=HULL, ambient=0.55, **common)
+        self.ship_vao.render()
+        if self.tile_floes:
+            ctx.enable_direct(GL_CLIP_DISTANCE0)
+            ctx.enable(moderngl.CULL_FACE)  # not for the ship: its matrix mirrors (starboard-handed frame)
+            self._set(self.floe, view_proj=vp, pose_a=4, pose_b=5, pose_width=POSE_WIDTH, sun=self.sun,
+                      top_colour=ICE_BROKEN, side_colour=ICE_EDGE, ambient=0.7, **common)
+            self._draw_floes(view, cam)
+            ctx.disable(moderngl.CULL_FACE)
+            ctx.disable_direct(GL_CLIP_DISTANCE0)
+        tx, ty = math.tan(half), math.tan(channel.vfov() / 2)
+        corners = np.array([[-1, -1], [3, -1], [-1, 3]], dtype=float)
+        rays = -cam.view[2, :3] + corners[:, :1] * tx * cam.view[0, :3] + corners[:, 1:] * ty * cam.view[1, :3]
+        self.env_buf.write(np.hstack([corners, rays]).astype("f4").tobytes())
+        scene = self.model.scene
+        ice = tuple(c * (0.7 + 0.3 * max(self.sun[2], 0.0)) for c in ICE_INTACT)
+        self._set(self.env, horizon_colour=SKY_HORIZON, zenith_colour=SKY_ZENITH, water_colour=WATER,
+                  ice_colour=ice, slab_z=self.slab_z, far=s.far_m, tile_info=0, cell_raster=3,
+                  raster_size=self.raster_size, status=7, pose_width=POSE_WIDTH,
+                  field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
+        self.env_vao.render()
+        self._blend_bands(channel, blend)
+        return cam
+
+    def _blend_bands(self, channel: ChannelSettings, blend: moderngl.Texture) -> None:
+        """Multiply the columns of the blend bands by their factors (a pass over the bands
+        only, not the whole image)."""
+        t = math.tan(math.radians(channel.hfov_deg) / 2)
+        spans = []
+        if channel.blend_left_deg > 0:
+            spans.append((-1.0, math.tan(math.radians(channel.blend_left_deg - channel.hfov_deg / 2)) / t))
+        if channel.blend_right_deg > 0:
+            spans.append((math.tan(math.radians(channel.hfov_deg / 2 - channel.blend_right_deg)) / t, 1.0))
+        if not spans:
+            return
+        quads = np.array([[[a, -1], [b, -1], [b, 1], [a, -1], [b, 1], [a, 1]] for a, b in spans], dtype="f4")
+        self.band_buf.orphan(quads.nbytes)
+        self.band_buf.write(quads.tobytes())
+        ctx = self.ctx
+        ctx.disable(moderngl.DEPTH_TEST)
+        ctx.enable(moderngl.BLEND)
+        ctx.blend_func = moderngl.ZERO, moderngl.SRC_COLOR
+        blend.use(6)
+        self.band["blend_ramp"].value = 6
+        self.band_vao.render(vertices=6 * len(spans))
+        ctx.disable(moderngl.BLEND)
+
+    def _draw_floes(self, view: WorldView, cam: Camera) -> None:
+        """Each tile's broken floes, if its box (with a margin for drift) is in view; their
+        side faces only within the level-of-detail distance."""
+        keys = list(self.tile_floes)
+        corner = np.array([view.placements[k].corner for k in keys], dtype=float)
+        side = self.model.scene.side
+        lo = np.column_stack([corner - FLOE_DRIFT_MARGIN, np.full(len(keys), -2.0)])
+        hi = np.column_stack([corner + side + FLOE_DRIFT_MARGIN, np.full(len(keys), 2.0)])
+        seen = visible_boxes(cam.view_proj, lo, hi)
+        gap = np.maximum(np.maximum(lo[:, :2] - cam.eye[:2], cam.eye[:2] - hi[:, :2]), 0.0)
+        near = np.hypot(gap[:, 0], gap[:, 1]) < self.settings.lod_distance_m
+        for k, show, full in zip(keys, seen, near):
+            if show:
+                tops, sides = self.tile_floes[k]
+                tops.render()
+                if full:
+                    sides.render()
+
+    @staticmethod
+    def _set(prog: moderngl.Program, **uniforms) -> None:
+        for name, value in uniforms.items():
+            if name not in prog:
+                continue
+            if isinstance(value, np.ndarray) and value.shape == (4, 4):
+                set_matrix(prog[name], value)
+            else:
+                prog[name].value = value

@@ -1,0 +1,34 @@
+"""Picture of a real-time run: the ship's track and the tick wall times."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from bridge_node.node.realtime_loop import LoopStats
+from bridge_node.reports.figures import plt, save_figure
+
+
+def plot_run(stats: LoopStats, path: Path) -> Path:
+    """Track (north against east) and tick wall time against simulated time."""
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.5))
+    if stats.track:
+        tr = np.array(stats.track)
+        ax.plot(tr[:, 2], tr[:, 1], "-", color="C0")
+        ax.plot(tr[-1, 2], tr[-1, 1], "o", color="C3", label="end")
+        ax.legend(fontsize=8)
+    ax.set_xlabel("east, m")
+    ax.set_ylabel("north, m")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_title("ship's track")
+    ax.grid(alpha=0.3)
+    t = np.arange(1, len(stats.step_ms) + 1) * (stats.sim_s / max(stats.ticks, 1))
+    bx.plot(t, stats.step_ms, lw=0.5, color="0.4")
+    bx.axhline(1e3 * stats.sim_s / max(stats.ticks, 1), color="C3", ls="--", label="tick period")
+    bx.set_xlabel("simulated time, s")
+    bx.set_ylabel("tick wall time, ms")
+    bx.set_title(f"{stats.ticks} ticks, {stats.overruns} overruns")
+    bx.legend(fontsize=8)
+    bx.grid(alpha=0.3)
+    fig.tight_layout()
+    return save_figure(fig, path)

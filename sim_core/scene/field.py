@@ -1,0 +1,80 @@
+"""Ice field layout: a W x H metre field of square tiles, each with a level-ice thickness."""
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from sim_core.fracture.fragment_count import MAX_THICKNESS
+from sim_core.params import Params
+
+
+class IceFieldSettings(Params):
+    """Field extent and thickness profile. Gradients run from the south edge (y = 0,
+    ``thickness``) to the north edge (y = H, ``thickness_end``); a grid gives one value per
+    tile, row 0 at the south edge."""
+
+    width: float = Field(6400.0, ge=100.0, le=1.0e6, description="east-west extent, m")
+    height: float = Field(6400.0, ge=100.0, le=1.0e6, description="north-south extent, m")
+    thickness_profile: Literal["uniform", "gradient", "grid"] = "uniform"
+    thickness: float = Field(gt=0.0, le=MAX_THICKNESS, description="level-ice thickness, m")
+    thickness_end: float | None = Field(None, gt=0.0, le=MAX_THICKNESS, description="gradient end, m")
+    thickness_grid: str | None = Field(None, description="CSV of per-tile thickness, m")
+    class_step: float = Field(0.1, ge=0.01, le=0.5, description="thickness class width, m")
+
+    @model_validator(mode="after")
+    def _profile_inputs(self) -> "IceFieldSettings":
+        if self.thickness_profile == "gradient" and self.thickness_end is None:
+            raise ValueError("thickness_end is required when thickness_profile = 'gradient'")
+        if self.thickness_profile == "grid" and not self.thickness_grid:
+            raise ValueError("thickness_grid (a CSV file) is required when thickness_profile = 'grid'")
+        return self
+
+
+def tile_counts(field: IceFieldSettings, tile_side: float) -> tuple[int, int]:
+    """Tiles along x (east) and y (north): the field rounded up to whole tiles."""
+    return math.ceil(field.width / tile_side - 1e-9), math.ceil(field.height / tile_side - 1e-9)
+
+
+def tile_thickness(
+    field: IceFieldSettings, tile_side: float, grid: np.ndarray | None = None
+) -> np.ndarray:
+    """Thickness (m) of every tile as an (ny, nx) array, row 0 at the south edge."""
+    nx, ny = tile_counts(field, tile_side)
+    if field.thickness_profile == "uniform":
+        return np.full((ny, nx), field.thickness)
+    if field.thickness_profile == "gradient":
+        y = (np.arange(ny) + 0.5) / ny
+        column = field.thickness + (field.thickness_end - field.thickness) * y
+        return np.repeat(column[:, None], nx, axis=1)
+    if grid is None or grid.shape != (ny, nx):
+        got = None if grid is None else grid.shape
+        raise ValueError(f"thickness grid must have shape {(ny, nx)} (rows, columns), got {got}")
+    if not np.all(np.isfinite(grid) & (grid > 0.0) & (grid <= MAX_THICKNESS)):
+        raise ValueError(f"thickness grid values must lie in (0, {MAX_THICKNESS}] m")
+    return grid.astype(float)
+
+
+def thickness_class(h: np.ndarray | float, step: float) -> np.ndarray:
+    """Round thickness to its class (multiples of step, at least one step, at most 1.5 m)."""
+    return np.clip(np.round(np.asarray(h) / step) * step, step, MAX_THICKNESS).round(6)
+
+
+def tile_classes(field: IceFieldSettings, tile_side: float,
+                 grid: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Thickness class of every tile: (class index (ny, nx) uint8, row 0 at the south edge;
+    class thicknesses (k,) m). Uniform and gradient fields are built a row at a time, so a
+    640 km field costs one byte per tile."""
+    nx, ny = tile_counts(field, tile_side)
+    if field.thickness_profile == "grid":
+        classes = thickness_class(tile_thickness(field, tile_side, grid), field.class_step)
+    else:
+        column = tile_thickness(field.model_copy(update={"width": tile_side}), tile_side)[:, 0]
+        classes = thickness_class(column, field.class_step)[:, None]
+    values, index = np.unique(classes, return_inverse=True)
+    if len(values) > 256:
+        raise ValueError(f"{len(values)} thickness classes; at most 256 (raise class_step)")
+    index = index.reshape(classes.shape).astype(np.uint8)
+    return np.ascontiguousarray(np.broadcast_to(index, (ny, nx))), values

@@ -1,0 +1,147 @@
+"""Scene management of the ice field (paper §2.4): which tiles are breakable right now.
+
+Every tile of the field is in one of three ``TileState``s. UNBREAKABLE: one slab of level ice that
+costs nothing (the default). BREAKABLE: its pre-fractured template is placed in the ice
+world and simulated. FROZEN: it was breakable, the ship has left it behind; its floes keep
+their last pose and are drawn, but cost no physics. Unlike the paper's reverse replacement,
+freezing keeps the broken channel behind the ship in the scene.
+
+``update_scene`` is pure scene logic over the tile-state array: from the hull's contour
+points it decides which tiles to place, thaw and freeze. The world step applies those
+decisions to the ice world. Tile variants and rotations are drawn from a hash of the tile's
+index, so neighbours do not repeat and a rerun lays out the same field.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import IntEnum
+from typing import Literal
+
+import numpy as np
+from pydantic import Field
+
+from sim_core.params import Params
+from sim_core.scene.quadtree import detection_radius, tile_under, tiles_near
+
+
+class TileState(IntEnum):
+    """State of a tile of the field."""
+
+    UNBREAKABLE = 0
+    BREAKABLE = 1
+    FROZEN = 2
+
+
+class SceneSettings(Params):
+    """How the scene swaps tiles around the hull."""
+
+    detection: Literal["contour", "origin"] = Field(
+        "contour", description="contour: the paper's 34 contour points and R_T; origin: the traditional test")
+    reverse_replacement: bool = Field(True, description="freeze breakable tiles far from the ship")
+    reverse_distance: float = Field(700.0, gt=0.0, le=1.0e5, description="freeze beyond this distance, m")
+
+
+@dataclass(frozen=True)
+class SceneModel:
+    """Static scene data: the tile grid, each tile's thickness class and its templates."""
+
+    settings: SceneSettings
+    nx: int
+    ny: int
+    side: float  # m
+    radius: float  # detection radius R_T, m
+    tile_class: np.ndarray  # (ny * nx,) uint8: thickness class of each tile
+    class_thickness: np.ndarray  # (classes,) m
+    class_templates: tuple  # per class: array of the ice model's template indices (variants)
+
+    def centre(self, tiles: np.ndarray) -> np.ndarray:
+        """Centres (n, 2) of flat tile indices, world m."""
+        tiles = np.asarray(tiles)
+        return np.column_stack([(tiles % self.nx + 0.5) * self.side, (tiles // self.nx + 0.5) * self.side])
+
+    def thickness_at(self, point: np.ndarray) -> float:
+        """Level-ice thickness (m) of the tile holding the point; 0 off the field."""
+        tile = tile_under(point, self.nx, self.ny, self.side)
+        return 0.0 if tile < 0 else float(self.class_thickness[self.tile_class[tile]])
+
+
+@dataclass
+class SceneData:
+    """Per-step scene state: every tile's state, and where breakable tiles sit in the ice world."""
+
+    tile_state: np.ndarray  # (ny * nx,) uint8
+    placement: dict[int, int] = field(default_factory=dict)  # tile -> index of its placement in the ice world
+    live: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # TileState.BREAKABLE tiles
+
+
+@dataclass
+class SceneUpdate:
+    """Decisions of one update: flat tile indices to place, thaw and freeze."""
+
+    place: np.ndarray
+    thaw: np.ndarray
+    freeze: np.ndarray
+
+
+def compile_scene(settings: SceneSettings, tile_class: np.ndarray, class_thickness: np.ndarray,
+                  class_templates: list[np.ndarray], tile_side: float, ship_length: float) -> SceneModel:
+    """Scene model of a field whose tiles (ny, nx) carry thickness classes (indices into
+    class_thickness, m); class_templates lists each class's template indices."""
+    radius = detection_radius(tile_side, ship_length)
+    if settings.reverse_replacement and settings.reverse_distance < radius + ship_length:
+        raise ValueError(f"reverse_distance = {settings.reverse_distance} m must be at least R_T + L = "
+                         f"{radius + ship_length:.1f} m, or tiles near the hull would be frozen")
+    ny, nx = tile_class.shape
+    return SceneModel(settings, nx, ny, float(tile_side), radius, np.ascontiguousarray(tile_class, np.uint8).ravel(),
+                      np.asarray(class_thickness, float), tuple(np.asarray(t, np.int64) for t in class_templates))
+
+
+def new_scene_data(model: SceneModel) -> SceneData:
+    """Every tile unbreakable."""
+    return SceneData(np.zeros(model.nx * model.ny, dtype=np.uint8))
+
+
+def detected_tiles(model: SceneModel, contour: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """Tiles that must be breakable for a hull with these world contour points (n, 2) and
+    reference point (2,), m, by the configured detection."""
+    if model.settings.detection == "origin":
+        tile = tile_under(origin, model.nx, model.ny, model.side)
+        return np.array([tile] if tile >= 0 else [], dtype=np.int64)
+    return tiles_near(contour, model.radius, model.nx, model.ny, model.side)
+
+
+def update_scene(model: SceneModel, data: SceneData, contour: np.ndarray, origin: np.ndarray) -> SceneUpdate:
+    """Decide and record this step's swaps: detected unbreakable tiles are placed, detected
+    frozen tiles thawed, and (with reverse replacement) breakable tiles whose centre lies
+    farther than the reverse distance from the hull's reference point are frozen."""
+    wanted = detected_tiles(model, contour, origin)
+    state = data.tile_state[wanted]
+    place, thaw = wanted[state == TileState.UNBREAKABLE], wanted[state == TileState.FROZEN]
+    live = data.live
+    if model.settings.reverse_replacement and len(live):
+        far = np.hypot(*(model.centre(live) - origin).T) > model.settings.reverse_distance
+        freeze = live[far]
+    else:
+        freeze = live[:0]
+    data.tile_state[place] = TileState.BREAKABLE
+    data.tile_state[thaw] = TileState.BREAKABLE
+    data.tile_state[freeze] = TileState.FROZEN
+    if len(place) or len(thaw) or len(freeze):
+        data.live = np.setdiff1d(np.concatenate([live, place, thaw]), freeze)
+    return SceneUpdate(place, thaw, freeze)
+
+
+def tile_layout(model: SceneModel, tile: int) -> tuple[int, int]:
+    """(template index, quarter turns) for a tile: a variant of its thickness class and a
+    rotation, both from a hash of the tile index (SplitMix64's finaliser)."""
+    z = (int(tile) + 0x9E3779B97F4A7C15) & 0xFFFFFFFFFFFFFFFF
+    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & 0xFFFFFFFFFFFFFFFF
+    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & 0xFFFFFFFFFFFFFFFF
+    z ^= z >> 31
+    variants = model.class_templates[model.tile_class[tile]]
+    return int(variants[z % len(variants)]), int((z >> 8) % 4)
+
+
+def tile_corner(model: SceneModel, tile: int) -> tuple[float, float]:
+    """South-west corner of a tile, world m."""
+    return (tile % model.nx) * model.side, (tile // model.nx) * model.side

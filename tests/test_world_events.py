@@ -1,0 +1,120 @@
+"""The world's published contract: events and snapshots agree, rows keep their numbers, a
+thawed tile's floes come back where they froze, and refused orders are counted and raise an
+alarm."""
+import math
+
+import numpy as np
+import pytest
+
+from bridge_node.node.config import load_config
+from bridge_node.node.order_refusals import REFUSED_ALARM, OrderRefusals
+from bridge_node.node.world_setup import build_world, start_world
+from bridge_node.render.world_view import WorldView
+from sim_core.fracture.tile_template import FractureSettings, build_tile
+from sim_core.frames.hull_contour import waterline_contour
+from sim_core.ice.floes import BreakCause, FloeStatus
+from sim_core.ice.model import compile_ice_model
+from sim_core.ice.step import HullMotion, ice_step
+from sim_core.ice.tiles import break_cells, freeze_tile, new_ice_data, place_tile, thaw_tile
+from sim_core.ship.model import OrderRejection
+from sim_core.world import Controls, snapshot, step
+
+
+@pytest.fixture(scope="module")
+def small_world(tmp_path_factory):
+    """A 400 m x 600 m field of 0.5 m ice in 50 m tiles, freezing tiles 205 m astern."""
+    base = load_config()
+    cfg = base.model_copy(update={
+        "fracture": base.fracture.model_copy(update={"tile_side": 50.0}),
+        "ice_field": base.ice_field.model_copy(update={"width": 400.0, "height": 600.0}),
+        "scene": base.scene.model_copy(update={"reverse_distance": 205.0}),
+        "paths": base.paths.model_copy(update={"cache_dir": str(tmp_path_factory.getbasetemp() / "tiles")}),
+        "exercise": base.exercise.model_copy(update={"start_north": -60.0}),
+    })
+    return build_world(cfg, None), cfg
+
+
+def test_events_applied_step_by_step_equal_a_snapshot(small_world):
+    model, cfg = small_world
+    data = start_world(model, cfg)
+    view = WorldView()
+    view.apply(snapshot(model, data))
+    frozen_seen = 0
+    for _ in range(2500):  # 250 s: tiles placed, cells broken, tiles frozen astern
+        events = step(model, data, 0.1)
+        frozen_seen += len(events.frozen)
+        view.apply(events)
+    assert frozen_seen > 0 and events.floes_frozen > 0 and events.seq == 2500
+    late = WorldView()  # a consumer joining now
+    late.apply(snapshot(model, data))
+    assert late.rows == view.rows == data.ice.state.n
+    np.testing.assert_array_equal(late.status, view.status)
+    np.testing.assert_allclose(late.pose, view.pose)
+    assert late.placements == view.placements
+    assert view.ship.time == pytest.approx(data.time) and view.ship.north == data.ship.eta[0]
+    st = data.ice.state
+    assert late.take_changes().broken.size == np.count_nonzero(st.status != FloeStatus.INTACT)
+
+
+def test_rows_are_only_appended_and_keep_their_cells():
+    tile = build_tile(0.5, 3, FractureSettings(tile_side=40.0, colliders="sphere"))
+    model = compile_ice_model([tile])
+    data = new_ice_data(model, waterline_contour(150.0, 24.0), 0.1)
+    first = place_tile(model, data, 0, (0.0, 0.0))
+    second = place_tile(model, data, 0, (40.0, 0.0), 1)
+    assert (first, second) == (0, 1)
+    rows = data.tiles.rows(first)
+    gcell = data.state.gcell.copy()
+    freeze_tile(data, first)
+    thaw_tile(data, first)
+    third = place_tile(model, data, 0, (80.0, 0.0))
+    assert data.tiles.rows(third)[0] == 2 * tile.n_cells  # appended after the others
+    np.testing.assert_array_equal(data.state.gcell[: 2 * tile.n_cells], gcell)
+    assert np.all(data.state.tile[rows] == first)
+
+
+def test_thawed_floes_come_back_to_life_where_they_froze():
+    tile = build_tile(0.5, 5, FractureSettings(tile_side=40.0, colliders="sphere"))
+    model = compile_ice_model([tile])
+    data = new_ice_data(model, waterline_contour(150.0, 24.0), 0.1)
+    rows = data.tiles.rows(place_tile(model, data, 0, (0.0, 0.0)))
+    st = data.state
+    loose = rows[np.abs(st.home[rows, 0] - 20.0) < 6.0]  # a lane through the middle
+    break_cells(data, loose, BreakCause.HULL)
+    data.contacts.set_velocity(loose, np.tile([0.0, 0.3], (len(loose), 1)), np.zeros(len(loose)))
+    far = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
+    for _ in range(30):
+        ice_step(model, data, far, 1 / 30)
+    moved = st.xy[loose].copy()
+    assert np.abs(moved - st.home[loose]).max() > 0.05  # they drifted before freezing
+    freeze_tile(data, 0)
+    assert np.all(st.status[loose] == FloeStatus.FROZEN) and st.count(FloeStatus.FROZEN) == len(loose)
+    yaw = st.yaw[loose].copy()
+    thaw_tile(data, 0)
+    assert np.all(st.status[loose] == FloeStatus.FREE) and st.count(FloeStatus.FROZEN) == 0
+    np.testing.assert_array_equal(st.xy[loose], moved)  # at the poses they froze with
+    np.testing.assert_array_equal(st.yaw[loose], yaw)
+    assert st.count(FloeStatus.FREE) == len(loose)
+    # and alive again: the contact space moves them
+    data.contacts.set_velocity(loose, np.tile([0.0, 0.3], (len(loose), 1)), np.zeros(len(loose)))
+    ice_step(model, data, far, 1 / 30)
+    assert np.abs(st.xy[loose] - moved).max() > 1e-3
+
+
+def test_rejected_orders_are_published_counted_and_alarmed(small_world):
+    model, cfg = small_world
+    data = start_world(model, cfg)
+    events = step(model, data, 0.1, Controls(rudder=math.radians(60.0), telegraph="warp_nine"))
+    assert [(r.order, r.refused) for r in events.rejected] == [("rudder", False), ("telegraph", True)]
+    refusals = OrderRefusals()
+    refused = OrderRejection("telegraph", True, "unknown telegraph position 'warp_nine' rejected")
+    clamped = OrderRejection("rudder", False, "rudder order 60.0 deg clamped to the 35 deg limit")
+    assert refusals.note((clamped,) * 5, 0.0) == []  # clamped orders are obeyed: no alarm
+    assert refusals.note((refused,), 0.0) == [] and refusals.note((refused,), 1.0) == []
+    raised = refusals.note((refused,), 2.0)
+    assert [(a.number, a.active) for a in raised] == [(REFUSED_ALARM["telegraph"], True)]
+    assert "warp_nine" in raised[0].text
+    assert refusals.note((refused,), 3.0) == []  # raised once
+    cleared = refusals.note((), 20.0)
+    assert [(a.number, a.active) for a in cleared] == [(REFUSED_ALARM["telegraph"], False)]
+    assert refusals.counts == {"rudder clamped": 5, "telegraph refused": 4}
