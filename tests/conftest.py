@@ -3,6 +3,7 @@ from pathlib import Path
 
 import pytest
 
+from bridge_node.node.config import NodeConfig, load_config
 from sim_core.fracture.tile_template import FractureSettings, build_tile
 
 REPO = Path(__file__).resolve().parent.parent
@@ -27,3 +28,17 @@ def run_cli(*args, cwd=None):
         [sys.executable, "-m", "bridge_node", *args], capture_output=True, text=True,
         cwd=cwd or REPO, timeout=300,
     )
+
+
+def exercise_config(cache_dir: Path, width: float, height: float, tile_side: float = 100.0,
+                    start_north: float | None = None, **scene) -> NodeConfig:
+    """The default config on a small field (m) with its own template cache; optionally the
+    ship's start (m north of the field) and scene settings."""
+    base = load_config()
+    return base.model_copy(update={
+        "fracture": base.fracture.model_copy(update={"tile_side": tile_side}),
+        "ice_field": base.ice_field.model_copy(update={"width": width, "height": height}),
+        "scene": base.scene.model_copy(update=scene),
+        "paths": base.paths.model_copy(update={"cache_dir": str(cache_dir)}),
+        "exercise": base.exercise.model_copy(update={"start_north": start_north}),
+    })

@@ -5,9 +5,8 @@ import math
 
 import numpy as np
 import pytest
-from conftest import run_cli
+from conftest import exercise_config, run_cli
 
-from bridge_node.node.config import load_config
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
 from bridge_node.render.renderer import SceneRenderer
@@ -26,13 +25,7 @@ def channel(name="c", **kw) -> ChannelSettings:
 @pytest.fixture(scope="module")
 def exercise(tmp_path_factory):
     """A 400 m x 600 m field of 0.5 m ice, B = 50 m; the ship has steamed 70 s into it."""
-    base = load_config()
-    cfg = base.model_copy(update={
-        "fracture": base.fracture.model_copy(update={"tile_side": 50.0}),
-        "ice_field": base.ice_field.model_copy(update={"width": 400.0, "height": 600.0}),
-        "paths": base.paths.model_copy(update={"cache_dir": str(tmp_path_factory.getbasetemp() / "tiles")}),
-        "exercise": base.exercise.model_copy(update={"start_north": -60.0}),
-    })
+    cfg = exercise_config(tmp_path_factory.getbasetemp() / "tiles", 400.0, 600.0, 50.0, start_north=-60.0)
     model = build_world(cfg, None)
     data = start_world(model, cfg)
     for _ in range(700):

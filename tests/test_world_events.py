@@ -5,8 +5,8 @@ import math
 
 import numpy as np
 import pytest
+from conftest import exercise_config
 
-from bridge_node.node.config import load_config
 from bridge_node.node.order_refusals import REFUSED_ALARM, OrderRefusals
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.world_view import WorldView
@@ -23,14 +23,8 @@ from sim_core.world import Controls, snapshot, step
 @pytest.fixture(scope="module")
 def small_world(tmp_path_factory):
     """A 400 m x 600 m field of 0.5 m ice in 50 m tiles, freezing tiles 205 m astern."""
-    base = load_config()
-    cfg = base.model_copy(update={
-        "fracture": base.fracture.model_copy(update={"tile_side": 50.0}),
-        "ice_field": base.ice_field.model_copy(update={"width": 400.0, "height": 600.0}),
-        "scene": base.scene.model_copy(update={"reverse_distance": 205.0}),
-        "paths": base.paths.model_copy(update={"cache_dir": str(tmp_path_factory.getbasetemp() / "tiles")}),
-        "exercise": base.exercise.model_copy(update={"start_north": -60.0}),
-    })
+    cfg = exercise_config(tmp_path_factory.getbasetemp() / "tiles", 400.0, 600.0, 50.0, start_north=-60.0,
+                          reverse_distance=205.0)
     return build_world(cfg, None), cfg
 
 

@@ -30,7 +30,6 @@ TICK_S = 0.05  # 20 Hz
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("action", choices=("monitor",), help="what to do with the links")
     p.add_argument("--duration", type=float, default=None, help="stop after this many seconds (default: Ctrl-C)")
     p.add_argument("--json", action="store_true", help="end with one JSON summary instead of the live view")
     p.add_argument("--record", default=None, help="session record folder (default: paths.session_dir/<time>)")

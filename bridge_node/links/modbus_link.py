@@ -144,7 +144,7 @@ class _Worker:
 
     def _run(self) -> None:
         period = 1.0 / self.settings.poll_hz
-        backoff = Backoff(first=0.1, cap=1.0)
+        backoff = Backoff()
         next_poll = time.monotonic()
         answering = False  # connected means the console answers, not that a port is open
         while not self._stop.is_set():

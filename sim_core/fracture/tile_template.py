@@ -20,7 +20,6 @@ from sim_core.material import IceMaterial
 from sim_core.params import Params
 
 
-
 class FractureSettings(Params):
     """How tiles are pre-fractured and which colliders their cells get."""
 
