@@ -22,7 +22,7 @@ from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, create_context
 from bridge_node.render.renderer import SceneRenderer
 from bridge_node.render.settings import ChannelSettings, RenderSettings
-from bridge_node.render.world_view import WorldView
+from bridge_node.stream.world_view import WorldView
 from sim_core.frames.ship_frame import ship_to_world
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.tiles import break_cells

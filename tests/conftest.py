@@ -1,3 +1,4 @@
+import socket
 import sys
 from pathlib import Path
 
@@ -42,3 +43,24 @@ def exercise_config(cache_dir: Path, width: float, height: float, tile_side: flo
         "paths": base.paths.model_copy(update={"cache_dir": str(cache_dir)}),
         "exercise": base.exercise.model_copy(update={"start_north": start_north}),
     })
+
+
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that nothing listens on now."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def exercise_toml(folder: Path, channels: str = "", **sections: str) -> Path:
+    """A config file for CLI runs: a 400 m x 400 m field of 0.3 m ice, the ship's bow in the
+    ice, its own template cache and session folder, a state stream on free loopback ports,
+    and the given ``[[render.channels]]`` text and extra sections (name -> TOML body)."""
+    text = ('[ship]\nname = "polar_cargo"\n[ice_field]\nwidth = 400.0\nheight = 400.0\nthickness = 0.3\n'
+            '[exercise]\nstart_north = -60.0\n'
+            f'[paths]\ncache_dir = "{folder / "tiles"}"\nsession_dir = "{folder / "sessions"}"\n'
+            f'[stream]\npublish = "tcp://127.0.0.1:{free_port()}"\nsnapshot = "tcp://127.0.0.1:{free_port()}"\n'
+            + channels + "".join(f"[{name}]\n{body}\n" for name, body in sections.items()))
+    path = folder / "exercise.toml"
+    path.write_text(text)
+    return path

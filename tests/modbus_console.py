@@ -4,20 +4,14 @@ port (RTU), run in a thread with its own event loop; it can be stopped and start
 from __future__ import annotations
 
 import asyncio
-import socket
 import threading
 
+from conftest import free_port
 from pymodbus.server import ModbusSerialServer, ModbusTcpServer
 from pymodbus.simulator import DataType, SimData, SimDevice
 
 READ_HOLDING, WRITE_MULTIPLE = 3, 16  # Modbus function codes
 REGISTERS = 100
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 class ModbusConsole:

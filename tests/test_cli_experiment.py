@@ -1,7 +1,11 @@
 """``icebridge experiment`` as a user runs it: JSON results, plots, clear errors."""
 import json
 
-from conftest import run_cli
+import av
+import numpy as np
+from PIL import Image
+
+from conftest import exercise_toml, run_cli
 
 
 def test_transit_json_series_and_plots(tmp_path):
@@ -36,18 +40,24 @@ def test_scene_config_error_names_file_and_key(tmp_path):
     assert "Traceback" not in r.stderr
 
 
-def test_run_renders_channel_frames(tmp_path):
-    cfg = tmp_path / "exercise.toml"
-    cfg.write_text(
-        '[ship]\nname = "polar_cargo"\n[ice_field]\nwidth = 400.0\nheight = 400.0\nthickness = 0.3\n'
-        '[exercise]\nstart_north = -60.0\n'
-        '[[render.channels]]\nname = "bow"\nwidth = 160\nheight = 90\n'
-        f'[paths]\ncache_dir = "{tmp_path / "tiles"}"\nsession_dir = "{tmp_path / "sessions"}"\n'
-    )
-    r = run_cli("run", "--config", str(cfg), "--duration", "3", "--frames-every", "1", "--json", "--out", str(tmp_path))
+def test_run_streams_to_a_render_process_that_writes_frames_video_and_panorama(tmp_path):
+    """The main job, headless: physics in one process, the channels drawn by a render process
+    from the state stream, which writes PNG frames, a video and a panorama that show ice."""
+    cfg = exercise_toml(tmp_path, '[[render.channels]]\nname = "bow"\nwidth = 160\nheight = 90\npitch_deg = -10.0\n'
+                                  '[[render.channels]]\nname = "aft"\nwidth = 160\nheight = 90\nyaw_deg = 180.0\n')
+    r = run_cli("run", "--config", str(cfg), "--duration", "4", "--frames-every", "1", "--json", "--out", str(tmp_path))
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
     frames = sorted((tmp_path / "frames").glob("*_bow.png"))
-    assert out["frames_rendered"] == len(frames) >= 2
+    assert out["frames_rendered"] == 2 * len(frames) and len(frames) >= 2
     assert out["ticks"] > 30 and out["live_floes"] > 0
+    assert out["stream"]["sent"] == out["ticks"] + 1 and out["stream"]["dropped"] == 0
+    proc, = out["render_processes"]
+    assert proc["exit"] == 0 and proc["restarts"] == 0 and proc["frames"] > 2 and proc["channels"] == ["bow", "aft"]
+    panorama = np.asarray(Image.open(out["panorama"][0]))
+    assert panorama.shape == (90, 320, 3) and panorama.std() > 10  # a picture, not a flat image
+    assert (panorama.mean(axis=-1) > 170).mean() > 0.05  # with bright ice in it
+    with av.open(out["video"][0]) as video:
+        pictures = [f.to_ndarray(format="rgb24") for f in video.decode(video=0)]
+    assert len(pictures) >= 2 and all(p.std() > 10 for p in pictures)
     assert (tmp_path / "run.png").exists() and list((tmp_path / "sessions").iterdir())

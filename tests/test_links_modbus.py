@@ -6,7 +6,8 @@ from contextlib import ExitStack
 
 import pytest
 from links_helpers import STATE, node_config, order_collector, pty_pair, tick, wait_for
-from modbus_console import ModbusConsole, free_port
+from conftest import free_port
+from modbus_console import ModbusConsole
 
 from bridge_node.links.arbiter import ALARM_NUMBERS
 from bridge_node.links.hub import LINK_DOWN_ALARM, LinkHub

@@ -42,7 +42,7 @@ def test_console_steers_the_ship_in_real_time(tmp_path):
         sender.start()
         try:
             psi0 = data.ship.eta[5]
-            stats = run_realtime(model, data, hub, 30.0, 3.0, seen.append)
+            stats = run_realtime(model, data, hub, 30.0, 3.0, lambda events, _: seen.append(events))
         finally:
             stop.set()
             sender.join(2.0)

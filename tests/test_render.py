@@ -11,7 +11,7 @@ from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
 from bridge_node.render.renderer import SceneRenderer
 from bridge_node.render.settings import ChannelSettings, RenderSettings
-from bridge_node.render.world_view import WorldView
+from bridge_node.stream.world_view import WorldView
 from sim_core.ice.floes import FloeStatus
 from sim_core.world import snapshot, step
 

@@ -9,7 +9,7 @@ from conftest import exercise_config
 
 from bridge_node.node.order_refusals import REFUSED_ALARM, OrderRefusals
 from bridge_node.node.world_setup import build_world, start_world
-from bridge_node.render.world_view import WorldView
+from bridge_node.stream.world_view import WorldView
 from sim_core.fracture.tile_template import FractureSettings, build_tile
 from sim_core.frames.hull_contour import waterline_contour
 from sim_core.ice.floes import BreakCause, FloeStatus
@@ -112,3 +112,27 @@ def test_rejected_orders_are_published_counted_and_alarmed(small_world):
     cleared = refusals.note((), 20.0)
     assert [(a.number, a.active) for a in cleared] == [(REFUSED_ALARM["telegraph"], False)]
     assert refusals.counts == {"rudder clamped": 5, "telegraph refused": 4}
+
+
+def test_view_blends_between_the_two_latest_states(small_world):
+    model, cfg = small_world
+    data = start_world(model, cfg)
+    view = WorldView()
+    for _ in range(400):
+        view.apply(step(model, data, 0.1))
+    before_ship, before = view.ship, view.pose.copy()
+    events = step(model, data, 0.5, Controls(rudder=math.radians(35.0)))
+    view.apply(events)
+    after = view.pose.copy()
+    rows = events.floe_rows
+    view.blend(0.5)
+    assert view.ship.north == pytest.approx(0.5 * (before_ship.north + events.ship.north))
+    np.testing.assert_allclose(view.pose[rows, :3], 0.5 * (before[rows, :3] + after[rows, :3]))
+    assert np.abs(after[rows, :2] - before[rows, :2]).max() > 0.01  # something did move
+    view.blend(1.0)
+    assert view.ship == events.ship
+    np.testing.assert_array_equal(view.pose, after)
+    view.blend(0.25)
+    nxt = step(model, data, 0.1)
+    view.apply(nxt)  # a new step starts from the true state, not the blended one
+    np.testing.assert_array_equal(view.pose[nxt.floe_rows], nxt.floe_pose)

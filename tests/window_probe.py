@@ -14,7 +14,7 @@ from bridge_node.render.channels import ChannelSet, context_for
 from bridge_node.render.renderer import SceneRenderer
 from bridge_node.render.settings import ChannelSettings, RenderSettings
 from bridge_node.render.windows import WindowError
-from bridge_node.render.world_view import WorldView
+from bridge_node.stream.world_view import WorldView
 from sim_core.world import snapshot, step
 
 

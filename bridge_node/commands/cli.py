@@ -16,6 +16,7 @@ from bridge_node.commands import (
     experiment_transit,
     links_monitor,
     prefracture,
+    render_node,
     render_snapshot,
     run,
     trial,
@@ -32,6 +33,7 @@ COMMANDS: dict[str, tuple] = {
         "transit": (experiment_transit, "a straight transit: live and frozen fragments, step time (Fig. 18, 19)"),
     }),
     "render-snapshot": (render_snapshot, "render the projector channels of the exercise to PNGs"),
+    "render-node": (render_node, "render projector channels from a running node's state stream"),
     "links": ("commission the console links", {
         "monitor": (links_monitor, "show orders and link health live, publish an open-water ship"),
     }),

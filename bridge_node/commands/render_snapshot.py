@@ -14,7 +14,7 @@ from bridge_node.node.config import load_config
 from bridge_node.node.errors import UserError
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.open_channels import open_channels
-from bridge_node.render.world_view import WorldView
+from bridge_node.stream.world_view import WorldView
 from sim_core.world import snapshot, step
 
 DT = 1 / 30

@@ -1,9 +1,12 @@
 """``icebridge run``: the node. Links -> orders -> ship -> ice world -> outputs, in real time.
 
-Shows a live status line; at the end prints a summary and writes the ship's track and the
-tick times as plots. With ``--frames-every S`` it also renders the projector channels
-every S simulated seconds to PNG frames (offscreen; a frame costs the loop its render
-time). Ctrl-C (or SIGTERM) ends the run cleanly.
+After every step the physics process publishes its events on the state stream
+(``[stream]``); render processes (``icebridge render-node``, one per channel group, started
+here unless ``--render none``) draw the channels from it, so physics never waits for
+pictures. With a display they show the window channels; headless they write a video of
+the run and a panorama PNG at the end. Shows a live status line; at the end prints a
+summary (tick statistics, transport delays, the render processes' files) and writes the
+ship's track and the tick times as plots. Ctrl-C (or SIGTERM) ends the run cleanly.
 """
 from __future__ import annotations
 
@@ -13,6 +16,7 @@ import math
 import time
 from pathlib import Path
 
+import zmq
 from rich.console import Console
 from rich.live import Live
 
@@ -20,10 +24,10 @@ from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config, new_session_dir
 from bridge_node.node.errors import UserError
 from bridge_node.node.realtime_loop import run_realtime
+from bridge_node.node.render_processes import RenderProcesses
 from bridge_node.node.world_setup import build_world, start_world, warm_up
-from bridge_node.render.open_channels import open_channels
-from bridge_node.render.world_view import WorldView
 from bridge_node.reports.run import plot_run
+from bridge_node.stream.publisher import StatePublisher
 from sim_core.frames.units import KNOT
 from sim_core.world import WorldEvents, snapshot
 
@@ -35,24 +39,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="end with one JSON summary")
     p.add_argument("--out", default="out", help="folder for the plots and frames (default: out)")
     p.add_argument("--frames-every", type=float, default=None, metavar="S",
-                   help="also render the projector channels every S simulated seconds to OUT/frames/ (PNG)")
-
-
-class _Frames:
-    """Projector frames every ``every`` simulated seconds, from the published events."""
-
-    def __init__(self, cfg, model, every: float, folder: Path) -> None:
-        self.channels, self.every, self.folder = open_channels(cfg, model), every, folder
-        self.view = WorldView()
-        self.next, self.written = 0.0, 0
-
-    def __call__(self, events: WorldEvents) -> None:
-        self.view.apply(events)
-        if events.time >= self.next:
-            self.next += self.every
-            self.channels.render(self.view)
-            self.channels.save_png(self.folder, f"t{events.time:08.2f}_")
-            self.written += 1
+                   help="the render processes also write the PNG channels every S simulated seconds to OUT/frames/")
+    p.add_argument("--render", choices=("local", "none"), default=None,
+                   help="start local render processes (default: config render.processes)")
 
 
 def status_line(events: WorldEvents, alarms: int) -> str:
@@ -72,39 +61,68 @@ def _check(args: argparse.Namespace, rate: float) -> None:
         raise UserError(f"--frames-every {args.frames_every} s is outside the allowed range [0.1, 3600]")
 
 
+def _wait_for_renderers(renderers: RenderProcesses | None, publisher: StatePublisher, timeout: float) -> None:
+    """Before the first tick (never during the run): give the render processes time to
+    load the exercise and take their first snapshot."""
+    if renderers is None:
+        return
+    deadline = time.monotonic() + timeout
+    while publisher.snapshots < len(renderers.processes) and time.monotonic() < deadline:
+        renderers.check()
+        time.sleep(0.1)
+
+
 def run(args: argparse.Namespace) -> int:
     cfg = load_config(args.config)
     rate = args.rate if args.rate is not None else cfg.realtime.rate_hz
     _check(args, rate)
     console = Console(stderr=args.json)
+    out = Path(args.out)
+    renderers = None if args.render == "none" or (args.render is None and cfg.render.processes == "none") \
+        else RenderProcesses(cfg, args.config, out, args.frames_every)
+    if renderers:
+        renderers.start()  # they load the exercise while this process does
     with console.status("loading the exercise"):
         model = build_world(cfg, args.config)
         warm_up(model, cfg)
         data = start_world(model, cfg)
     record = None if args.no_record else new_session_dir(cfg, args.config)
-    frames = _Frames(cfg, model, args.frames_every, Path(args.out) / "frames") if args.frames_every else None
     last: list[WorldEvents] = [snapshot(model, data)]
     shown = [0.0]
-    with LinkHub(cfg.links, cfg.arbitration, record) as hub, \
+    try:
+        publisher = StatePublisher(cfg.stream)
+        publisher.open()
+    except zmq.ZMQError as exc:
+        raise UserError(f"stream: cannot bind {cfg.stream.publish} / {cfg.stream.snapshot}: {exc} "
+                        "(another node running? set [stream] endpoints)") from None
+    with publisher, LinkHub(cfg.links, cfg.arbitration, record) as hub, \
             Live(console=console, refresh_per_second=4, transient=True) as live:
-        def on_events(events: WorldEvents) -> None:
+        publisher.publish(last[0])
+        with console.status("starting the render processes"):
+            _wait_for_renderers(renderers, publisher, 120.0)
+
+        def on_events(events: WorldEvents, input_time: float | None) -> None:
             last[0] = events
-            if frames:
-                frames(events)
+            publisher.publish(events, input_time)
             if time.monotonic() - shown[0] > 0.25:
                 shown[0] = time.monotonic()
+                if renderers:
+                    renderers.check()
                 live.update(status_line(events, len(hub.active_alarms)))
         stats = run_realtime(model, data, hub, rate, args.duration, on_events)
         links = [link.health().as_dict() for link in hub.links]
         alarms = [a.text for a in hub.active_alarms.values()]
-    plot = plot_run(stats, Path(args.out) / "run.png")
+    rendered = renderers.stop() if renderers else []
     end = last[0].ship
     summary = stats.summary() | {
         "rate_hz": rate, "live_floes": last[0].floes_free, "frozen_floes": last[0].floes_frozen,
         "north_m": round(end.north, 1), "east_m": round(end.east, 1),
-        "speed_kn": round(end.speed_longitudinal / KNOT, 2), "alarms": alarms,
-        "links": links, "plot": str(plot), "frames_rendered": frames.written if frames else 0,
-        "record": str(record) if record else None,
+        "speed_kn": round(end.speed_longitudinal / KNOT, 2), "alarms": alarms, "links": links,
+        "stream": {"sent": publisher.sent, "dropped": publisher.dropped, "snapshots": publisher.snapshots},
+        "render_processes": rendered, "frames_rendered": sum(r.get("png_frames", 0) for r in rendered),
+        "video": [r["video"] for r in rendered if "video" in r],
+        "panorama": [r["panorama"] for r in rendered if "panorama" in r],
+        "plot": str(plot_run(stats, out / "run.png")), "record": str(record) if record else None,
     }
     if args.json:
         print(json.dumps(summary))

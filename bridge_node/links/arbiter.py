@@ -34,11 +34,13 @@ class _Channel:
 
 @dataclass
 class Decision:
-    """One tick's outcome: orders to give the ship, alarm changes, and the active sources."""
+    """One tick's outcome: orders to give the ship, alarm changes, the active sources, and
+    the time (monotonic s) the newest order passed on was read, if any."""
 
     controls: Controls
     alarms: list[Alarm]
     active: dict[str, str | None]
+    input_time: float | None = None
 
 
 class OrderArbiter:
@@ -99,7 +101,7 @@ class OrderArbiter:
     def decide(self, now: float) -> Decision:
         """The orders to pass on at ``now`` (monotonic s): each channel's winning source's
         latest order if not passed on yet, or the fail-safe; and the alarm changes."""
-        controls, alarms = Controls(), []
+        controls, alarms, newest = Controls(), [], None
         for name, ch in self.channels.items():
             source = self._fresh(ch, now)
             if source != ch.active:
@@ -114,10 +116,11 @@ class OrderArbiter:
             order = ch.latest[source]
             if order.time > ch.applied:
                 ch.applied = order.time
+                newest = order.time if newest is None else max(newest, order.time)
                 if order.kind == RUDDER:
                     controls.rudder = float(order.value)
                 elif order.kind == TELEGRAPH:
                     controls.telegraph = str(order.value)
                 else:
                     controls.lever = float(order.value)
-        return Decision(controls, alarms, {n: c.active for n, c in self.channels.items()})
+        return Decision(controls, alarms, {n: c.active for n, c in self.channels.items()}, newest)

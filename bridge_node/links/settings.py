@@ -2,12 +2,12 @@
 order arbitration (``[arbitration]``). Validated by pydantic: every error names the key."""
 from __future__ import annotations
 
-import ipaddress
 from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
 from bridge_node.links.nmea0183 import DEFAULT_RATES, DEFAULT_TALKERS, TYPICAL_LENGTH
+from bridge_node.node.network import loopback_unless
 from sim_core.params import Params
 
 Name = Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9_\-]+$")]
@@ -25,16 +25,6 @@ def _known_keys(v: dict, allowed: dict, what: str) -> dict:
     if unknown:
         raise ValueError(f"unknown {what}(s) {unknown}; allowed: {', '.join(sorted(allowed))}")
     return v
-
-
-def _loopback_unless(host: str, allowed: bool, key: str) -> str:
-    try:
-        ip = ipaddress.ip_address(host)
-    except ValueError:
-        raise ValueError(f"{key} must be an IP address, got {host!r}") from None
-    if not ip.is_loopback and not allowed:
-        raise ValueError(f"{key} = {host!r} is not a loopback address; set allow_network = true to use a network")
-    return host
 
 
 class NmeaLinkSettings(_LinkBase):
@@ -57,7 +47,7 @@ class NmeaLinkSettings(_LinkBase):
 
     @model_validator(mode="after")
     def _checks(self) -> "NmeaLinkSettings":
-        _loopback_unless(self.udp_host, self.allow_network, "udp_host")
+        loopback_unless(self.udp_host, self.allow_network, "udp_host")
         if self.port:
             need = sum(r * TYPICAL_LENGTH[k] for k, r in self.output_rates().items())
             budget = BAUD_BUDGET_SHARE * self.baudrate / 10.0
@@ -135,7 +125,7 @@ class ModbusLinkSettings(_LinkBase):
     @model_validator(mode="after")
     def _checks(self) -> "ModbusLinkSettings":
         if self.transport == "tcp":
-            _loopback_unless(self.host, self.allow_network, "host")
+            loopback_unless(self.host, self.allow_network, "host")
         elif not self.serial_port:
             raise ValueError("serial_port is required when transport = 'rtu'")
         return self

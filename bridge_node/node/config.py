@@ -14,6 +14,7 @@ from pydantic import Field, ValidationError, model_validator
 from bridge_node.links.settings import ArbitrationSettings, LinkSettings
 from bridge_node.node.errors import UserError
 from bridge_node.render.settings import RenderSettings
+from bridge_node.stream.settings import StreamSettings
 from sim_core.fracture.tile_template import FractureSettings
 from sim_core.ice.model import IceDynamicsSettings
 from sim_core.material import IceMaterial
@@ -71,6 +72,7 @@ class NodeConfig(Params):
     scene: SceneSettings = SceneSettings()
     realtime: RealtimeSettings = RealtimeSettings()
     render: RenderSettings = RenderSettings()
+    stream: StreamSettings = StreamSettings()
     links: list[LinkSettings] = Field(default_factory=list)
     arbitration: ArbitrationSettings = ArbitrationSettings()
     paths: PathSettings = PathSettings()

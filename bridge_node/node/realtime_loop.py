@@ -3,7 +3,9 @@
 Each tick polls the links and arbitrates (``LinkHub.poll``), steps the world by the tick's
 period with the decided orders, notes the orders the ship refused, publishes the new ship
 state on every link (``LinkHub.publish``) and hands the step's ``WorldEvents`` to the
-listener (status display, renderers, recorders). A tick that overruns its period is
+listener (the state stream, the status display) with the time the newest order that went
+into it was read. The delay from reading an order to publishing the state made with it
+is the input-to-outputs transport delay. A tick that overruns its period is
 counted; the loop never catches up in a burst: tick k never starts before k periods after
 the start, and if the loop falls more than a period behind, the schedule restarts from
 now, so simulated time runs slower than real time and the real-time factor reports it.
@@ -34,30 +36,43 @@ class LoopStats:
     step_ms: list = field(default_factory=list)
     track: list = field(default_factory=list)  # (sim time s, north m, east m, speed m/s, live floes)
     refusals: OrderRefusals = field(default_factory=OrderRefusals)
+    input_to_outputs_ms: list = field(default_factory=list)
 
     def summary(self) -> dict:
         ms = np.array(self.step_ms) if self.step_ms else np.zeros(1)
         return {"ticks": self.ticks, "overruns": self.overruns, "wall_s": round(self.wall_s, 2),
                 "sim_s": round(self.sim_s, 2), "real_time_factor": round(self.sim_s / max(self.wall_s, 1e-9), 3),
                 "tick_ms_median": round(float(np.median(ms)), 2), "tick_ms_p99": round(float(np.percentile(ms, 99)), 2),
-                "orders_rejected": dict(self.refusals.counts)}
+                "tick_ms_max": round(float(ms.max()), 2), "orders_rejected": dict(self.refusals.counts),
+                "input_to_outputs_ms": distribution(self.input_to_outputs_ms)}
 
 
-def _tick(model: WorldModel, data: WorldData, hub: LinkHub, period: float, stats: LoopStats) -> WorldEvents:
+def distribution(ms: list[float]) -> dict:
+    """Count, median and p99 of a list of delays (ms); None where there are none."""
+    a = np.array(ms)
+    return {"count": len(a), "median": round(float(np.median(a)), 2) if len(a) else None,
+            "p99": round(float(np.percentile(a, 99)), 2) if len(a) else None}
+
+
+def _tick(model: WorldModel, data: WorldData, hub: LinkHub, period: float,
+          stats: LoopStats) -> tuple[WorldEvents, float | None]:
     """One tick: poll and decide, step, note refusals, publish."""
     now = time.monotonic()
-    events = step(model, data, period, hub.poll(now).controls)
+    decision = hub.poll(now)
+    events = step(model, data, period, decision.controls)
     for alarm in stats.refusals.note(events.rejected, now):
         hub.raise_alarm(alarm, now)
     hub.publish(events.ship, now)
-    return events
+    if decision.input_time is not None:
+        stats.input_to_outputs_ms.append((time.monotonic() - decision.input_time) * 1e3)
+    return events, decision.input_time
 
 
 def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float, duration: float | None,
-                 on_events: Callable[[WorldEvents], None] | None = None,
+                 on_events: Callable[[WorldEvents, float | None], None] | None = None,
                  should_stop: Callable[[], bool] = lambda: False) -> LoopStats:
     """Run at ``rate_hz`` until ``duration`` wall seconds have passed (None: until
-    should_stop() or Ctrl-C); ``on_events`` gets every step's events."""
+    should_stop() or Ctrl-C); ``on_events`` gets every step's events and input time."""
     period = 1.0 / rate_hz
     stats = LoopStats()
     start = time.monotonic()
@@ -65,9 +80,9 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
     try:
         while (duration is None or time.monotonic() - start < duration) and not should_stop():
             t0 = time.monotonic()
-            events = _tick(model, data, hub, period, stats)
+            events, input_time = _tick(model, data, hub, period, stats)
             if on_events:
-                on_events(events)
+                on_events(events, input_time)
             stats.ticks += 1
             stats.sim_s = stats.ticks * period
             stats.step_ms.append((time.monotonic() - t0) * 1e3)

@@ -10,8 +10,9 @@ import numpy as np
 
 from bridge_node.render.renderer import SceneRenderer
 from bridge_node.render.settings import ChannelSettings
+from bridge_node.render.video import save_png
 from bridge_node.render.windows import ChannelWindow, window_context
-from bridge_node.render.world_view import WorldView
+from bridge_node.stream.world_view import WorldView
 
 
 def create_context() -> moderngl.Context:
@@ -89,14 +90,10 @@ class ChannelSet:
             w.present()
 
     def save_png(self, folder: Path, stem: str = "") -> list[Path]:
-        from PIL import Image
+        """Write the last frame of every PNG-output channel to ``folder/<stem><name>.png``."""
+        return [save_png(t.image(), folder / f"{stem}{t.channel.name}.png") for t in self.targets
+                if t.channel.output == "png"]
 
-        folder.mkdir(parents=True, exist_ok=True)
-        paths = []
-        for t in self.targets:
-            if t.channel.output != "png":
-                continue
-            path = folder / f"{stem}{t.channel.name}.png"
-            Image.fromarray(t.image()).save(path)
-            paths.append(path)
-        return paths
+    def images(self) -> list[np.ndarray]:
+        """The last frame of every channel, in channel order."""
+        return [t.image() for t in self.targets]

@@ -11,6 +11,19 @@ from bridge_node.render.windows import WindowError
 from sim_core.world import WorldModel
 
 
+def select_channels(cfg: NodeConfig, names: list[str] | None) -> NodeConfig:
+    """The config with only the named channels (all when names is None); an unknown name is
+    the user's error."""
+    if names is None:
+        return cfg
+    known = [c.name for c in cfg.render.channels]
+    unknown = [n for n in names if n not in known]
+    if unknown or not names:
+        raise UserError(f"--channels: unknown channel(s) {unknown}; configured: {', '.join(known)}")
+    chosen = [c for c in cfg.render.channels if c.name in names]
+    return cfg.model_copy(update={"render": cfg.render.model_copy(update={"channels": chosen})})
+
+
 def open_channels(cfg: NodeConfig, model: WorldModel) -> ChannelSet:
     """Context, scene renderer and channel set (with the channel windows); a missing display
     or EGL is a clear error."""

@@ -26,7 +26,7 @@ from bridge_node.render import shaders
 from bridge_node.render.camera import Camera, channel_camera, set_matrix, ship_matrix, visible_boxes
 from bridge_node.render.meshes import cell_rasters, cell_vertices, ship_vertices
 from bridge_node.render.settings import ChannelSettings, RenderSettings
-from bridge_node.render.world_view import WorldView
+from bridge_node.stream.world_view import WorldView
 from sim_core.csr import gather_ranges
 from sim_core.world import WorldModel
 

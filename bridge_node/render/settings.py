@@ -64,10 +64,21 @@ class RenderSettings(Params):
     sun_azimuth_deg: float = Field(150.0, ge=0.0, lt=360.0)
     freeboard_m: float = Field(9.0, ge=0.5, le=40.0, description="own ship's deck height above the waterline")
     lod_distance_m: float = Field(300.0, ge=0.0, le=1.0e6, description="floe side faces drawn within this distance")
+    processes: Literal["local", "none"] = Field(
+        "local", description="local: icebridge run starts a render process per channel group; none: render nothing")
+    groups: list[list[str]] | None = Field(
+        None, description="channels per render process (one display/GPU each); unset: all channels in one")
+    fps: float = Field(60.0, ge=1.0, le=240.0, description="frame rate of render processes with window channels")
+    headless_fps: float = Field(5.0, ge=1.0, le=60.0, description="frame rate of headless render processes")
 
     @model_validator(mode="after")
     def _unique_names(self) -> "RenderSettings":
         doubled = repeated([c.name for c in self.channels])
         if doubled:
             raise ValueError(f"channel names must be unique, repeated: {doubled}")
+        grouped = [n for g in self.groups or [] for n in g]
+        unknown = sorted(set(grouped) - {c.name for c in self.channels})
+        if unknown or repeated(grouped) or any(not g for g in self.groups or []):
+            raise ValueError(f"groups: each channel at most once, no empty group; unknown: {unknown}, "
+                             f"repeated: {repeated(grouped)}")
         return self

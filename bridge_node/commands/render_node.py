@@ -1,0 +1,157 @@
+"""``icebridge render-node``: render projector channels from a running node's state stream.
+
+Connects to the node's stream (the config's ``[stream]``; ``--connect HOST`` for a node on
+another PC), takes a snapshot, then renders its channels (``--channels``, default all) at
+``--fps`` from the stream, one physics step behind and blending the two latest states, so
+the picture moves smoothly whatever the physics rate. Window channels are shown on their
+monitors; ``--frames-every S`` writes the PNG channels every S simulated seconds;
+``--video FILE`` writes all its channels side by side at ``--video-fps``; ``--panorama
+FILE`` writes the last picture of all channels side by side. It ends after ``--duration``
+seconds, when the stream has been silent for ``--idle-exit`` seconds, or on Ctrl-C or
+SIGTERM, and writes a JSON summary (frames, resyncs, input-to-pixels delay) to
+``--summary``. ``--drop-every N`` and ``--frame-delay S`` inject faults for testing: drop
+every N-th step message, sleep S seconds in every frame.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+from urllib.parse import urlsplit, urlunsplit
+
+import numpy as np
+
+from bridge_node.node.config import load_config
+from bridge_node.node.errors import UserError
+from bridge_node.node.world_setup import build_world
+from bridge_node.render.channels import ChannelSet
+from bridge_node.render.open_channels import open_channels, select_channels
+from bridge_node.render.video import VideoWriter, save_png, side_by_side
+from bridge_node.stream.settings import StreamSettings
+from bridge_node.stream.subscriber import StateSubscriber, StreamError
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--connect", metavar="HOST", help="the node's host (default: the config's [stream] endpoints)")
+    p.add_argument("--channels", help="comma-separated channel names (default: all configured)")
+    p.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
+    p.add_argument("--duration", type=float, default=None, help="stop after this many seconds (default: Ctrl-C)")
+    p.add_argument("--idle-exit", type=float, default=None, metavar="S",
+                   help="stop when the stream has been silent this many seconds")
+    p.add_argument("--frames-every", type=float, default=None, metavar="S",
+                   help="write the PNG channels every S simulated seconds to OUT/frames/")
+    p.add_argument("--video", default=None, metavar="FILE", help="write the channels side by side as a video")
+    p.add_argument("--video-fps", type=float, default=5.0, help="video frames per second (default 5)")
+    p.add_argument("--panorama", default=None, metavar="FILE", help="write the last picture of all channels")
+    p.add_argument("--summary", default=None, metavar="FILE", help="write a JSON summary at the end")
+    p.add_argument("--out", default="out", help="folder for the frames (default: out)")
+    p.add_argument("--wait", type=float, default=30.0, help="seconds to wait for the node's first snapshot")
+    p.add_argument("--drop-every", type=int, default=None, metavar="N", help="fault injection: drop every N-th step")
+    p.add_argument("--frame-delay", type=float, default=0.0, metavar="S", help="fault injection: slow every frame")
+
+
+def endpoints(stream: StreamSettings, host: str | None) -> tuple[str, str]:
+    """The publish and snapshot endpoints, on ``host`` instead of the configured one if given."""
+    if host is None:
+        return stream.publish, stream.snapshot
+    out = []
+    for endpoint in (stream.publish, stream.snapshot):
+        parts = urlsplit(endpoint)
+        out.append(urlunsplit(parts._replace(netloc=f"{host}:{parts.port}")))
+    return out[0], out[1]
+
+
+class _Outputs:
+    """What a frame leaves behind: PNG frames, video frames, the last panorama."""
+
+    def __init__(self, args: argparse.Namespace, channels: ChannelSet) -> None:
+        self.args, self.channels = args, channels
+        self.video = VideoWriter(Path(args.video), args.video_fps) if args.video else None
+        self.next_png = 0.0
+        self.next_video = 0.0
+        self.pngs = 0
+
+    def frame(self, sim_time: float, now: float) -> None:
+        a = self.args
+        if a.frames_every and sim_time >= self.next_png:
+            self.next_png = sim_time + a.frames_every
+            self.pngs += len(self.channels.save_png(Path(a.out) / "frames", f"t{sim_time:08.2f}_"))
+        if self.video is not None and now >= self.next_video:
+            self.next_video = now + 1.0 / a.video_fps
+            self.video.write(side_by_side(self.channels.images()))
+
+    def close(self) -> dict:
+        out = {"png_frames": self.pngs}
+        if self.video is not None:
+            self.video.close()
+            out |= {"video": self.args.video, "video_frames": self.video.frames}
+        if self.args.panorama and self.channels.targets:
+            out["panorama"] = str(save_png(side_by_side(self.channels.images()), Path(self.args.panorama)))
+        return out
+
+
+def _render_loop(sub: StateSubscriber, channels: ChannelSet, outputs: _Outputs, args: argparse.Namespace) -> dict:
+    """Render until the duration, the idle limit or Ctrl-C; returns frame statistics."""
+    period, start = 1.0 / args.fps, time.monotonic()
+    next_frame = last_message = start
+    step_s, frames, delays, waiting = 0.0, 0, [], None
+    drop = (lambda seq: seq % args.drop_every == 0) if args.drop_every else None
+    try:
+        while args.duration is None or time.monotonic() - start < args.duration:
+            before = sub.view.time
+            applied = sub.poll(0, drop)
+            now = time.monotonic()
+            if applied:
+                step_s, last_message = max(sub.view.time - before, 1e-3) / len(applied), now
+                if sub.last_input is not None and sub.last_input[0] >= applied[0].seq:
+                    waiting = sub.last_input[1]
+            elif args.idle_exit is not None and now - last_message > args.idle_exit:
+                break
+            sub.view.blend((now - last_message) / step_s if step_s else 1.0)
+            channels.render(sub.view)
+            frames += 1
+            if waiting is not None:  # the first frame that shows a state made with a new order
+                delays.append(time.monotonic() - waiting)
+                waiting = None
+            outputs.frame(sub.view.time, now)
+            time.sleep(args.frame_delay)
+            next_frame += period
+            behind = time.monotonic() - next_frame
+            next_frame = time.monotonic() if behind > period else next_frame
+            time.sleep(max(0.0, -behind))
+    except KeyboardInterrupt:
+        pass
+    ms = np.array(delays) * 1e3
+    return {"frames": frames, "wall_s": round(time.monotonic() - start, 2),
+            "input_to_pixels_ms": {"count": len(ms), "median": round(float(np.median(ms)), 1) if len(ms) else None,
+                                   "p99": round(float(np.percentile(ms, 99)), 1) if len(ms) else None}}
+
+
+def run(args: argparse.Namespace) -> int:
+    cfg = load_config(args.config)
+    if not 1.0 <= args.fps <= 240.0:
+        raise UserError(f"--fps {args.fps} is outside the allowed range [1, 240]")
+    if args.drop_every is not None and args.drop_every < 2:
+        raise UserError(f"--drop-every {args.drop_every}: must be at least 2")
+    cfg = select_channels(cfg, args.channels.split(",") if args.channels else None)
+    publish, snapshot = endpoints(cfg.stream, args.connect)
+    model = build_world(cfg, args.config)
+    channels = open_channels(cfg, model)
+    summary: dict = {"channels": [c.name for c in cfg.render.channels], "publish": publish}
+    with StateSubscriber(publish, snapshot, timeout_s=args.wait) as sub:
+        try:
+            sub.sync()
+        except StreamError as exc:
+            raise UserError(str(exc)) from None
+        outputs = _Outputs(args, channels)
+        try:
+            summary |= _render_loop(sub, channels, outputs, args)
+        finally:
+            summary |= outputs.close() | {"resyncs": sub.resyncs, "lost": sub.lost, "last_seq": sub.view.seq,
+                                          "sim_time": round(sub.view.time, 3)}
+            if args.summary:
+                Path(args.summary).parent.mkdir(parents=True, exist_ok=True)
+                Path(args.summary).write_text(json.dumps(summary))
+    print(json.dumps(summary))
+    return 0

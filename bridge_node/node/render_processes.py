@@ -1,0 +1,106 @@
+"""The node's local render processes: one ``icebridge render-node`` per channel group,
+started beside the physics process, watched, and restarted if one dies.
+
+Physics never waits for them: they read the state stream, and a process that dies is
+reported (logged, counted in the run summary) and started again, rejoining from a
+snapshot. Headless (no window channels), each writes a video of its channels and, at the
+end, a panorama PNG. On a machine with few cores a headless render process gets one
+rasteriser thread (Mesa llvmpipe's ``LP_NUM_THREADS``), so the physics keeps its core.
+"""
+from __future__ import annotations
+
+import json
+import logging
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from bridge_node.node.config import NodeConfig
+
+log = logging.getLogger("icebridge.render")
+
+
+@dataclass
+class RenderProcess:
+    """One render process and what it was started with."""
+
+    group: list[str]
+    command: list[str]
+    summary: Path
+    stderr: Path
+    proc: subprocess.Popen | None = None
+    restarts: int = 0
+    log: list[str] = field(default_factory=list)
+
+
+class RenderProcesses:
+    """Start, watch and stop the render processes of a run."""
+
+    def __init__(self, cfg: NodeConfig, config_path: str | None, out: Path, frames_every: float | None) -> None:
+        channels = cfg.render.channels
+        groups = cfg.render.groups or [[c.name for c in channels]]
+        self.headless = not any(c.output == "window" for c in channels)
+        fps = cfg.render.headless_fps if self.headless else cfg.render.fps
+        self.env = os.environ.copy()
+        if self.headless and (os.cpu_count() or 1) <= 4:
+            self.env.setdefault("LP_NUM_THREADS", "1")
+        self.out = out
+        self.processes = []
+        for k, group in enumerate(groups):
+            tag = "" if len(groups) == 1 else f"_{k + 1}"
+            command = [sys.executable, "-m", "bridge_node", "render-node", "--channels", ",".join(group),
+                       "--fps", f"{fps:g}", "--out", str(out), "--idle-exit", "30",
+                       "--summary", str(out / f"render{tag}.json")]
+            if config_path:
+                command += ["--config", str(config_path)]
+            if frames_every:
+                command += ["--frames-every", f"{frames_every:g}"]
+            if self.headless:
+                command += ["--video", str(out / f"video{tag}.mp4"), "--panorama", str(out / f"panorama{tag}.png")]
+            self.processes.append(RenderProcess(group, command, out / f"render{tag}.json", out / f"render{tag}.log"))
+
+    def _launch(self, p: RenderProcess) -> None:
+        with open(p.stderr, "a", encoding="utf-8") as err:
+            p.proc = subprocess.Popen(p.command, env=self.env, stdout=subprocess.DEVNULL, stderr=err)
+
+    def start(self) -> None:
+        self.out.mkdir(parents=True, exist_ok=True)
+        for p in self.processes:
+            p.summary.unlink(missing_ok=True)
+            p.stderr.unlink(missing_ok=True)
+            self._launch(p)
+
+    def check(self) -> None:
+        """Restart any process that has died; never waits."""
+        for p in self.processes:
+            if p.proc is not None and p.proc.poll() is not None:
+                err = p.stderr.read_text(encoding="utf-8", errors="replace").strip().splitlines()[-2:]
+                p.log.append(f"exit {p.proc.returncode}: {' | '.join(err)}")
+                log.error("render process for %s died (exit %s); restarting", ",".join(p.group), p.proc.returncode)
+                p.restarts += 1
+                self._launch(p)
+
+    def stop(self, timeout: float = 60.0) -> list[dict]:
+        """Ask every process to finish (SIGTERM: it closes its video and writes its panorama
+        and summary), wait, and return their summaries."""
+        for p in self.processes:
+            if p.proc is not None and p.proc.poll() is None:
+                p.proc.send_signal(signal.SIGTERM)
+        deadline = time.monotonic() + timeout
+        out = []
+        for p in self.processes:
+            if p.proc is None:
+                continue
+            try:
+                p.proc.wait(max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                p.proc.kill()
+                p.proc.wait()
+            summary = json.loads(p.summary.read_text()) if p.summary.exists() else {}
+            out.append(summary | {"group": p.group, "restarts": p.restarts, "exit": p.proc.returncode,
+                                  "errors": p.log[-3:], "log": str(p.stderr)})
+        return out

@@ -1,0 +1,68 @@
+"""``WorldEvents`` as ZeroMQ multipart frames: a small JSON header for the scalars, then
+each array as its raw bytes (no pickle, no JSON for bulk data).
+
+Frames: ``[TOPIC, header, array, array, ...]``. The header names each array's dtype and
+shape in frame order. Floe poses travel as float32 (what the renderer uses; 0.1 mm at 1 km)
+and row numbers as int32. ``input_time`` is the monotonic time (s) of the newest console
+order that went into the step, or None.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+
+from sim_core.ship.model import OrderRejection
+from sim_core.ship.outputs import ShipOutputs
+from sim_core.world import PlacedTiles, WorldEvents
+
+TOPIC = b"w"
+HEARTBEAT = b"h"  # [HEARTBEAT, b"<seq>"]: the last sequence number published
+_PLACED = [f.name for f in dataclasses.fields(PlacedTiles)]
+_ARRAYS = ("thawed", "frozen", "broken_by_hull", "broken_by_contact", "floe_rows", "floe_pose", "floe_status",
+           "ice_load")
+_WIRE = {"floe_pose": np.float32, "floe_rows": np.int32, "broken_by_hull": np.int32,
+         "broken_by_contact": np.int32}
+
+
+class CodecError(ValueError):
+    """Frames that are not a state message of this version."""
+
+
+def encode(events: WorldEvents, input_time: float | None = None) -> list[bytes]:
+    """Frames of one state message."""
+    arrays = [np.ascontiguousarray(getattr(events.placed, name)) for name in _PLACED]
+    arrays += [np.ascontiguousarray(getattr(events, name), dtype=_WIRE.get(name)) for name in _ARRAYS]
+    header = {
+        "seq": events.seq, "time": events.time, "snapshot": events.snapshot, "input_time": input_time,
+        "ship": dataclasses.asdict(events.ship), "floes_free": events.floes_free,
+        "floes_frozen": events.floes_frozen, "rejected": [dataclasses.asdict(r) for r in events.rejected],
+        "arrays": [[a.dtype.str, list(a.shape)] for a in arrays],
+    }
+    return [TOPIC, json.dumps(header).encode(), *(a.tobytes() for a in arrays)]
+
+
+def decode(frames: list) -> tuple[WorldEvents, float | None]:
+    """The events and input time of a state message; raises CodecError for anything else."""
+    try:
+        if bytes(frames[0]) != TOPIC:
+            raise CodecError("not a state message")
+        header = json.loads(bytes(frames[1]))
+        specs = header["arrays"]
+        if len(specs) != len(_PLACED) + len(_ARRAYS) or len(frames) != 2 + len(specs):
+            raise CodecError("wrong number of frames")
+        arrays = [np.frombuffer(f, dtype=np.dtype(d)).reshape(shape) for f, (d, shape) in zip(frames[2:], specs)]
+        placed = PlacedTiles(*arrays[:len(_PLACED)])
+        named = dict(zip(_ARRAYS, arrays[len(_PLACED):]))
+        events = WorldEvents(
+            seq=int(header["seq"]), time=float(header["time"]), ship=ShipOutputs(**header["ship"]), placed=placed,
+            floes_free=int(header["floes_free"]), floes_frozen=int(header["floes_frozen"]),
+            rejected=tuple(OrderRejection(**r) for r in header["rejected"]), snapshot=bool(header["snapshot"]),
+            **{k: (v.astype(np.int64) if k in ("floe_rows", "broken_by_hull", "broken_by_contact") else v)
+               for k, v in named.items()})
+    except CodecError:
+        raise
+    except (ValueError, KeyError, TypeError, IndexError) as exc:
+        raise CodecError(f"malformed state message: {exc}") from None
+    return events, header["input_time"]

@@ -1,0 +1,161 @@
+"""The state stream on loopback: messages round-trip exactly, late joiners and lossy
+subscribers end up with the published state, render processes (separate processes) draw
+what a single process draws, and a slow renderer never holds the physics back."""
+import json
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from bridge_node.links.hub import LinkHub
+from bridge_node.node.config import load_config
+from bridge_node.node.realtime_loop import run_realtime
+from bridge_node.node.world_setup import build_world, start_world
+from bridge_node.render.channels import ChannelSet, create_context
+from bridge_node.render.renderer import SceneRenderer
+from bridge_node.stream.codec import decode, encode
+from bridge_node.stream.publisher import StatePublisher
+from bridge_node.stream.subscriber import StateSubscriber
+from bridge_node.stream.world_view import WorldView
+from conftest import REPO, exercise_toml
+from sim_core.world import Controls, snapshot, step
+
+CHANNELS = ('[[render.channels]]\nname = "bow"\nwidth = 160\nheight = 90\npitch_deg = -10.0\nblend_right_deg = 5.0\n'
+            '[[render.channels]]\nname = "aft"\nwidth = 160\nheight = 90\nyaw_deg = 180.0\npitch_deg = -25.0\n'
+            'eye = [-75.0, 0.0, 20.0]\n')
+
+
+@pytest.fixture(scope="module")
+def exercise(tmp_path_factory):
+    """Config file, config and world of a small exercise with two channels."""
+    folder = tmp_path_factory.mktemp("stream")
+    path = exercise_toml(folder, CHANNELS)
+    cfg = load_config(path)
+    return path, cfg, build_world(cfg, str(path))
+
+
+def views_equal(a: WorldView, b: WorldView) -> None:
+    assert a.seq == b.seq and a.rows == b.rows and a.placements == b.placements and a.frozen == b.frozen
+    np.testing.assert_array_equal(a.status, b.status)
+    np.testing.assert_array_equal(a.cause, b.cause)
+    np.testing.assert_allclose(a.pose, b.pose, atol=2e-4)  # float32 on the wire
+
+
+def test_messages_round_trip(exercise):
+    _, cfg, model = exercise
+    data = start_world(model, cfg)
+    for _ in range(300):
+        events = step(model, data, 0.1, Controls(rudder=1.0))  # clamped: a rejection travels too
+    back, input_time = decode(encode(events, 12.5))
+    assert input_time == 12.5 and back.seq == events.seq and back.ship == events.ship
+    assert back.rejected == events.rejected and len(back.placed.tile) == len(events.placed.tile)
+    np.testing.assert_array_equal(back.floe_rows, events.floe_rows)
+    np.testing.assert_allclose(back.floe_pose, events.floe_pose, atol=2e-4)
+    full = WorldView()
+    full.apply(decode(encode(snapshot(model, data)))[0])
+    direct = WorldView()
+    direct.apply(snapshot(model, data))
+    views_equal(full, direct)
+
+
+def test_late_joiner_and_lost_messages_end_with_the_published_state(exercise):
+    _, cfg, model = exercise
+    data = start_world(model, cfg)
+    with StatePublisher(cfg.stream) as publisher:
+        for _ in range(200):  # the channel is broken before anyone listens
+            publisher.publish(step(model, data, 0.1))
+        with StateSubscriber(cfg.stream.publish, cfg.stream.snapshot) as late, \
+                StateSubscriber(cfg.stream.publish, cfg.stream.snapshot) as lossy:
+            late.sync()
+            lossy.sync()
+            assert late.view.seq == 200 and late.view.take_changes().broken.size > 100
+            for _ in range(150):
+                publisher.publish(step(model, data, 0.1))
+                late.poll(2)
+                lossy.poll(2, drop=lambda seq: seq % 17 == 0 or 280 <= seq < 290)  # every 17th and a burst
+            deadline = time.monotonic() + 10.0
+            while min(late.view.seq, lossy.view.seq) < data.seq and time.monotonic() < deadline:
+                late.poll(50)
+                lossy.poll(50, drop=lambda seq: seq % 17 == 0)
+            truth = WorldView()
+            truth.apply(decode(encode(snapshot(model, data)))[0])
+            views_equal(late.view, truth)
+            views_equal(lossy.view, truth)
+            assert late.resyncs == 0 and lossy.resyncs >= 8 and lossy.lost >= 8
+    assert publisher.dropped == 0 and publisher.snapshots >= 10
+
+
+def render_node(config, out, *args) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "bridge_node", "render-node", "--config", str(config),
+                             "--fps", "10", "--out", str(out), *args], cwd=REPO,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def test_render_processes_draw_what_one_process_draws(exercise, tmp_path):
+    """Physics here; two render processes, each with one channel, join mid-exercise (one
+    losing every 5th message); once the physics stops they show exactly the final state."""
+    path, cfg, model = exercise
+    data = start_world(model, cfg)
+    with StatePublisher(cfg.stream) as publisher:
+        for _ in range(300):
+            publisher.publish(step(model, data, 0.1))
+        nodes = [render_node(path, tmp_path, "--channels", "bow", "--panorama", str(tmp_path / "bow.png"),
+                             "--summary", str(tmp_path / "bow.json")),
+                 render_node(path, tmp_path, "--channels", "aft", "--panorama", str(tmp_path / "aft.png"),
+                             "--summary", str(tmp_path / "aft.json"), "--drop-every", "5")]
+        deadline = time.monotonic() + 120.0
+        while publisher.snapshots < 2 and time.monotonic() < deadline:
+            assert all(n.poll() is None for n in nodes), [n.communicate() for n in nodes]
+            publisher.publish(step(model, data, 0.1))
+            time.sleep(0.1)
+        for _ in range(60):  # the exercise goes on while they draw
+            publisher.publish(step(model, data, 0.1))
+            time.sleep(0.05)
+        time.sleep(2.0)  # physics stopped: they settle on the last state
+        for n in nodes:
+            n.send_signal(signal.SIGTERM)
+            assert n.wait(60) == 0, n.stderr.read()
+    summaries = {name: json.loads((tmp_path / f"{name}.json").read_text()) for name in ("bow", "aft")}
+    assert all(s["last_seq"] == data.seq for s in summaries.values())
+    assert summaries["aft"]["resyncs"] > 0 and summaries["bow"]["resyncs"] == 0
+    view = WorldView()
+    view.apply(decode(encode(snapshot(model, data)))[0])
+    cs = ChannelSet(SceneRenderer(create_context(), model, cfg.render), cfg.render.channels)
+    cs.render(view)
+    for target in cs.targets:
+        remote = np.asarray(Image.open(tmp_path / f"{target.channel.name}.png")).astype(int)
+        local = target.image().astype(int)
+        assert np.abs(remote - local).max() <= 3, target.channel.name
+        assert local.std() > 10
+
+
+def test_a_slow_renderer_never_holds_the_physics_back(exercise, tmp_path):
+    path, cfg, model = exercise
+    data = start_world(model, cfg)
+    seqs = []
+    with StatePublisher(cfg.stream) as publisher, LinkHub([], cfg.arbitration) as hub:
+        publisher.publish(snapshot(model, data))
+        slow = render_node(path, tmp_path, "--channels", "bow", "--frame-delay", "0.5",
+                           "--summary", str(tmp_path / "slow.json"))
+        deadline = time.monotonic() + 120.0
+        while publisher.snapshots < 1 and time.monotonic() < deadline:
+            assert slow.poll() is None, slow.communicate()
+            time.sleep(0.1)
+
+        def on_events(events, input_time):
+            seqs.append(events.seq)
+            publisher.publish(events, input_time)
+        stats = run_realtime(model, data, hub, 30.0, 3.0, on_events)
+        time.sleep(1.5)
+        slow.send_signal(signal.SIGTERM)
+        assert slow.wait(60) == 0, slow.stderr.read()
+    summary = json.loads((tmp_path / "slow.json").read_text())
+    assert seqs == list(range(1, stats.ticks + 1))  # no step skipped
+    assert stats.sim_s == pytest.approx(stats.ticks / 30.0)
+    assert publisher.sent == stats.ticks + 1 and publisher.dropped == 0
+    assert summary["frames"] < stats.ticks / 4  # the renderer drew far fewer frames than steps...
+    assert summary["last_seq"] == data.seq  # ...yet it caught up with the last one
