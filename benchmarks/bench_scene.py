@@ -85,7 +85,8 @@ def main() -> None:
         rows.append((n, ms, brute))
     base = np.median(rows[0][1])
     for n, ms, brute in rows:
-        line = (f"scene update, {n * B / 1000:6.1f} km field ({n * n:>9d} tiles): median {np.median(ms) * 1e3:6.1f} us, "
+        line = (f"scene update, {n * B / 1000:6.1f} km field ({n * n:>9d} tiles): "
+                f"median {np.median(ms) * 1e3:6.1f} us, "
                 f"p99 {np.percentile(ms, 99) * 1e3:6.1f} us, {np.median(ms) / base:4.2f}x the 6.4 km cost")
         if len(brute):
             line += f"; brute-force scan {np.median(brute):8.2f} ms ({np.median(brute) / np.median(ms):7.0f}x slower)"

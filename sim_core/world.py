@@ -101,9 +101,9 @@ class WorldEvents:
     """What the world publishes after a step (or, with ``snapshot`` set, the whole state).
 
     Floe rows are only ever appended (``sim_core.ice.floes``), so consumers can keep them
-    by number. ``floe_rows`` are the rows whose pose or status may have changed: those of
-    the tiles live in this step, including tiles frozen in it (their final pose); in a
-    snapshot, every row. Poses are (x, y, heave, yaw, roll, pitch) in world m and rad.
+    by number. ``floe_rows`` are the rows whose pose or status may have changed: the free
+    floes of the live tiles, and every row of a tile placed, thawed or frozen in this step
+    (a frozen tile's final pose); in a snapshot, every row. Poses are (x, y, heave, yaw, roll, pitch) in world m and rad.
     """
 
     seq: int
@@ -204,6 +204,17 @@ def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate) -> tupl
             np.array(thawed, dtype=np.int64), np.array(frozen, dtype=np.int64))
 
 
+def _moved_rows(data: WorldData, placed: PlacedTiles, thawed: np.ndarray, frozen: np.ndarray) -> np.ndarray:
+    """Rows whose pose or status may have changed in a step: the free floes of the live
+    tiles (broken cells included), and every row of the tiles placed, thawed or frozen in
+    it. Intact cells of live tiles do not move, and frozen tiles cost nothing."""
+    st, tiles = data.ice.state, data.ice.tiles
+    live = data.live_rows
+    swapped = [*placed.placement.tolist(), *thawed.tolist(), *frozen.tolist()]
+    moving = live[st.status[live] == FloeStatus.FREE]
+    return np.union1d(moving, _tile_rows(tiles, swapped)) if swapped else moving
+
+
 def _ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple[float, int]:
     scene = model.scene
     tile = tile_under(bow, scene.nx, scene.ny, scene.side)
@@ -241,9 +252,7 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
     data.seq += 1
     if len(report.broken_by_hull):
         data.last_hull_break = data.time
-    rows = np.concatenate([data.live_rows, _tile_rows(data.ice.tiles, frozen.tolist())]) if len(frozen) \
-        else data.live_rows
-    return _publish(model, data, rows, placed=placed, thawed=thawed, frozen=frozen,
+    return _publish(model, data, _moved_rows(data, placed, thawed, frozen), placed=placed, thawed=thawed, frozen=frozen,
                     broken_by_hull=report.broken_by_hull, broken_by_contact=report.broken_by_contact,
                     ice_load=load, rejected=tuple(rejected))
 

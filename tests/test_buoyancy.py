@@ -55,7 +55,8 @@ def test_fully_under_and_fully_above():
 def simulate(model, cells, heave, roll, pitch, seconds, dt=1 / 60):
     n = len(cells)
     rows = np.arange(n)
-    state = [np.array(heave, float), np.array(roll, float), np.array(pitch, float), np.zeros(n), np.zeros(n), np.zeros(n)]
+    state = [np.array(heave, float), np.array(roll, float), np.array(pitch, float),
+             np.zeros(n), np.zeros(n), np.zeros(n)]
     mat = model.material
     history = []
     for _ in range(int(seconds / dt)):

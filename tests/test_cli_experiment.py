@@ -3,9 +3,8 @@ import json
 
 import av
 import numpy as np
-from PIL import Image
-
 from conftest import exercise_toml, run_cli
+from PIL import Image
 
 
 def test_transit_json_series_and_plots(tmp_path):

@@ -131,7 +131,8 @@ def transits(tmp_path_factory):
         series = []
         while data.ship.eta[0] < 520.0:
             ev = step(model, data, 0.1)
-            series.append((data.ship.eta[0], data.ice.state.count(FloeStatus.FREE), data.ice.state.count(FloeStatus.FROZEN),
+            st = data.ice.state
+            series.append((data.ship.eta[0], st.count(FloeStatus.FREE), st.count(FloeStatus.FROZEN),
                            len(ev.broken_by_hull)))
         out[reverse] = (model, data, np.array(series))
     return out

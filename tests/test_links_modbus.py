@@ -5,8 +5,8 @@ import time
 from contextlib import ExitStack
 
 import pytest
-from links_helpers import STATE, node_config, order_collector, pty_pair, tick, wait_for
 from conftest import free_port
+from links_helpers import STATE, node_config, order_collector, pty_pair, tick, wait_for
 from modbus_console import ModbusConsole
 
 from bridge_node.links.arbiter import ALARM_NUMBERS

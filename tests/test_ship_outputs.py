@@ -31,7 +31,8 @@ def test_outputs_of_a_turning_ship():
     assert out.speed_transverse != 0.0
     # drifting in a turn: course over ground differs from heading by the drift angle
     drift = math.atan2(out.speed_transverse, out.speed_longitudinal)
-    assert (out.course_over_ground - out.heading - drift + math.pi) % (2 * math.pi) - math.pi == pytest.approx(0, abs=1e-9)
+    off = (out.course_over_ground - out.heading - drift + math.pi) % (2 * math.pi) - math.pi
+    assert off == pytest.approx(0, abs=1e-9)
     assert out.speed_over_ground == pytest.approx(math.hypot(out.speed_longitudinal, out.speed_transverse))
     assert out.shaft_rps > 0 and out.ice_resistance == 0.0
 

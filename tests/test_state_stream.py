@@ -9,11 +9,13 @@ import time
 
 import numpy as np
 import pytest
+from conftest import REPO, exercise_toml
 from PIL import Image
 
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config
 from bridge_node.node.realtime_loop import run_realtime
+from bridge_node.node.render_processes import RenderProcesses
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, create_context
 from bridge_node.render.renderer import SceneRenderer
@@ -21,7 +23,6 @@ from bridge_node.stream.codec import decode, encode
 from bridge_node.stream.publisher import StatePublisher
 from bridge_node.stream.subscriber import StateSubscriber
 from bridge_node.stream.world_view import WorldView
-from conftest import REPO, exercise_toml
 from sim_core.world import Controls, snapshot, step
 
 CHANNELS = ('[[render.channels]]\nname = "bow"\nwidth = 160\nheight = 90\npitch_deg = -10.0\nblend_right_deg = 5.0\n'
@@ -159,3 +160,27 @@ def test_a_slow_renderer_never_holds_the_physics_back(exercise, tmp_path):
     assert publisher.sent == stats.ticks + 1 and publisher.dropped == 0
     assert summary["frames"] < stats.ticks / 4  # the renderer drew far fewer frames than steps...
     assert summary["last_seq"] == data.seq  # ...yet it caught up with the last one
+
+
+def test_a_render_process_that_dies_is_restarted(exercise, tmp_path):
+    path, cfg, model = exercise
+    data = start_world(model, cfg)
+    with StatePublisher(cfg.stream) as publisher:
+        publisher.publish(snapshot(model, data))
+        renderers = RenderProcesses(cfg, str(path), tmp_path, None)
+        renderers.start()
+        first = renderers.processes[0].proc
+        first.kill()
+        first.wait(30)
+        renderers.check()  # notices the death and starts it again; never waits for it
+        second = renderers.processes[0].proc
+        assert second is not first and second.poll() is None
+        deadline = time.monotonic() + 120.0
+        while publisher.snapshots < 1 and time.monotonic() < deadline:  # the new one joins
+            renderers.check()
+            publisher.publish(step(model, data, 0.1))
+            time.sleep(0.1)
+        summary, = renderers.stop()
+    assert summary["restarts"] == 1 and summary["exit"] == 0 and summary["last_seq"] == data.seq
+    assert summary["errors"][0].startswith("exit -9")
+    assert (tmp_path / "video.mp4").exists() and (tmp_path / "panorama.png").exists()

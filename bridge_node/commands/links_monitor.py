@@ -111,7 +111,8 @@ def run(args: argparse.Namespace) -> int:
 def _summary(hub: LinkHub, data: ShipData, start: float, refusals: OrderRefusals, record: Path | None) -> dict:
     return {
         "duration_s": round(time.monotonic() - start, 2),
-        "orders": {key: {"last": o.value, "count": hub.order_counts[key]} for key, o in sorted(hub.last_orders.items())},
+        "orders": {key: {"last": o.value, "count": hub.order_counts[key]}
+                   for key, o in sorted(hub.last_orders.items())},
         "orders_per_source": dict(hub.arbiter.counts),
         "errors": dict(hub.errors()),
         "alarms": [{"time_s": round(t - start, 2), "number": a.number, "text": a.text, "active": a.active}

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
+import threading
 import time
 from pathlib import Path
 from urllib.parse import urlsplit, urlunsplit
@@ -97,8 +99,10 @@ def _render_loop(sub: StateSubscriber, channels: ChannelSet, outputs: _Outputs, 
     next_frame = last_message = start
     step_s, frames, delays, waiting = 0.0, 0, [], None
     drop = (lambda seq: seq % args.drop_every == 0) if args.drop_every else None
+    stop = threading.Event()  # SIGTERM ends the loop after the frame in hand (at least one)
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
     try:
-        while args.duration is None or time.monotonic() - start < args.duration:
+        while (args.duration is None or time.monotonic() - start < args.duration) and not (stop.is_set() and frames):
             before = sub.view.time
             applied = sub.poll(0, drop)
             now = time.monotonic()

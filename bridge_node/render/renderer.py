@@ -87,7 +87,8 @@ class SceneRenderer:
         self.env_buf = ctx.buffer(reserve=3 * 5 * 4)
         self.env_vao = ctx.vertex_array(self.env, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
         if scene.nx * scene.ny > MAX_TILES:
-            raise ValueError(f"the renderer draws fields of up to {MAX_TILES} tiles; this one has {scene.nx * scene.ny}")
+            raise ValueError(f"the renderer draws fields of up to {MAX_TILES} tiles; "
+                             f"this one has {scene.nx * scene.ny}")
         info = np.tile(np.array([-1, 0], "i4"), scene.nx * scene.ny)
         self.tile_info = ctx.texture((scene.nx, scene.ny), 2, info.tobytes(), dtype="i4")
         self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST

@@ -130,7 +130,8 @@ def vertical_substeps(model: IceModel, dt: float) -> int:
     return max(1, math.ceil(model.omega_max * dt / 0.2))
 
 
-def placed_outlines(model: IceModel, gcell: np.ndarray, at: np.ndarray, angle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def placed_outlines(model: IceModel, gcell: np.ndarray, at: np.ndarray,
+                    angle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Plan outlines of cells ``gcell`` (n,) with their centroids at (n, 2) m and turned by
     (n,) rad CCW: all points (P, 2), m, and each outline's point count (n,)."""
     start, stop = model.outline_start[gcell], model.outline_start[gcell + 1]
