@@ -3,7 +3,7 @@
 1. Stream bandwidth and delay (publish -> subscriber applied, median and p99) at 60 Hz with
    3000 and 10 000 live floes, with one and three subscriber processes.
 2. The physics loop at 30 Hz on the default exercise (bow in the ice, a helm console on
-   virtual CAN changing its order every 0.5 s) for --seconds, without render processes
+   virtual CAN changing its order every 0.5 s, engine full ahead) for --seconds, without render processes
    (the baseline, same run) and with three: tick median, p99 and max, overruns, and the
    transport delays input -> outputs and input -> pixels.
 Run: .venv/bin/python benchmarks/bench_pipeline.py [--seconds S]
@@ -106,6 +106,7 @@ def physics_run(seconds: float, renderers: int, folder: Path) -> dict:
         k = 0
         while not stop.is_set():
             console.send(console_frame("HelmOrder", RudderOrder=10.0 * (k % 2), Status=1, Counter=k % 16))
+            console.send(console_frame("EngineOrder", Engine=0, Lever=0, TelegraphPosition=4, Mode=1))
             k += 1
             stop.wait(0.5)
     with StatePublisher(cfg.stream) as pub, LinkHub(cfg.links, cfg.arbitration) as hub:
