@@ -103,7 +103,7 @@ def main() -> None:
         modbus = ModbusConsole("tcp")
         modbus.start()
         cfg = node_config([
-            {"type": "can", "name": "can", "channel": "bench"},
+            {"type": "can", "name": "can", "channel": "bench", "allowed_sources": [0x42]},
             {"type": "nmea0183", "name": "nmea", "port": node_end, "baudrate": 115200, "udp_port": 10119,
              "rates": {"RSA": 20.0}},
             {"type": "modbus", "name": "modbus", "port": modbus.port, "poll_hz": 50,

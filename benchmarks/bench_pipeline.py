@@ -81,7 +81,8 @@ def can_link():
     from pydantic import TypeAdapter
 
     from bridge_node.links.settings import LinkSettings
-    return TypeAdapter(LinkSettings).validate_python({"type": "can", "name": "helm", "channel": "bench-pipeline"})
+    return TypeAdapter(LinkSettings).validate_python({"type": "can", "name": "helm", "channel": "bench-pipeline",
+                                                      "allowed_sources": [0x42]})
 
 
 def physics_run(seconds: float, renderers: int, folder: Path) -> dict:

@@ -103,7 +103,8 @@ class WorldEvents:
     Floe rows are only ever appended (``sim_core.ice.floes``), so consumers can keep them
     by number. ``floe_rows`` are the rows whose pose or status may have changed: the free
     floes of the live tiles, and every row of a tile placed, thawed or frozen in this step
-    (a frozen tile's final pose); in a snapshot, every row. Poses are (x, y, heave, yaw, roll, pitch) in world m and rad.
+    (a frozen tile's final pose); in a snapshot, every row. Poses are (x, y, heave, yaw,
+    roll, pitch) in world m and rad.
     """
 
     seq: int
@@ -252,7 +253,8 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
     data.seq += 1
     if len(report.broken_by_hull):
         data.last_hull_break = data.time
-    return _publish(model, data, _moved_rows(data, placed, thawed, frozen), placed=placed, thawed=thawed, frozen=frozen,
+    rows = _moved_rows(data, placed, thawed, frozen)
+    return _publish(model, data, rows, placed=placed, thawed=thawed, frozen=frozen,
                     broken_by_hull=report.broken_by_hull, broken_by_contact=report.broken_by_contact,
                     ice_load=load, rejected=tuple(rejected))
 

@@ -21,7 +21,7 @@ from bridge_node.links.nmea_link import NmeaLink
 from bridge_node.links.registry import make_link, open_link
 from bridge_node.links.session_record import SessionRecord
 
-LINKS = [{"type": "can", "name": "helm_can", "channel": "icebridge-base"},
+LINKS = [{"type": "can", "name": "helm_can", "channel": "icebridge-base", "allowed_sources": "any"},
          {"type": "nmea0183", "name": "nmea", "udp_port": None},
          {"type": "modbus", "name": "io", "registers": [{"order": "rudder", "address": 0}]}]
 

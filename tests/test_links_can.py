@@ -15,7 +15,8 @@ from bridge_node.links.n2k_frames import identifier
 @pytest.fixture
 def can_hub(request):
     channel = f"icebridge-test-{request.node.name}"
-    cfg = node_config([{"type": "can", "name": "helm_can", "channel": channel}], rudder=["helm_can"],
+    cfg = node_config([{"type": "can", "name": "helm_can", "channel": channel, "allowed_sources": [0x42, 0x10]}],
+                      rudder=["helm_can"],
                       engine=["helm_can"])
     with LinkHub(cfg.links, cfg.arbitration) as hub:
         peer = can.Bus(interface="virtual", channel=channel)
@@ -101,7 +102,8 @@ def test_output_rates_are_kept(can_hub):
 def test_console_over_slcan_on_a_pty(tmp_path):
     """The node on slcan, as with a USB-CAN adapter; the console on the other end of the pty."""
     with pty_pair(tmp_path) as (node_end, console_end):
-        cfg = node_config([{"type": "can", "name": "slcan", "interface": "slcan", "channel": node_end}],
+        cfg = node_config([{"type": "can", "name": "slcan", "interface": "slcan", "channel": node_end,
+                            "allowed_sources": [0x42]}],
                           rudder=["slcan"], engine=["slcan"])
         hub = LinkHub(cfg.links, cfg.arbitration)
         hub.open()

@@ -109,7 +109,7 @@ def test_link_config_errors_name_the_key(tmp_path):
     r = run_cli("links", "monitor", "--config", str(cfg), "--duration", "1")
     assert r.returncode == 2 and "links.0.can.bitrate = 5" in r.stderr
     cfg.write_text('[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n'
-                   '[[links]]\nname = "a"\ntype = "can"\n[arbitration]\nrudder = ["b"]\n')
+                   '[[links]]\nname = "a"\ntype = "can"\nallowed_sources = "any"\n[arbitration]\nrudder = ["b"]\n')
     r = run_cli("links", "monitor", "--config", str(cfg), "--duration", "1")
     assert r.returncode == 2 and "arbitration.rudder: unknown link(s) ['b']" in r.stderr
     assert "Traceback" not in r.stderr

@@ -24,7 +24,7 @@ def test_console_steers_the_ship_in_real_time(tmp_path):
         "links": [], "paths": base.paths.model_copy(update={"cache_dir": str(tmp_path / "tiles")}),
     })
     cfg = type(cfg).model_validate(cfg.model_dump() | {
-        "links": [{"type": "can", "name": "helm", "channel": "icebridge-rt"}],
+        "links": [{"type": "can", "name": "helm", "channel": "icebridge-rt", "allowed_sources": [0x42]}],
         "arbitration": {"rudder": ["helm"], "engine": ["helm"]},
         "exercise": cfg.exercise.model_dump() | {"start_north": -60.0}})  # bow already in the ice
     model = build_world(cfg, None)

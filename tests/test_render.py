@@ -78,8 +78,8 @@ def test_open_water_view_shows_sky_and_water(ctx, exercise):
 
 def test_ice_field_ahead_and_the_other_side(ctx, exercise):
     model, data = exercise
-    ahead, behind = render(ctx, model, data, [channel("ahead", pitch_deg=-20.0, eye=(80.0, 0.0, 20.0)),
-                                              channel("behind", yaw_deg=180.0, pitch_deg=-20.0, eye=(80.0, 0.0, 20.0))])
+    ahead, behind = render(ctx, model, data, [channel("ahead", pitch_deg=-20.0, eye=[80.0, 0.0, 20.0]),
+                                              channel("behind", yaw_deg=180.0, pitch_deg=-20.0, eye=[80.0, 0.0, 20.0])])
     rows = slice(H // 2, None)  # below the horizon, near the ship
     assert is_ice(ahead[rows]).mean() > 0.6  # level ice ahead of the bow
     # the ship's own channel astern: broken floes and open water, darker than level ice
@@ -90,7 +90,7 @@ def test_ice_field_ahead_and_the_other_side(ctx, exercise):
 @pytest.mark.parametrize("pitch", [-10.0, 0.0, 12.0])
 def test_horizon_sits_where_pitch_and_fov_put_it(ctx, exercise, pitch):
     model, data = exercise
-    c = channel(yaw_deg=180.0, pitch_deg=pitch, eye=(-80.0, 0.0, 20.0))
+    c = channel(yaw_deg=180.0, pitch_deg=pitch, eye=[-80.0, 0.0, 20.0])
     img, = render(ctx, model, data, [c], visibility=100_000.0)
     column = img[:, W // 2].astype(float).mean(axis=1)
     first_dark = int(np.argmax(column < 0.5 * (column[0] + column[-1])))
@@ -101,8 +101,8 @@ def test_horizon_sits_where_pitch_and_fov_put_it(ctx, exercise, pitch):
 
 
 def neighbours():
-    return [channel("left", yaw_deg=-27.5, blend_right_deg=5.0, pitch_deg=-15.0, eye=(-70.0, 0.0, 20.0)),
-            channel("right", yaw_deg=27.5, blend_left_deg=5.0, pitch_deg=-15.0, eye=(-70.0, 0.0, 20.0))]
+    return [channel("left", yaw_deg=-27.5, blend_right_deg=5.0, pitch_deg=-15.0, eye=[-70.0, 0.0, 20.0]),
+            channel("right", yaw_deg=27.5, blend_left_deg=5.0, pitch_deg=-15.0, eye=[-70.0, 0.0, 20.0])]
 
 
 def column_at(c: ChannelSettings, azimuth_deg: float) -> int:
@@ -141,7 +141,7 @@ def test_blend_ramps_sum_to_one_across_the_overlap(ctx, exercise):
 def test_floe_heave_roll_and_pitch_change_its_pixels(ctx, exercise):
     model, data = exercise
     st = data.ice.state
-    c = channel(yaw_deg=180.0, pitch_deg=-35.0, eye=(-75.0, 0.0, 20.0))
+    c = channel(yaw_deg=180.0, pitch_deg=-35.0, eye=[-75.0, 0.0, 20.0])
     # the free floe nearest the spot this channel looks at
     psi = data.ship.eta[5]
     stern = np.array([data.ship.eta[1] - 75 * math.sin(psi), data.ship.eta[0] - 75 * math.cos(psi)])

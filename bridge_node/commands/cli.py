@@ -22,6 +22,7 @@ from bridge_node.commands import (
     trial,
 )
 from bridge_node.node.errors import UserError
+from bridge_node.node.paths import writable_dir, writable_file
 
 # name -> (module, help) or (help, {sub-name: (module, help)})
 COMMANDS: dict[str, tuple] = {
@@ -61,6 +62,21 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# options naming where a command writes: checked before any work starts
+OUTPUT_DIRS = {"out": "--out", "record": "--record", "cache_dir": "--cache-dir"}
+OUTPUT_FILES = {"export": "--export", "video": "--video", "panorama": "--panorama", "summary": "--summary"}
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """UserError unless every output folder and file the arguments name can be written."""
+    for name, option in OUTPUT_DIRS.items():
+        if getattr(args, name, None) is not None:
+            writable_dir(getattr(args, name), option)
+    for name, option in OUTPUT_FILES.items():
+        if getattr(args, name, None) is not None:
+            writable_file(getattr(args, name), option)
+
+
 def _interrupt(*_) -> None:
     raise KeyboardInterrupt
 
@@ -71,6 +87,7 @@ def main(argv: list[str] | None = None) -> int:
     # flush their session record on the way out
     signal.signal(signal.SIGTERM, _interrupt)
     try:
+        check_outputs(args)
         return int(args.handler(args) or 0)
     except UserError as exc:
         print(f"icebridge {args.command}: error: {exc}", file=sys.stderr)

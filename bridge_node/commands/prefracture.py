@@ -19,6 +19,7 @@ from bridge_node.library.gltf import export_glb
 from bridge_node.library.templates import library_template
 from bridge_node.node.config import load_config, resolve_path
 from bridge_node.node.errors import UserError
+from bridge_node.node.paths import writable_dir
 from bridge_node.node.world_setup import field_tile_classes
 from bridge_node.reports.prefracture import plot_templates
 from sim_core.fracture.fragment_count import check_thickness
@@ -54,7 +55,8 @@ def run(args: argparse.Namespace) -> int:
             export_glb(tile, args.export)
             console.print(f"wrote {args.export} ({tile.n_cells} cells)")
     else:
-        cache = Path(args.cache_dir) if args.cache_dir else resolve_path(args.config, cfg.paths.cache_dir)
+        cache = Path(args.cache_dir) if args.cache_dir else writable_dir(
+            resolve_path(args.config, cfg.paths.cache_dir), "paths.cache_dir")
         jobs = [(h, v) for h in field_tile_classes(cfg, args.config)[1].tolist() for v in range(settings.variants)]
         rows = []
         with Progress(console=console, transient=True) as progress:

@@ -52,6 +52,13 @@ def status_line(events: WorldEvents, alarms: int) -> str:
             f"{events.floes_free} | frozen {events.floes_frozen} | alarms {alarms}")
 
 
+def _end_state(events: WorldEvents) -> dict:
+    """The summary's picture of the last published state."""
+    s = events.ship
+    return {"live_floes": events.floes_free, "frozen_floes": events.floes_frozen, "north_m": round(s.north, 1),
+            "east_m": round(s.east, 1), "speed_kn": round(s.speed_longitudinal / KNOT, 2)}
+
+
 def _check(args: argparse.Namespace, rate: float) -> None:
     if args.duration is not None and not 0.0 < args.duration <= 7 * 86400.0:
         raise UserError(f"--duration {args.duration} s is outside the allowed range (0, 604800]")
@@ -113,17 +120,18 @@ def run(args: argparse.Namespace) -> int:
         links = [link.health().as_dict() for link in hub.links]
         alarms = [a.text for a in hub.active_alarms.values()]
     rendered = renderers.stop() if renderers else []
-    end = last[0].ship
-    summary = stats.summary() | {
-        "rate_hz": rate, "live_floes": last[0].floes_free, "frozen_floes": last[0].floes_frozen,
-        "north_m": round(end.north, 1), "east_m": round(end.east, 1),
-        "speed_kn": round(end.speed_longitudinal / KNOT, 2), "alarms": alarms, "links": links,
+    summary = stats.summary() | _end_state(last[0]) | {
+        "rate_hz": rate, "alarms": alarms, "links": links,
         "stream": {"sent": publisher.sent, "dropped": publisher.dropped, "snapshots": publisher.snapshots},
         "render_processes": rendered, "frames_rendered": sum(r.get("png_frames", 0) for r in rendered),
         "video": [r["video"] for r in rendered if "video" in r],
         "panorama": [r["panorama"] for r in rendered if "panorama" in r],
-        "plot": str(plot_run(stats, out / "run.png")), "record": str(record) if record else None,
+        "record": str(record) if record else None,
     }
+    try:  # a finished run's summary is never lost to a plotting error
+        summary["plot"] = str(plot_run(stats, out / "run.png"))
+    except (OSError, ValueError) as exc:
+        summary["plot_error"] = str(exc)
     if args.json:
         print(json.dumps(summary))
         return 0

@@ -87,7 +87,7 @@ class CanLink(Link):
         self.console = load_dbc(dbc_path(settings.dbc))
         self.n2k = load_dbc(N2K_DBC)
         self._schedule = RateSchedule(settings.output_rates())
-        self._allowed = frozenset(settings.allowed_sources)
+        self._allowed = None if settings.allowed_sources == "any" else frozenset(settings.allowed_sources)
         self._sid = 0
         self._fast_seq: dict[int, int] = {}
 
@@ -114,8 +114,14 @@ class CanLink(Link):
         if not msg.is_extended_id:
             self._count_error("unknown_frame")
             return []
+        if msg.is_fd or len(msg.data) > 8:  # consoles and NMEA 2000 speak classic CAN
+            self._count_error("fd_frame")
+            return []
         _, pgn, source = parse_identifier(msg.arbitration_id)
-        if self._allowed and source not in self._allowed:
+        if source == self.settings.source_address:  # our own address: another node claims it, or an echo
+            self._count_error("own_address")
+            return []
+        if self._allowed is not None and source not in self._allowed:
             self._count_error("source_not_allowed")
             return []
         try:

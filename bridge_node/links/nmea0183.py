@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import datetime as dt
 import math
+import re
 
 import pynmea2
 
@@ -25,12 +26,23 @@ DEFAULT_RATES = {"RMC": 1.0, "GGA": 1.0, "VTG": 1.0, "ZDA": 1.0, "HDT": 10.0, "R
 TYPICAL_LENGTH = {"RMC": 72, "GGA": 74, "VTG": 40, "ZDA": 36, "HDT": 18, "ROT": 18, "RSA": 22, "RPM": 28,
                   "VBW": 44, "XDR": 34}  # characters with CR LF, to budget a line's baud rate
 
+_DECIMAL = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)")
+
+
+def nmea_decimal(text: str) -> float:
+    """A numeric field in NMEA 0183's decimal format (optional sign, digits, optional
+    fraction); Python's other float syntax (``1_0``, ``1e-400``, ``nan``) is not a number here.
+    pynmea2 hands a field that fails this back as its text, which the order parser rejects."""
+    if not _DECIMAL.fullmatch(text):
+        raise ValueError(f"not an NMEA decimal: {text!r}")
+    return float(text)
+
 
 class ROR(pynmea2.TalkerSentence):
     """Rudder order: starboard (or single) and port order, deg (- to port), statuses, source."""
 
-    fields = (("Starboard order", "stbd", float), ("Starboard status", "stbd_status"),
-              ("Port order", "port", float), ("Port status", "port_status"), ("Command source", "source"))
+    fields = (("Starboard order", "stbd", nmea_decimal), ("Starboard status", "stbd_status"),
+              ("Port order", "port", nmea_decimal), ("Port status", "port_status"), ("Command source", "source"))
 
 
 class ETL(pynmea2.TalkerSentence):
@@ -45,7 +57,7 @@ class PRC(pynmea2.TalkerSentence):
     """Propulsion remote control: lever %, status, RPM demand, mode, pitch demand, mode,
     location, engine number."""
 
-    fields = (("Lever", "lever", float), ("Lever status", "lever_status"), ("RPM demand", "rpm"),
+    fields = (("Lever", "lever", nmea_decimal), ("Lever status", "lever_status"), ("RPM demand", "rpm"),
               ("RPM mode", "rpm_mode"), ("Pitch demand", "pitch"), ("Pitch mode", "pitch_mode"),
               ("Location", "location"), ("Engine", "engine"))
 

@@ -4,6 +4,7 @@ for chart plotters such as OpenCPN. Without a serial port the link sends on UDP 
 from __future__ import annotations
 
 import datetime as dt
+import ipaddress
 import socket
 import time
 from collections.abc import Iterator
@@ -49,6 +50,8 @@ class NmeaLink(Link):
     def open(self) -> None:
         if self.settings.udp_port and self._udp is None:
             self._udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+            if ipaddress.ip_address(self.settings.udp_host).is_loopback:  # never open a port off the host
+                self._udp.bind(("127.0.0.1", 0))
         super().open()
 
     def close(self) -> None:

@@ -6,6 +6,11 @@ One folder per session: ``can.log`` in python-can's candump log format (written 
 (``<unix time> <link> <rx|tx> <sentence>``), and ``modbus.csv`` with one row per register
 read or write. ``flush()`` is called every tick and writes to the OS at most a second after
 a line was added, so a killed node loses at most the last second.
+
+Every complete line ends with a newline, and lines are only appended, so after a power cut
+or a full disk only the last line can be torn, and it has no newline: readers
+(``record_reader``) skip it and count it. Before appending to an existing file the record
+cuts such a torn tail off, so it never glues onto the next line.
 """
 from __future__ import annotations
 
@@ -20,12 +25,27 @@ from bridge_node.links.base import Listener, Traffic
 FLUSH_PERIOD = 0.5  # s
 
 
+def cut_torn_tail(path: Path) -> bool:
+    """Truncate a file after its last newline if it ends in a torn line; True if it did."""
+    if not path.is_file() or path.stat().st_size == 0:
+        return False
+    with open(path, "rb+") as f:
+        f.seek(-1, 2)
+        if f.read(1) == b"\n":
+            return False
+        f.seek(0)
+        data = f.read()
+        f.truncate(data.rfind(b"\n") + 1)
+    return True
+
+
 class SessionRecord(Listener):
     """Writers for one session folder (created if missing; existing files are appended to)."""
 
     def __init__(self, folder: str | Path) -> None:
         self.folder = Path(folder)
         self.folder.mkdir(parents=True, exist_ok=True)
+        self.torn_tails_cut = sum(cut_torn_tail(self.folder / name) for name in ("can.log", "nmea.log", "modbus.csv"))
         self._can = can.Logger(str(self.folder / "can.log"), append=True)
         self._nmea = open(self.folder / "nmea.log", "a", encoding="ascii", errors="replace")
         new_csv = not (self.folder / "modbus.csv").exists()

@@ -2,12 +2,13 @@
 order arbitration (``[arbitration]``). Validated by pydantic: every error names the key."""
 from __future__ import annotations
 
+import math
 from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
 from bridge_node.links.nmea0183 import DEFAULT_RATES, DEFAULT_TALKERS, TYPICAL_LENGTH
-from bridge_node.node.network import loopback_unless
+from bridge_node.node.network import NETWORK_CAN_INTERFACES, loopback_unless, serial_port_unless
 from sim_core.params import Params
 
 Name = Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9_\-]+$")]
@@ -31,7 +32,7 @@ class NmeaLinkSettings(_LinkBase):
     """Serial NMEA 0183 console and instruments, with a UDP mirror of the outputs."""
 
     type: Literal["nmea0183"]
-    port: str | None = Field(None, description="serial port or pyserial URL; unset: UDP output only")
+    port: str | None = Field(None, min_length=1, description="serial port or pyserial URL; unset: UDP output only")
     baudrate: Literal[BAUD_RATES] = 38400
     talkers: dict[str, Annotated[str, Field(pattern=r"^[A-Z]{2}$")]] = Field(default_factory=dict)
     rates: dict[str, Annotated[float, Field(ge=0.0, le=20.0)]] = Field(default_factory=dict, description="Hz")
@@ -49,6 +50,7 @@ class NmeaLinkSettings(_LinkBase):
     def _checks(self) -> "NmeaLinkSettings":
         loopback_unless(self.udp_host, self.allow_network, "udp_host")
         if self.port:
+            serial_port_unless(self.port, self.allow_network, "port")
             need = sum(r * TYPICAL_LENGTH[k] for k, r in self.output_rates().items())
             budget = BAUD_BUDGET_SHARE * self.baudrate / 10.0
             if need > budget:
@@ -68,12 +70,16 @@ class CanLinkSettings(_LinkBase):
     """A CAN bus through python-can: console frames decoded with a DBC, NMEA 2000 in and out."""
 
     type: Literal["can"]
-    interface: str = Field("virtual", description="python-can interface: socketcan, pcan, kvaser, slcan, virtual, ...")
-    channel: str = "icebridge"
+    interface: str = Field("virtual", min_length=1,
+                           description="python-can interface: socketcan, pcan, kvaser, slcan, virtual, ...")
+    channel: str = Field("icebridge", min_length=1)
     bitrate: int = Field(250_000, ge=10_000, le=1_000_000)
-    dbc: str = Field("console.dbc", description="console frames (relative to the config file's folder)")
+    dbc: str = Field("console.dbc", min_length=1,
+                     description="console frames: relative to the config file's folder, else to config/")
     source_address: int = Field(0x23, ge=0, le=251, description="this node's NMEA 2000 source address")
-    allowed_sources: list[Annotated[int, Field(ge=0, le=253)]] = Field(default_factory=list)
+    allowed_sources: Annotated[list[Annotated[int, Field(ge=0, le=253)]], Field(min_length=1)] | Literal["any"] = Field(
+        description='source addresses whose orders are taken (the console\'s), or "any": every device on the bus')
+    allow_network: bool = Field(False, description="allow interfaces and channels that reach a network")
     rudder_order_pgn: bool = Field(True, description="take PGN 127245 rudder angle orders as a helm source")
     rates: dict[str, Annotated[float, Field(ge=0.0, le=50.0)]] = Field(default_factory=dict, description="Hz")
 
@@ -82,8 +88,25 @@ class CanLinkSettings(_LinkBase):
     def _known_outputs(cls, v: dict) -> dict:
         return _known_keys(v, N2K_OUTPUTS, "output")
 
+    @model_validator(mode="after")
+    def _off_the_host(self) -> "CanLinkSettings":
+        if self.interface in NETWORK_CAN_INTERFACES and not self.allow_network:
+            raise ValueError(f"interface = {self.interface!r} reaches a network; set allow_network = true to use it")
+        serial_port_unless(self.channel, self.allow_network, "channel")
+        return self
+
     def output_rates(self) -> dict[str, float]:
         return N2K_OUTPUTS | self.rates
+
+
+SCALE_RANGE = (1e-6, 1e6)  # |scale| of a register: beyond this it is a typo, not a scaling
+
+
+def sane_scale(v: float) -> float:
+    """A register scale: finite, non-zero, |scale| in SCALE_RANGE."""
+    if not (math.isfinite(v) and SCALE_RANGE[0] <= abs(v) <= SCALE_RANGE[1]):
+        raise ValueError(f"scale = {v!r}: must be finite and {SCALE_RANGE[0]:g} <= |scale| <= {SCALE_RANGE[1]:g}")
+    return v
 
 
 class RegisterSpec(Params):
@@ -96,6 +119,8 @@ class RegisterSpec(Params):
     scale: float = Field(1.0, description="engineering value = raw x scale (rudder deg, lever %, ETL code)")
     engine: int = Field(0, ge=0, le=9)
 
+    _scale = field_validator("scale")(lambda cls, v: sane_scale(v))
+
 
 class WriteSpec(Params):
     """One indicator value written to a holding register after each poll."""
@@ -104,6 +129,8 @@ class WriteSpec(Params):
     address: int = Field(ge=0, le=65535)
     type: Literal["int16", "uint16"] = "int16"
     scale: float = Field(0.1, description="raw = value / scale (deg, rpm, deg, kn)")
+
+    _scale = field_validator("scale")(lambda cls, v: sane_scale(v))
 
 
 class ModbusLinkSettings(_LinkBase):
@@ -114,7 +141,7 @@ class ModbusLinkSettings(_LinkBase):
     host: str = "127.0.0.1"
     port: int = Field(502, ge=1, le=65535)
     allow_network: bool = False
-    serial_port: str | None = None
+    serial_port: str | None = Field(None, min_length=1)
     baudrate: Literal[BAUD_RATES] = 19200
     device_id: int = Field(1, ge=0, le=247)
     poll_hz: float = Field(20.0, gt=0.0, le=100.0)
@@ -128,6 +155,8 @@ class ModbusLinkSettings(_LinkBase):
             loopback_unless(self.host, self.allow_network, "host")
         elif not self.serial_port:
             raise ValueError("serial_port is required when transport = 'rtu'")
+        else:
+            serial_port_unless(self.serial_port, self.allow_network, "serial_port")
         return self
 
 

@@ -6,13 +6,16 @@ and exits non-zero, without a traceback.
 from __future__ import annotations
 
 import tomllib
+from datetime import datetime, timezone
 from pathlib import Path
 from typing import Literal
 
+import cantools
 from pydantic import Field, ValidationError, model_validator
 
 from bridge_node.links.settings import ArbitrationSettings, LinkSettings
 from bridge_node.node.errors import UserError
+from bridge_node.node.paths import writable_dir
 from bridge_node.render.settings import RenderSettings
 from bridge_node.stream.settings import StreamSettings
 from sim_core.fracture.tile_template import FractureSettings
@@ -23,6 +26,7 @@ from sim_core.scene.field import IceFieldSettings
 from sim_core.scene.scene import SceneSettings
 from sim_core.ship.particulars import TELEGRAPH_POSITIONS, ShipParticulars
 
+MAX_DBC_BYTES = 4 * 2**20  # a console's DBC is kilobytes; anything this large is not one
 DEFAULT_CONFIG = Path(__file__).resolve().parents[2] / "config" / "default.toml"
 
 
@@ -36,7 +40,7 @@ class PathSettings(Params):
 class ShipChoice(Params):
     """Which ship: ``config/ships/<name>.toml`` beside the config (or the built-in one)."""
 
-    name: str = Field(min_length=1)
+    name: str = Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_\-]+$")
 
 
 class ExerciseSettings(Params):
@@ -110,13 +114,34 @@ def _describe(err: dict) -> str:
 def load_config(path: str | Path | None = None) -> NodeConfig:
     """Read and validate a TOML config (default: config/default.toml). Raises ConfigError.
     A CAN link's relative DBC path is taken from the config file's folder when the file is
-    there, else from the project's ``config/`` folder."""
+    there, else from the project's ``config/`` folder; the file is checked here."""
     path = Path(path) if path is not None else DEFAULT_CONFIG
     cfg = _load_validated(path, NodeConfig)
-    links = [link.model_copy(update={"dbc": str(path.resolve().parent / link.dbc)})
-             if getattr(link, "dbc", None) and (path.resolve().parent / link.dbc).is_file() else link
-             for link in cfg.links]
+    links = [link.model_copy(update={"dbc": str(_dbc_file(path, f"links.{i}.dbc", link.dbc))})
+             if link.type == "can" else link for i, link in enumerate(cfg.links)]
     return cfg.model_copy(update={"links": links})
+
+
+def _dbc_file(config: Path, key: str, value: str) -> Path:
+    """The DBC file a CAN link names, resolved and checked: a regular, readable file of
+    sane size that cantools parses. ConfigError naming the file, key and value otherwise."""
+    candidates = [Path(value).expanduser()] if Path(value).expanduser().is_absolute() else \
+        [config.resolve().parent / value, DEFAULT_CONFIG.parent / value]
+    path = next((p for p in candidates if p.exists()), candidates[0])
+    where = f"{config}: {key} = {value!r}"
+    if not path.exists():
+        raise ConfigError(f"{where}: no such file (looked in {', '.join(str(p.parent) for p in candidates)})")
+    if not path.is_file():
+        raise ConfigError(f"{where}: {path} is not a regular file")
+    if path.stat().st_size > MAX_DBC_BYTES:
+        raise ConfigError(f"{where}: {path} is larger than {MAX_DBC_BYTES // 2**20} MiB; not a DBC file")
+    try:
+        cantools.database.load_file(str(path), strict=False)
+    except OSError as exc:
+        raise ConfigError(f"{where}: cannot read {path}: {exc.strerror or exc}") from None
+    except Exception as exc:  # cantools raises many kinds (its own, ValueError, KeyError...) on a bad file
+        raise ConfigError(f"{where}: {path} is not a DBC file cantools can read ({type(exc).__name__})") from None
+    return path
 
 
 def load_ship(name: str, config_path: str | Path | None = None) -> ShipParticulars:
@@ -148,10 +173,11 @@ def _load_validated(path: Path, schema: type[Params]) -> Params:
 
 
 def new_session_dir(cfg: NodeConfig, config_path: str | Path | None) -> Path:
-    """A new session record folder under ``paths.session_dir``, named by the UTC time."""
-    from datetime import datetime, timezone
-
-    return resolve_path(config_path, cfg.paths.session_dir) / datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    """A new session record folder under ``paths.session_dir``, named by the UTC time;
+    UserError if no files can be written there."""
+    root = writable_dir(resolve_path(config_path, cfg.paths.session_dir), f"{config_path or DEFAULT_CONFIG}: "
+                        "paths.session_dir")
+    return root / datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
 
 
 def resolve_path(config_path: str | Path | None, value: str) -> Path:

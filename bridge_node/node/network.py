@@ -2,11 +2,20 @@
 from __future__ import annotations
 
 import ipaddress
+import re
+
+# pyserial URLs that open a network connection (socket://HOST:PORT, rfc2217://HOST:PORT),
+# also inside another URL (spy://, for one)
+_SERIAL_NETWORK_URL = re.compile(r"(?:socket|rfc2217)://\[?([^\]/:?]*)")
+# python-can interfaces that reach a network
+NETWORK_CAN_INTERFACES = ("udp_multicast", "socketcand")
 
 
 def loopback_unless(host: str, allowed: bool, key: str) -> str:
-    """The host if it is a loopback IP address, or any IP address when ``allowed``;
-    ValueError (naming the config key) otherwise."""
+    """The host if it is a loopback IP address (or ``localhost``), or any IP address when
+    ``allowed``; ValueError (naming the config key) otherwise."""
+    if host == "localhost":
+        return host
     try:
         ip = ipaddress.ip_address(host)
     except ValueError:
@@ -14,3 +23,11 @@ def loopback_unless(host: str, allowed: bool, key: str) -> str:
     if not ip.is_loopback and not allowed:
         raise ValueError(f"{key} = {host!r} is not a loopback address; set allow_network = true to use a network")
     return host
+
+
+def serial_port_unless(port: str, allowed: bool, key: str) -> str:
+    """A serial port or pyserial URL; a URL that opens a network connection must name a
+    loopback host unless ``allowed``."""
+    for host in _SERIAL_NETWORK_URL.findall(port):
+        loopback_unless(host, allowed, key)
+    return port

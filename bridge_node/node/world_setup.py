@@ -14,6 +14,7 @@ from rich.progress import Progress
 from bridge_node.library.templates import library_template
 from bridge_node.node.config import NodeConfig, load_ship, resolve_path
 from bridge_node.node.errors import UserError
+from bridge_node.node.paths import writable_dir
 from sim_core.frames.units import KNOT
 from sim_core.ice.model import compile_ice_model
 from sim_core.scene.field import tile_classes
@@ -44,7 +45,8 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
                         "'prism' cells (voronoi3d cells overlap in plan view)")
     ship = compile_ship(load_ship(cfg.ship.name, config_path), cfg.ice_material)
     tile_class, class_h = field_tile_classes(cfg, config_path)
-    cache = resolve_path(config_path, cfg.paths.cache_dir)
+    cache = writable_dir(resolve_path(config_path, cfg.paths.cache_dir), f"{config_path or 'default config'}: "
+                         "paths.cache_dir")
     jobs = [(h, v) for h in class_h for v in range(cfg.fracture.variants)]
     task = progress.add_task("loading tile templates", total=len(jobs)) if progress else None
     templates = []

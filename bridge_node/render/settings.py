@@ -25,7 +25,8 @@ class ChannelSettings(Params):
     vfov_deg: float | None = Field(None, gt=1.0, lt=170.0, description="unset: from hfov and the aspect ratio")
     width: int = Field(1280, ge=16, le=8192)
     height: int = Field(720, ge=16, le=8192)
-    eye: tuple[float, float, float] = Field((10.0, 0.0, 25.0), description="ship frame, m")
+    eye: list[float] = Field(default_factory=lambda: [10.0, 0.0, 25.0], min_length=3, max_length=3,
+                             description="ship frame, m")
     blend_left_deg: float = Field(0.0, ge=0.0, le=30.0)
     blend_right_deg: float = Field(0.0, ge=0.0, le=30.0)
     gamma: float = Field(2.2, ge=1.0, le=3.0, description="projector gamma for the blend ramps")
@@ -51,7 +52,7 @@ def _front_channels() -> list[ChannelSettings]:
     return [ChannelSettings(name="port", yaw_deg=-55.0, blend_right_deg=5.0),
             ChannelSettings(name="centre", yaw_deg=0.0, blend_left_deg=5.0, blend_right_deg=5.0),
             ChannelSettings(name="starboard", yaw_deg=55.0, blend_left_deg=5.0),
-            ChannelSettings(name="astern", yaw_deg=180.0, eye=(-60.0, 0.0, 25.0))]
+            ChannelSettings(name="astern", yaw_deg=180.0, eye=[-60.0, 0.0, 25.0])]
 
 
 class RenderSettings(Params):
