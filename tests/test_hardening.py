@@ -185,12 +185,12 @@ def test_mutated_configs_are_clean_errors_or_valid_configs(tmp_path, seed, data)
 def test_the_node_opens_no_socket_off_the_loopback(tmp_path):
     cfg = exercise_toml(tmp_path, '[[render.channels]]\nname = "bow"\nwidth = 64\nheight = 36\n',
                         **{"[links]": 'name = "instruments"\ntype = "nmea0183"\nudp_port = 10110'})
-    node = subprocess.Popen([sys.executable, "-m", "bridge_node", "run", "--config", str(cfg), "--duration", "20",
+    node = subprocess.Popen([sys.executable, "-m", "bridge_node", "run", "--config", str(cfg), "--duration", "30",
                              "--no-record", "--out", str(tmp_path)], cwd=REPO, stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
     seen = set()
     try:
-        deadline = time.monotonic() + 20.0
+        deadline = time.monotonic() + 40.0  # loading, then the run: look all along
         while node.poll() is None and time.monotonic() < deadline:
             procs = [psutil.Process(node.pid), *psutil.Process(node.pid).children(recursive=True)]
             for p in procs:
@@ -258,3 +258,7 @@ def test_numba_caches_outside_the_source_tree(tmp_path):
     assert r.stdout.strip() == str(tmp_path / "icebridge" / "numba")
     assert list((tmp_path / "icebridge" / "numba").rglob("*.nbi"))
     assert not list((REPO / "sim_core").rglob("*.nbi"))
+
+
+def test_a_ship_name_on_the_command_line_is_checked_too():
+    clean_error(run_cli("trial", "turning", "--ship", "x" * 300), "ship name", "at most 64")

@@ -16,16 +16,16 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import signal
 import threading
 import time
 from pathlib import Path
 from urllib.parse import urlsplit, urlunsplit
 
-import numpy as np
-
 from bridge_node.node.config import load_config
 from bridge_node.node.errors import UserError
+from bridge_node.node.realtime_loop import distribution
 from bridge_node.node.world_setup import build_world
 from bridge_node.render.channels import ChannelSet
 from bridge_node.render.open_channels import open_channels, select_channels
@@ -93,51 +93,72 @@ class _Outputs:
         return out
 
 
-def _render_loop(sub: StateSubscriber, channels: ChannelSet, outputs: _Outputs, args: argparse.Namespace) -> dict:
-    """Render until the duration, the idle limit or Ctrl-C; returns frame statistics."""
+def _frame_pacing(next_frame: float, period: float) -> float:
+    """Sleep until the next frame is due; returns when the one after is (a loop that fell
+    more than a period behind starts again from now rather than bursting)."""
+    next_frame += period
+    behind = time.monotonic() - next_frame
+    time.sleep(max(0.0, -behind))
+    return time.monotonic() if behind > period else next_frame
+
+
+def _render_loop(sub: StateSubscriber, channels: ChannelSet, outputs: _Outputs, args: argparse.Namespace,
+                 stop: threading.Event) -> dict:
+    """Render until the duration, the idle limit, SIGTERM or Ctrl-C (after at least one
+    frame); returns frame statistics."""
     period, start = 1.0 / args.fps, time.monotonic()
     next_frame = last_message = start
-    step_s, frames, delays, waiting = 0.0, 0, [], None
+    step_s, frames, delays, waiting, stepped = 0.0, 0, [], None, False
     drop = (lambda seq: seq % args.drop_every == 0) if args.drop_every else None
-    stop = threading.Event()  # SIGTERM ends the loop after the frame in hand (at least one)
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
     try:
         while (args.duration is None or time.monotonic() - start < args.duration) and not (stop.is_set() and frames):
             before = sub.view.time
             applied = sub.poll(0, drop)
             now = time.monotonic()
             if applied:
-                step_s, last_message = max(sub.view.time - before, 1e-3) / len(applied), now
-                if sub.last_input is not None and sub.last_input[0] >= applied[0].seq:
-                    waiting = sub.last_input[1]
-            elif args.idle_exit is not None and now - last_message > args.idle_exit:
-                break
+                step_s, last_message, stepped = max(sub.view.time - before, 1e-3) / len(applied), now, True
+                if sub.last_input is not None and sub.last_input[0] >= applied[0].seq and args.connect is None:
+                    waiting = sub.last_input[1]  # monotonic clocks compare only on one host
+            elif stepped and args.idle_exit is not None and now - last_message > args.idle_exit:
+                break  # the physics has stopped stepping
             sub.view.blend((now - last_message) / step_s if step_s else 1.0)
             channels.render(sub.view)
             frames += 1
             if waiting is not None:  # the first frame that shows a state made with a new order
-                delays.append(time.monotonic() - waiting)
+                delays.append((time.monotonic() - waiting) * 1e3)
                 waiting = None
             outputs.frame(sub.view.time, now)
             time.sleep(args.frame_delay)
-            next_frame += period
-            behind = time.monotonic() - next_frame
-            next_frame = time.monotonic() if behind > period else next_frame
-            time.sleep(max(0.0, -behind))
+            next_frame = _frame_pacing(next_frame, period)
     except KeyboardInterrupt:
         pass
-    ms = np.array(delays) * 1e3
-    return {"frames": frames, "wall_s": round(time.monotonic() - start, 2),
-            "input_to_pixels_ms": {"count": len(ms), "median": round(float(np.median(ms)), 1) if len(ms) else None,
-                                   "p99": round(float(np.percentile(ms, 99)), 1) if len(ms) else None}}
+    except StreamError as exc:  # the node went away during a resync: end with what we have
+        return {"frames": frames, "stream_error": str(exc), "input_to_pixels_ms": distribution(delays)}
+    return {"frames": frames, "wall_s": round(time.monotonic() - start, 2), "input_to_pixels_ms": distribution(delays)}
+
+
+def _check(args: argparse.Namespace) -> None:
+    if not 1.0 <= args.fps <= 240.0:
+        raise UserError(f"--fps {args.fps} is outside the allowed range [1, 240]")
+    if not 0.1 <= args.video_fps <= 60.0:
+        raise UserError(f"--video-fps {args.video_fps} is outside the allowed range [0.1, 60]")
+    if args.drop_every is not None and args.drop_every < 2:
+        raise UserError(f"--drop-every {args.drop_every}: must be at least 2")
+
+
+def _write_summary(summary: dict, path: str | None) -> None:
+    """Write the summary atomically (a reader never sees half of it)."""
+    if path:
+        tmp = Path(path).with_name(Path(path).name + ".tmp")
+        tmp.write_text(json.dumps(summary))
+        os.replace(tmp, path)
 
 
 def run(args: argparse.Namespace) -> int:
+    stop = threading.Event()  # SIGTERM from here on ends the work cleanly, with its outputs
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
     cfg = load_config(args.config)
-    if not 1.0 <= args.fps <= 240.0:
-        raise UserError(f"--fps {args.fps} is outside the allowed range [1, 240]")
-    if args.drop_every is not None and args.drop_every < 2:
-        raise UserError(f"--drop-every {args.drop_every}: must be at least 2")
+    _check(args)
     cfg = select_channels(cfg, args.channels.split(",") if args.channels else None)
     publish, snapshot = endpoints(cfg.stream, args.connect)
     model = build_world(cfg, args.config)
@@ -145,17 +166,15 @@ def run(args: argparse.Namespace) -> int:
     summary: dict = {"channels": [c.name for c in cfg.render.channels], "publish": publish}
     with StateSubscriber(publish, snapshot, timeout_s=args.wait) as sub:
         try:
-            sub.sync()
+            sub.sync(give_up=stop.is_set)
         except StreamError as exc:
             raise UserError(str(exc)) from None
         outputs = _Outputs(args, channels)
         try:
-            summary |= _render_loop(sub, channels, outputs, args)
+            summary |= _render_loop(sub, channels, outputs, args, stop)
         finally:
             summary |= outputs.close() | {"resyncs": sub.resyncs, "lost": sub.lost, "last_seq": sub.view.seq,
                                           "sim_time": round(sub.view.time, 3)}
-            if args.summary:
-                Path(args.summary).parent.mkdir(parents=True, exist_ok=True)
-                Path(args.summary).write_text(json.dumps(summary))
+            _write_summary(summary, args.summary)
     print(json.dumps(summary))
     return 0

@@ -75,8 +75,39 @@ def _wait_for_renderers(renderers: RenderProcesses | None, publisher: StatePubli
         return
     deadline = time.monotonic() + timeout
     while publisher.snapshots < len(renderers.processes) and time.monotonic() < deadline:
-        renderers.check()
         time.sleep(0.1)
+
+
+def _open_stream(cfg) -> StatePublisher:
+    publisher = StatePublisher(cfg.stream)
+    try:
+        publisher.open()
+    except zmq.ZMQError as exc:
+        raise UserError(f"stream: cannot bind {cfg.stream.publish} / {cfg.stream.snapshot}: {exc} "
+                        "(another node running? set [stream] endpoints)") from None
+    return publisher
+
+
+def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, renderers, record, console) -> tuple:
+    """The real-time loop with its live status line; returns the statistics, the last
+    events, the links' health and the active alarms."""
+    last: list[WorldEvents] = [snapshot(model, data)]
+    shown = [0.0]
+    with LinkHub(cfg.links, cfg.arbitration, record) as hub, \
+            Live(console=console, refresh_per_second=4, transient=True) as live:
+        publisher.publish(last[0])
+        live.update("starting the render processes")
+        _wait_for_renderers(renderers, publisher, 300.0)
+
+        def on_events(events: WorldEvents, input_time: float | None) -> None:
+            last[0] = events
+            publisher.publish(events, input_time)
+            if time.monotonic() - shown[0] > 0.25:
+                shown[0] = time.monotonic()
+                live.update(status_line(events, len(hub.active_alarms)))
+        stats = run_realtime(model, data, hub, rate, args.duration, on_events)
+        return (stats, last[0], [link.health().as_dict() for link in hub.links],
+                [a.text for a in hub.active_alarms.values()])
 
 
 def run(args: argparse.Namespace) -> int:
@@ -85,44 +116,26 @@ def run(args: argparse.Namespace) -> int:
     _check(args, rate)
     console = Console(stderr=args.json)
     out = Path(args.out)
-    renderers = None if args.render == "none" or (args.render is None and cfg.render.processes == "none") \
-        else RenderProcesses(cfg, args.config, out, args.frames_every)
-    if renderers:
-        renderers.start()  # they load the exercise while this process does
-    with console.status("loading the exercise"):
-        model = build_world(cfg, args.config)
-        warm_up(model, cfg)
-        data = start_world(model, cfg)
     record = None if args.no_record else new_session_dir(cfg, args.config)
-    last: list[WorldEvents] = [snapshot(model, data)]
-    shown = [0.0]
-    try:
-        publisher = StatePublisher(cfg.stream)
-        publisher.open()
-    except zmq.ZMQError as exc:
-        raise UserError(f"stream: cannot bind {cfg.stream.publish} / {cfg.stream.snapshot}: {exc} "
-                        "(another node running? set [stream] endpoints)") from None
-    with publisher, LinkHub(cfg.links, cfg.arbitration, record) as hub, \
-            Live(console=console, refresh_per_second=4, transient=True) as live:
-        publisher.publish(last[0])
-        with console.status("starting the render processes"):
-            _wait_for_renderers(renderers, publisher, 120.0)
-
-        def on_events(events: WorldEvents, input_time: float | None) -> None:
-            last[0] = events
-            publisher.publish(events, input_time)
-            if time.monotonic() - shown[0] > 0.25:
-                shown[0] = time.monotonic()
-                if renderers:
-                    renderers.check()
-                live.update(status_line(events, len(hub.active_alarms)))
-        stats = run_realtime(model, data, hub, rate, args.duration, on_events)
-        links = [link.health().as_dict() for link in hub.links]
-        alarms = [a.text for a in hub.active_alarms.values()]
-    rendered = renderers.stop() if renderers else []
-    summary = stats.summary() | _end_state(last[0]) | {
+    local = args.render == "local" or (args.render is None and cfg.render.processes == "local")
+    renderers = RenderProcesses(cfg, args.config, out, args.frames_every) if local else None
+    rendered = []
+    with _open_stream(cfg) as publisher:
+        try:
+            if renderers:
+                renderers.start()  # they load the exercise while this process does
+            with console.status("loading the exercise"):
+                model = build_world(cfg, args.config)
+                warm_up(model, cfg)
+                data = start_world(model, cfg)
+            stats, last, links, alarms = _loop(cfg, args, rate, model, data, publisher, renderers, record, console)
+        finally:
+            if renderers:  # before the stream closes, so that they draw the last state
+                rendered = renderers.stop()
+    summary = stats.summary() | _end_state(last) | {
         "rate_hz": rate, "alarms": alarms, "links": links,
-        "stream": {"sent": publisher.sent, "dropped": publisher.dropped, "snapshots": publisher.snapshots},
+        "stream": {"sent": publisher.sent, "dropped": publisher.dropped, "snapshots": publisher.snapshots,
+                   "error": publisher.error},
         "render_processes": rendered, "frames_rendered": sum(r.get("png_frames", 0) for r in rendered),
         "video": [r["video"] for r in rendered if "video" in r],
         "panorama": [r["panorama"] for r in rendered if "panorama" in r],

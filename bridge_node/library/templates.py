@@ -9,6 +9,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -30,12 +31,18 @@ def template_path(
 
 
 def save_template(path: Path, template: TileTemplate) -> None:
-    """Write a template atomically."""
+    """Write a template atomically, through a temporary file of its own: processes that
+    build the same template at once (a node and its render processes on a cold library)
+    each write whole files, and the last rename wins with identical content."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as f:
-        np.savez(f, **template.to_arrays())
-    os.replace(tmp, path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **template.to_arrays())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 def load_template(path: Path) -> TileTemplate:

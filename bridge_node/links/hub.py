@@ -23,6 +23,7 @@ from sim_core.ship.outputs import ShipOutputs
 
 log = logging.getLogger("icebridge.links")
 LINK_DOWN_ALARM = 200  # + the link's index
+RECORD_ALARM = 299  # the session record could not be written (a full disk)
 ALARM_REPEAT_S = 10.0  # active alarms are announced again this often, s
 
 
@@ -125,6 +126,8 @@ class LinkHub:
                 link.publish_alarm(alarm, now)
         for listener in self.listeners:
             listener.flush()
+        if self.record is not None and self.record.failed and RECORD_ALARM not in self.active_alarms:
+            self.raise_alarm(Alarm(RECORD_ALARM, f"session record stopped: {self.record.failed}"[:40], True), now)
 
     def errors(self) -> Counter:
         """Error counts by kind, summed over the links."""

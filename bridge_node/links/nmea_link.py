@@ -4,7 +4,6 @@ for chart plotters such as OpenCPN. Without a serial port the link sends on UDP 
 from __future__ import annotations
 
 import datetime as dt
-import ipaddress
 import socket
 import time
 from collections.abc import Iterator
@@ -14,6 +13,7 @@ import serial
 from bridge_node.links.base import Alarm, ControlInput, Link, RateSchedule, register_link
 from bridge_node.links.nmea0183 import SentenceError, parse_order, render_alarm, render_outputs
 from bridge_node.links.settings import NmeaLinkSettings
+from bridge_node.node.network import is_loopback_host
 from sim_core.ship.outputs import ShipOutputs
 
 MAX_PENDING = 1024  # characters of a line without its end: beyond this it is noise
@@ -50,7 +50,7 @@ class NmeaLink(Link):
     def open(self) -> None:
         if self.settings.udp_port and self._udp is None:
             self._udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-            if ipaddress.ip_address(self.settings.udp_host).is_loopback:  # never open a port off the host
+            if is_loopback_host(self.settings.udp_host):  # never open a port off the host
                 self._udp.bind(("127.0.0.1", 0))
         super().open()
 

@@ -15,6 +15,7 @@ cuts such a torn tail off, so it never glues onto the next line.
 from __future__ import annotations
 
 import csv
+import logging
 import time
 from pathlib import Path
 
@@ -23,6 +24,7 @@ import can
 from bridge_node.links.base import Listener, Traffic
 
 FLUSH_PERIOD = 0.5  # s
+log = logging.getLogger("icebridge.record")
 
 
 def cut_torn_tail(path: Path) -> bool:
@@ -56,9 +58,18 @@ class SessionRecord(Listener):
         self._last_flush = time.monotonic()
         self._writers = {"can": self._can_frame, "nmea0183": self._sentence, "modbus": self._register}
         self._stopped = False
+        self.failed: str | None = None  # why recording stopped (a full disk, say); the node goes on
 
     def on_traffic(self, traffic: Traffic) -> None:
-        self._writers[traffic.protocol](traffic)
+        if self.failed is None:
+            try:
+                self._writers[traffic.protocol](traffic)
+            except OSError as exc:
+                self._fail(exc)
+
+    def _fail(self, exc: OSError) -> None:
+        self.failed = exc.strerror or str(exc)
+        log.error("session record in %s stopped: %s", self.folder, self.failed)
 
     def _can_frame(self, t: Traffic) -> None:
         self._can(t.data)  # the frame's own timestamp, wall-clock unix time
@@ -73,10 +84,13 @@ class SessionRecord(Listener):
     def flush(self, force: bool = False) -> None:
         """Write buffered lines to the OS if ``FLUSH_PERIOD`` has passed (or ``force``)."""
         now = time.monotonic()
-        if force or now - self._last_flush >= FLUSH_PERIOD:
-            self._can.file.flush()
-            self._nmea.flush()
-            self._modbus_file.flush()
+        if self.failed is None and (force or now - self._last_flush >= FLUSH_PERIOD):
+            try:
+                self._can.file.flush()
+                self._nmea.flush()
+                self._modbus_file.flush()
+            except OSError as exc:
+                self._fail(exc)
             self._last_flush = now
 
     def stop(self) -> None:
@@ -85,6 +99,9 @@ class SessionRecord(Listener):
             return
         self._stopped = True
         self.flush(force=True)
-        self._can.stop()
-        self._nmea.close()
-        self._modbus_file.close()
+        for close in (self._can.stop, self._nmea.close, self._modbus_file.close):
+            try:
+                close()
+            except OSError as exc:  # the data that did not fit is lost either way; say so once
+                if self.failed is None:
+                    self._fail(exc)

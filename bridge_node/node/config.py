@@ -5,6 +5,7 @@ and exits non-zero, without a traceback.
 """
 from __future__ import annotations
 
+import re
 import tomllib
 from datetime import datetime, timezone
 from pathlib import Path
@@ -15,7 +16,7 @@ from pydantic import Field, ValidationError, model_validator
 
 from bridge_node.links.settings import ArbitrationSettings, LinkSettings
 from bridge_node.node.errors import UserError
-from bridge_node.node.paths import writable_dir
+from bridge_node.node.paths import expand_user, writable_dir
 from bridge_node.render.settings import RenderSettings
 from bridge_node.stream.settings import StreamSettings
 from sim_core.fracture.tile_template import FractureSettings
@@ -26,6 +27,7 @@ from sim_core.scene.field import IceFieldSettings
 from sim_core.scene.scene import SceneSettings
 from sim_core.ship.particulars import TELEGRAPH_POSITIONS, ShipParticulars
 
+SHIP_NAME = r"^[A-Za-z0-9_\-]{1,64}$"  # ships/<name>.toml
 MAX_DBC_BYTES = 4 * 2**20  # a console's DBC is kilobytes; anything this large is not one
 DEFAULT_CONFIG = Path(__file__).resolve().parents[2] / "config" / "default.toml"
 
@@ -40,7 +42,7 @@ class PathSettings(Params):
 class ShipChoice(Params):
     """Which ship: ``config/ships/<name>.toml`` beside the config (or the built-in one)."""
 
-    name: str = Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_\-]+$")
+    name: str = Field(pattern=SHIP_NAME)
 
 
 class ExerciseSettings(Params):
@@ -125,20 +127,22 @@ def load_config(path: str | Path | None = None) -> NodeConfig:
 def _dbc_file(config: Path, key: str, value: str) -> Path:
     """The DBC file a CAN link names, resolved and checked: a regular, readable file of
     sane size that cantools parses. ConfigError naming the file, key and value otherwise."""
-    candidates = [Path(value).expanduser()] if Path(value).expanduser().is_absolute() else \
-        [config.resolve().parent / value, DEFAULT_CONFIG.parent / value]
-    path = next((p for p in candidates if p.exists()), candidates[0])
     where = f"{config}: {key} = {value!r}"
-    if not path.exists():
-        raise ConfigError(f"{where}: no such file (looked in {', '.join(str(p.parent) for p in candidates)})")
-    if not path.is_file():
-        raise ConfigError(f"{where}: {path} is not a regular file")
-    if path.stat().st_size > MAX_DBC_BYTES:
-        raise ConfigError(f"{where}: {path} is larger than {MAX_DBC_BYTES // 2**20} MiB; not a DBC file")
+    given = expand_user(value, f"{config}: {key}")
+    candidates = [given] if given.is_absolute() else [config.resolve().parent / value, DEFAULT_CONFIG.parent / value]
     try:
+        path = next((p for p in candidates if p.exists()), None)
+        if path is None:
+            raise ConfigError(f"{where}: no such file (looked in {', '.join(str(p.parent) for p in candidates)})")
+        if not path.is_file():
+            raise ConfigError(f"{where}: {path} is not a regular file")
+        if path.stat().st_size > MAX_DBC_BYTES:
+            raise ConfigError(f"{where}: {path} is larger than {MAX_DBC_BYTES // 2**20} MiB; not a DBC file")
         cantools.database.load_file(str(path), strict=False)
-    except OSError as exc:
-        raise ConfigError(f"{where}: cannot read {path}: {exc.strerror or exc}") from None
+    except ConfigError:
+        raise
+    except OSError as exc:  # a name too long, a file that cannot be read...
+        raise ConfigError(f"{where}: {exc.strerror or exc}") from None
     except Exception as exc:  # cantools raises many kinds (its own, ValueError, KeyError...) on a bad file
         raise ConfigError(f"{where}: {path} is not a DBC file cantools can read ({type(exc).__name__})") from None
     return path
@@ -147,6 +151,8 @@ def _dbc_file(config: Path, key: str, value: str) -> Path:
 def load_ship(name: str, config_path: str | Path | None = None) -> ShipParticulars:
     """Particulars of the named ship, from ``ships/<name>.toml`` beside the config file, or
     from the built-in ``config/ships``. Raises ConfigError."""
+    if not re.fullmatch(SHIP_NAME, name):
+        raise ConfigError(f"ship name {name[:80]!r}: letters, digits, _ and - only, at most 64 characters")
     folders = [resolve_path(config_path, "ships"), DEFAULT_CONFIG.parent / "ships"]
     for folder in folders:
         path = folder / f"{name}.toml"
@@ -182,7 +188,7 @@ def new_session_dir(cfg: NodeConfig, config_path: str | Path | None) -> Path:
 
 def resolve_path(config_path: str | Path | None, value: str) -> Path:
     """A path from the config: ~ expanded, relative paths taken from the config's folder."""
-    p = Path(value).expanduser()
+    p = expand_user(value, f"{config_path or DEFAULT_CONFIG}: path")
     if p.is_absolute():
         return p
     base = Path(config_path).resolve().parent if config_path else DEFAULT_CONFIG.parent

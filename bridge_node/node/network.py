@@ -6,21 +6,24 @@ import re
 
 # pyserial URLs that open a network connection (socket://HOST:PORT, rfc2217://HOST:PORT),
 # also inside another URL (spy://, for one)
-_SERIAL_NETWORK_URL = re.compile(r"(?:socket|rfc2217)://\[?([^\]/:?]*)")
+_SERIAL_NETWORK_URL = re.compile(r"(?:socket|rfc2217)://(?:\[([^\]]*)\]|([^/:?]*))", re.IGNORECASE)
 # python-can interfaces that reach a network
 NETWORK_CAN_INTERFACES = ("udp_multicast", "socketcand")
+
+
+def is_loopback_host(host: str) -> bool:
+    """True for ``localhost`` and loopback IP addresses (ValueError for other names)."""
+    return host == "localhost" or ipaddress.ip_address(host).is_loopback
 
 
 def loopback_unless(host: str, allowed: bool, key: str) -> str:
     """The host if it is a loopback IP address (or ``localhost``), or any IP address when
     ``allowed``; ValueError (naming the config key) otherwise."""
-    if host == "localhost":
-        return host
     try:
-        ip = ipaddress.ip_address(host)
+        loopback = is_loopback_host(host)
     except ValueError:
         raise ValueError(f"{key} must be an IP address, got {host!r}") from None
-    if not ip.is_loopback and not allowed:
+    if not loopback and not allowed:
         raise ValueError(f"{key} = {host!r} is not a loopback address; set allow_network = true to use a network")
     return host
 
@@ -28,6 +31,6 @@ def loopback_unless(host: str, allowed: bool, key: str) -> str:
 def serial_port_unless(port: str, allowed: bool, key: str) -> str:
     """A serial port or pyserial URL; a URL that opens a network connection must name a
     loopback host unless ``allowed``."""
-    for host in _SERIAL_NETWORK_URL.findall(port):
-        loopback_unless(host, allowed, key)
+    for bracketed, plain in _SERIAL_NETWORK_URL.findall(port):
+        loopback_unless(bracketed or plain, allowed, key)
     return port

@@ -9,6 +9,14 @@ from pathlib import Path
 from bridge_node.node.errors import UserError
 
 
+def expand_user(path: str | Path, what: str) -> Path:
+    """``~`` expanded; UserError naming ``what`` for an unknown user (``~nobody/x``)."""
+    try:
+        return Path(path).expanduser()
+    except RuntimeError:
+        raise UserError(f"{what} = {str(path)!r}: cannot expand ~ (no such user)") from None
+
+
 def _cannot_write_in(folder: Path) -> str | None:
     """Why no file can be written in the folder (created if missing), or None."""
     try:
@@ -23,7 +31,7 @@ def _cannot_write_in(folder: Path) -> str | None:
 def writable_dir(path: str | Path, what: str) -> Path:
     """The folder (created if missing) if files can be written in it; UserError naming
     ``what`` (an option or config key) and the path otherwise."""
-    path = Path(path).expanduser()
+    path = expand_user(path, what)
     reason = _cannot_write_in(path)
     if reason:
         raise UserError(f"{what} = {str(path)!r}: cannot write files there ({reason})")
@@ -33,7 +41,7 @@ def writable_dir(path: str | Path, what: str) -> Path:
 def writable_file(path: str | Path, what: str) -> Path:
     """The file path if it can be written: not a folder, in a folder files can be written
     in (created if missing), not a read-only existing file; UserError otherwise."""
-    path = Path(path).expanduser()
+    path = expand_user(path, what)
     if path.is_dir():
         raise UserError(f"{what} = {str(path)!r}: is a folder, expected a file name")
     reason = _cannot_write_in(path.parent)

@@ -1,11 +1,12 @@
 """The node's local render processes: one ``icebridge render-node`` per channel group,
 started beside the physics process, watched, and restarted if one dies.
 
-Physics never waits for them: they read the state stream, and a process that dies is
-reported (logged, counted in the run summary) and started again, rejoining from a
-snapshot. Headless (no window channels), each writes a video of its channels and, at the
-end, a panorama PNG. On a machine with few cores a headless render process gets one
-rasteriser thread (Mesa llvmpipe's ``LP_NUM_THREADS``), so the physics keeps its core.
+Physics never waits for them: they read the state stream, and a watchdog thread reports a
+process that dies (logged, counted in the run summary) and starts it again, after a
+back-off and at most ``MAX_RESTARTS`` times; it rejoins from a snapshot. Headless (no window
+channels), each writes a video of its channels and, at the end, a panorama PNG. On a
+machine with few cores a headless render process gets one rasteriser thread (Mesa
+llvmpipe's ``LP_NUM_THREADS``), so the physics keeps its core.
 """
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,6 +24,9 @@ from pathlib import Path
 from bridge_node.node.config import NodeConfig
 
 log = logging.getLogger("icebridge.render")
+WATCH_S = 0.5  # s between the watchdog's looks
+RESTART_BACKOFF_S = (1.0, 30.0)  # first delay before a restart, doubling up to the cap
+MAX_RESTARTS = 10
 
 
 @dataclass
@@ -34,6 +39,7 @@ class RenderProcess:
     stderr: Path
     proc: subprocess.Popen | None = None
     restarts: int = 0
+    next_start: float = 0.0  # monotonic s: not restarted before
     log: list[str] = field(default_factory=list)
 
 
@@ -49,18 +55,22 @@ class RenderProcesses:
         if self.headless and (os.cpu_count() or 1) <= 4:
             self.env.setdefault("LP_NUM_THREADS", "1")
         self.out = out
+        self._stop = threading.Event()
+        self._lock = threading.Lock()  # check() runs on the watchdog and may be called directly
+        self._watchdog: threading.Thread | None = None
         self.processes = []
         for k, group in enumerate(groups):
             tag = "" if len(groups) == 1 else f"_{k + 1}"
             command = [sys.executable, "-m", "bridge_node", "render-node", "--channels", ",".join(group),
-                       "--fps", f"{fps:g}", "--out", str(out), "--idle-exit", "30",
+                       "--fps", f"{fps:g}", "--out", str(out), "--wait", "600", "--idle-exit", "60",
                        "--summary", str(out / f"render{tag}.json")]
             if config_path:
                 command += ["--config", str(config_path)]
             if frames_every:
                 command += ["--frames-every", f"{frames_every:g}"]
             if self.headless:
-                command += ["--video", str(out / f"video{tag}.mp4"), "--panorama", str(out / f"panorama{tag}.png")]
+                command += ["--video", str(out / f"video{tag}.mp4"), "--video-fps", f"{fps:g}",
+                            "--panorama", str(out / f"panorama{tag}.png")]
             self.processes.append(RenderProcess(group, command, out / f"render{tag}.json", out / f"render{tag}.log"))
 
     def _launch(self, p: RenderProcess) -> None:
@@ -68,25 +78,52 @@ class RenderProcesses:
             p.proc = subprocess.Popen(p.command, env=self.env, stdout=subprocess.DEVNULL, stderr=err)
 
     def start(self) -> None:
+        """Start every process, and the watchdog thread."""
         self.out.mkdir(parents=True, exist_ok=True)
         for p in self.processes:
             p.summary.unlink(missing_ok=True)
             p.stderr.unlink(missing_ok=True)
             self._launch(p)
+        self._watchdog = threading.Thread(target=self._watch, name="render-watchdog", daemon=True)
+        self._watchdog.start()
+
+    def _watch(self) -> None:
+        while not self._stop.wait(WATCH_S):
+            self.check()
 
     def check(self) -> None:
-        """Restart any process that has died; never waits."""
+        """Restart any process that has died, once its back-off has passed; never waits."""
+        with self._lock:
+            self._check(time.monotonic())
+
+    def _check(self, now: float) -> None:
         for p in self.processes:
-            if p.proc is not None and p.proc.poll() is not None:
+            if p.proc is None or p.proc.poll() is None or now < p.next_start or self._stop.is_set():
+                continue
+            if not p.next_start:  # just found dead: note it, restart after the back-off
                 err = p.stderr.read_text(encoding="utf-8", errors="replace").strip().splitlines()[-2:]
                 p.log.append(f"exit {p.proc.returncode}: {' | '.join(err)}")
-                log.error("render process for %s died (exit %s); restarting", ",".join(p.group), p.proc.returncode)
-                p.restarts += 1
-                self._launch(p)
+                if p.restarts >= MAX_RESTARTS:
+                    log.error("render process for %s died (exit %s); not restarted again after %d restarts",
+                              ",".join(p.group), p.proc.returncode, p.restarts)
+                    p.next_start = float("inf")
+                    continue
+                delay = min(RESTART_BACKOFF_S[0] * 2 ** p.restarts, RESTART_BACKOFF_S[1]) if p.restarts else 0.0
+                log.error("render process for %s died (exit %s); restarting in %.0f s", ",".join(p.group),
+                          p.proc.returncode, delay)
+                p.next_start = now + delay
+                if delay:
+                    continue
+            p.restarts += 1
+            p.next_start = 0.0
+            self._launch(p)
 
     def stop(self, timeout: float = 60.0) -> list[dict]:
         """Ask every process to finish (SIGTERM: it closes its video and writes its panorama
         and summary), wait, and return their summaries."""
+        self._stop.set()
+        if self._watchdog is not None:
+            self._watchdog.join()
         for p in self.processes:
             if p.proc is not None and p.proc.poll() is None:
                 p.proc.send_signal(signal.SIGTERM)
@@ -100,7 +137,10 @@ class RenderProcesses:
             except subprocess.TimeoutExpired:
                 p.proc.kill()
                 p.proc.wait()
-            summary = json.loads(p.summary.read_text()) if p.summary.exists() else {}
+            try:
+                summary = json.loads(p.summary.read_text()) if p.summary.exists() else {}
+            except (OSError, ValueError):  # a process killed while writing it
+                summary = {}
             out.append(summary | {"group": p.group, "restarts": p.restarts, "exit": p.proc.returncode,
                                   "errors": p.log[-3:], "log": str(p.stderr)})
         return out

@@ -59,10 +59,10 @@ def decode(frames: list) -> tuple[WorldEvents, float | None]:
             seq=int(header["seq"]), time=float(header["time"]), ship=ShipOutputs(**header["ship"]), placed=placed,
             floes_free=int(header["floes_free"]), floes_frozen=int(header["floes_frozen"]),
             rejected=tuple(OrderRejection(**r) for r in header["rejected"]), snapshot=bool(header["snapshot"]),
-            **{k: (v.astype(np.int64) if k in ("floe_rows", "broken_by_hull", "broken_by_contact") else v)
-               for k, v in named.items()})
+            **{k: (v.astype(np.int64) if k in _WIRE and v.dtype.kind == "i" else v) for k, v in named.items()})
+        input_time = header["input_time"]
     except CodecError:
         raise
     except (ValueError, KeyError, TypeError, IndexError) as exc:
         raise CodecError(f"malformed state message: {exc}") from None
-    return events, header["input_time"]
+    return events, input_time

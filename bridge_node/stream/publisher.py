@@ -48,25 +48,17 @@ class StatePublisher:
         self._error: BaseException | None = None
 
     def open(self) -> None:
-        """Bind the sockets (raises zmq.ZMQError, e.g. address in use) and start the thread."""
-        pull = self.context.socket(zmq.PULL)
-        pull.bind(self._inproc)
-        pub = self.context.socket(zmq.PUB)
-        pub.setsockopt(zmq.SNDHWM, self.settings.send_hwm)
-        router = self.context.socket(zmq.ROUTER)
-        try:
-            pub.bind(self.settings.publish)
-            router.bind(self.settings.snapshot)
-        except zmq.ZMQError:
-            for s in (pull, pub, router):
-                s.close(linger=0)
-            raise
+        """Start the thread, which creates and binds its sockets (all ZeroMQ sockets are
+        used by the thread that made them); raises zmq.ZMQError, e.g. address in use."""
+        self._thread = threading.Thread(target=self._serve, name="state-publisher", daemon=True)
+        self._thread.start()
+        self._ready.wait()
+        if self._error is not None:
+            self._thread.join()
+            raise self._error
         self._push = self.context.socket(zmq.PUSH)
         self._push.setsockopt(zmq.SNDHWM, HANDOVER_HWM)
         self._push.connect(self._inproc)
-        self._thread = threading.Thread(target=self._serve, args=(pull, pub, router), name="state-publisher",
-                                        daemon=True)
-        self._thread.start()
 
     def publish(self, events: WorldEvents, input_time: float | None = None) -> None:
         """Hand one step's events to the publisher thread; never blocks."""
@@ -75,46 +67,81 @@ class StatePublisher:
         except zmq.Again:
             self.dropped += 1
 
-    def _serve(self, pull: zmq.Socket, pub: zmq.Socket, router: zmq.Socket) -> None:
+    def _bind(self) -> list[zmq.Socket]:
+        pull, pub, router = (self.context.socket(kind) for kind in (zmq.PULL, zmq.PUB, zmq.ROUTER))
+        pub.setsockopt(zmq.SNDHWM, self.settings.send_hwm)
+        pub.setsockopt(zmq.LINGER, 500)  # ms: the last steps still reach subscribers on close
+        try:
+            pull.bind(self._inproc)
+            pub.bind(self.settings.publish)
+            router.bind(self.settings.snapshot)
+        except zmq.ZMQError:
+            for s in (pull, pub, router):
+                s.close(linger=0)
+            raise
+        return [pull, pub, router]
+
+    def _serve(self) -> None:
+        try:
+            pull, pub, router = self._bind()
+        except zmq.ZMQError as exc:
+            self._error = exc
+            self._ready.set()
+            return
+        self._ready.set()
+        try:
+            self._loop(pull, pub, router)
+        except (zmq.ZMQError, ValueError) as exc:  # reported by close(); the physics loop goes on
+            self._error = exc
+            log.error("state publisher stopped: %s", exc)
+        finally:
+            pull.close(linger=0)
+            router.close(linger=0)
+            pub.close()
+
+    def _loop(self, pull: zmq.Socket, pub: zmq.Socket, router: zmq.Socket) -> None:
         view = WorldView()
         poller = zmq.Poller()
         poller.register(pull, zmq.POLLIN)
         poller.register(router, zmq.POLLIN)
         beat = time.monotonic()
-        try:
-            while True:
-                ready = dict(poller.poll(int(HEARTBEAT_S * 1000)))
-                if time.monotonic() - beat >= HEARTBEAT_S and view.ship is not None:
-                    pub.send_multipart([HEARTBEAT, str(view.seq).encode()])
-                    beat = time.monotonic()
-                if pull in ready:
-                    frames = pull.recv_multipart()
-                    if frames == [b"stop"]:
-                        break
-                    view.apply(decode(frames)[0])
-                    pub.send_multipart(frames)  # PUB drops at a subscriber's high-water mark
-                    self.sent += 1
-                if router in ready:
-                    identity, *request = router.recv_multipart()
-                    if request == [SNAPSHOT_REQUEST] and view.ship is not None:
-                        router.send_multipart([identity, *encode(view.to_snapshot())])
-                        self.snapshots += 1
-                    else:
-                        router.send_multipart([identity, b"not-ready"])
-        except BaseException as exc:  # reported by close(); the physics loop goes on
-            self._error = exc
-            log.error("state publisher stopped: %s", exc)
-        finally:
-            for s in (pull, pub, router):
-                s.close(linger=0)
+        while True:
+            ready = dict(poller.poll(int(HEARTBEAT_S * 1000)))
+            if time.monotonic() - beat >= HEARTBEAT_S and view.ship is not None:
+                pub.send_multipart([HEARTBEAT, str(view.seq).encode()])
+                beat = time.monotonic()
+            if pull in ready:
+                frames = pull.recv_multipart()
+                if frames == [b"stop"]:
+                    return
+                view.apply(decode(frames)[0])
+                pub.send_multipart(frames)  # PUB drops at a subscriber's high-water mark
+                self.sent += 1
+            if router in ready:
+                identity, *request = router.recv_multipart()
+                if request == [SNAPSHOT_REQUEST] and view.ship is not None:
+                    router.send_multipart([identity, *encode(view.to_snapshot())])
+                    self.snapshots += 1
+                else:
+                    router.send_multipart([identity, b"not-ready"])
+
+    @property
+    def error(self) -> str | None:
+        """Why the publisher thread stopped, if it did."""
+        return None if self._error is None else str(self._error)
 
     def close(self) -> None:
-        """Stop the thread and release the sockets; safe to call twice."""
-        if self._push is not None:
-            self._push.send_multipart([b"stop"])
+        """Stop the thread and release the sockets; safe to call twice, never hangs."""
+        if self._push is None:
+            return
+        if self._thread.is_alive():
+            try:
+                self._push.send_multipart([b"stop"], flags=zmq.NOBLOCK)
+            except zmq.Again:
+                pass
             self._thread.join(5.0)
-            self._push.close(linger=0)
-            self._push = None
+        self._push.close(linger=0)
+        self._push = None
 
     def __enter__(self) -> "StatePublisher":
         if self._push is None:

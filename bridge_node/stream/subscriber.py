@@ -41,22 +41,27 @@ class StateSubscriber:
         self._sub.connect(publish)
         self._dealer: zmq.Socket | None = None
 
-    def sync(self) -> None:
-        """Ask for a snapshot and apply it; StreamError if none comes within the timeout."""
+    def sync(self, give_up=lambda: False) -> None:
+        """Ask for a snapshot and apply it; StreamError if none comes within the timeout
+        (or when ``give_up()`` turns true while waiting)."""
         deadline = time.monotonic() + self.timeout_s
         self._request()
         while True:
             if self._dealer.poll(200):
                 frames = self._dealer.recv_multipart()
                 if frames != [b"not-ready"]:
-                    message = decode(frames)
+                    try:
+                        message = decode(frames)
+                    except CodecError:
+                        self.malformed += 1
+                        continue
                     if message[0].seq >= self.view.seq:  # not a stale reply to an earlier request
                         self._apply(message)
                         return
                     continue
                 time.sleep(0.05)  # the node has not stepped yet: ask again
                 self._request()
-            if time.monotonic() > deadline:
+            if time.monotonic() > deadline or give_up():
                 self._dealer.close(linger=0)  # a fresh socket next time drops a stale reply
                 self._dealer = None
                 raise StreamError(f"no snapshot from {self.snapshot_endpoint} within {self.timeout_s:g} s: "
