@@ -10,7 +10,7 @@ import sys
 import time
 
 import pytest
-from conftest import REPO
+from conftest import REPO, exercise_toml
 
 HERE = os.path.dirname(__file__)
 
@@ -52,3 +52,17 @@ def test_window_output_without_a_display_is_a_clear_error(tmp_path):
     r = subprocess.run([sys.executable, "-m", "bridge_node", "render-snapshot", "--config", str(cfg), "--time", "0",
                         "--out", str(tmp_path)], capture_output=True, text=True, cwd=REPO, env=env, timeout=300)
     assert r.returncode == 2 and "no display" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_run_with_a_display_shows_the_window_channels(display, tmp_path):
+    """The main job on a display: its render process opens the window channel and draws it
+    from the state stream (no video or panorama: those are for headless runs)."""
+    cfg = exercise_toml(tmp_path, '[[render.channels]]\nname = "bow"\nwidth = 160\nheight = 90\noutput = "window"\n')
+    r = subprocess.run([sys.executable, "-m", "bridge_node", "run", "--config", str(cfg), "--duration", "4", "--json",
+                        "--no-record", "--out", str(tmp_path)], capture_output=True, text=True, cwd=REPO,
+                       env=os.environ | {"DISPLAY": display}, timeout=300)
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    proc, = out["render_processes"]
+    assert proc["exit"] == 0 and proc["restarts"] == 0 and proc["frames"] > 0 and proc["channels"] == ["bow"]
+    assert out["video"] == [] and out["panorama"] == []
