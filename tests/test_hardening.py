@@ -154,7 +154,11 @@ def paths_of(node, prefix=()):
         yield from paths_of(value, prefix + (key,))
 
 
-@settings(max_examples=2000, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+MUTANTS = int(os.environ.get("ICEBRIDGE_MUTANTS", "2000"))  # more for an exploring run
+
+
+@settings(max_examples=MUTANTS, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture],
+          derandomize=MUTANTS == 2000)  # the suite's run is the same every time; exploring runs are random
 @given(st.sampled_from([DEFAULT_CONFIG, CONSOLE]), st.data())
 def test_mutated_configs_are_clean_errors_or_valid_configs(tmp_path, seed, data):
     doc = tomllib.loads(seed.read_text())

@@ -68,7 +68,7 @@ def criteria(result: TrialResult, length: float) -> list[tuple[str, float, float
 
 def run(args: argparse.Namespace) -> int:
     cfg = load_config(args.config)
-    particulars = load_ship(args.ship or cfg.ship.name, args.config)
+    particulars = load_ship(args.ship or cfg.ship.name, args.config, "--ship" if args.ship else "ship.name")
     model = compile_ship(particulars, cfg.ice_material)
     speed_kn = particulars.service_speed_kn if args.speed is None else args.speed
     _check("--speed", speed_kn, 0.0, 30.0, lo_open=True)

@@ -148,18 +148,20 @@ def _dbc_file(config: Path, key: str, value: str) -> Path:
     return path
 
 
-def load_ship(name: str, config_path: str | Path | None = None) -> ShipParticulars:
+def load_ship(name: str, config_path: str | Path | None = None, key: str = "ship.name") -> ShipParticulars:
     """Particulars of the named ship, from ``ships/<name>.toml`` beside the config file, or
-    from the built-in ``config/ships``. Raises ConfigError."""
+    from the built-in ``config/ships``. Raises ConfigError naming the config file and the
+    key (or option) the name came from."""
+    where = f"{config_path or DEFAULT_CONFIG}: {key} = {name[:80]!r}"
     if not re.fullmatch(SHIP_NAME, name):
-        raise ConfigError(f"ship name {name[:80]!r}: letters, digits, _ and - only, at most 64 characters")
+        raise ConfigError(f"{where}: a ship name is letters, digits, _ and - only, at most 64 characters")
     folders = [resolve_path(config_path, "ships"), DEFAULT_CONFIG.parent / "ships"]
     for folder in folders:
         path = folder / f"{name}.toml"
         if path.is_file():
             return _load_validated(path, ShipParticulars)
     known = sorted({p.stem for f in folders if f.is_dir() for p in f.glob("*.toml")})
-    raise ConfigError(f"unknown ship {name!r}; ships available: {', '.join(known) or 'none'}")
+    raise ConfigError(f"{where}: unknown ship {name!r}; ships available: {', '.join(known) or 'none'}")
 
 
 def _load_validated(path: Path, schema: type[Params]) -> Params:
