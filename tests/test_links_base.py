@@ -22,7 +22,7 @@ from bridge_node.links.registry import make_link, open_link
 from bridge_node.links.session_record import SessionRecord
 
 LINKS = [{"type": "can", "name": "helm_can", "channel": "icebridge-base", "allowed_sources": "any"},
-         {"type": "nmea0183", "name": "nmea", "udp_port": None},
+         {"type": "nmea0183", "name": "nmea", "udp_output": False},
          {"type": "modbus", "name": "io", "registers": [{"order": "rudder", "address": 0}]}]
 
 
@@ -61,7 +61,7 @@ class FakeLink(Link):
     """A link over ``FakeDevice``; ``fail_opens`` failures before an open succeeds."""
 
     def __init__(self) -> None:
-        super().__init__(SimpleNamespace(name="fake"))
+        super().__init__(SimpleNamespace(name="fake", engine=0))
         self.fail_opens = 0
         self.devices: list[FakeDevice] = []
 

@@ -27,7 +27,7 @@ def test_console_orders_and_instrument_outputs_over_a_pty(tmp_path, baud):
     udp = udp_listener()
     with pty_pair(tmp_path) as (node_end, console_end):
         cfg = node_config([{"type": "nmea0183", "name": "nmea", "port": node_end, "baudrate": baud,
-                            "udp_port": udp.getsockname()[1], "rates": {"RMC": 1, "GGA": 1, "VTG": 0, "ZDA": 0,
+                            "udp_output": True, "udp_port": udp.getsockname()[1], "rates": {"RMC": 1, "GGA": 1, "VTG": 0, "ZDA": 0,
                             "HDT": 5, "ROT": 1, "RSA": 1, "RPM": 1, "VBW": 0, "XDR": 0}}],
                           rudder=["nmea"], engine=["nmea"])
         hub = LinkHub(cfg.links, cfg.arbitration)
@@ -58,7 +58,7 @@ def test_console_orders_and_instrument_outputs_over_a_pty(tmp_path, baud):
         if line:
             m = pynmea2.parse(line, check=True)
             msgs[m.sentence_type] = m
-            assert m.talker == {"RMC": "GP", "GGA": "GP", "HDT": "HE", "ROT": "HE"}.get(m.sentence_type, "II")
+            assert m.talker == {"RMC": "GP", "GGA": "GP", "HDT": "IN", "ROT": "IN"}.get(m.sentence_type, "II")
     assert float(msgs["HDT"].heading) == pytest.approx(123.4, abs=0.05)
     assert float(msgs["RSA"].rsa_starboard) == pytest.approx(-12.3, abs=0.05)
     assert float(msgs["RPM"].speed) == pytest.approx(STATE.shaft_rps * 60, abs=0.05)
@@ -79,7 +79,7 @@ def test_console_orders_and_instrument_outputs_over_a_pty(tmp_path, baud):
 
 def test_bad_sentences_on_the_line_are_counted_not_fatal(tmp_path):
     with pty_pair(tmp_path) as (node_end, console_end):
-        cfg = node_config([{"type": "nmea0183", "name": "nmea", "port": node_end, "udp_port": None,
+        cfg = node_config([{"type": "nmea0183", "name": "nmea", "port": node_end,
                             "allowed_talkers": ["RC"]}], rudder=["nmea"])
         hub = LinkHub(cfg.links, cfg.arbitration)
         hub.open()

@@ -6,7 +6,8 @@ whichever the winning source sent last). A source is fresh while its last order 
 kind is younger than its link's timeout. When the winning source goes stale the next fresh
 one takes over and an alarm is raised; when every source is stale, the configured fail-safe
 applies after ``fail_safe_after_s`` (hold the last order, or midships and stop) and a
-second alarm is raised. Alarms clear when a source is fresh again.
+second alarm is raised. Alarms clear when a source is fresh again. Alarm texts name at most
+one link, so that they fit an ALR sentence whole (link names have at most 24 characters).
 """
 from __future__ import annotations
 
@@ -73,10 +74,10 @@ class OrderArbiter:
         stale_no, fail_no = ALARM_NUMBERS[name]
         if source is None:
             ch.stale_alarm = True
-            return [Alarm(stale_no, f"{name} source {ch.active} stale; no other source", True)]
+            return [Alarm(stale_no, f"every {name} source stale", True)]
         if ch.active is not None and ch.sources.index(source) > ch.sources.index(ch.active):
             ch.stale_alarm = True  # the winner went stale: a lower-priority source takes over
-            return [Alarm(stale_no, f"{name} source {ch.active} stale; using {source}", True)]
+            return [Alarm(stale_no, f"{name} source stale; now {source}", True)]
         alarms = []  # the first source, or a better one fresh again: clear the alarms raised
         if ch.stale_alarm:
             alarms.append(Alarm(stale_no, f"{name} source {source} in use", False))

@@ -29,6 +29,7 @@ if TYPE_CHECKING:
 
 RUDDER, TELEGRAPH, LEVER = "rudder", "telegraph", "lever"  # the kinds of order
 RUDDER_ORDER_LIMIT_DEG = 90.0  # beyond this a rudder order is nonsense, not an order to clamp
+ALARM_TEXT_MAX = 52  # characters: what an ALR sentence's text field holds within NMEA 0183's 82
 # ETL position codes (IEC 61162-1; also the console's CAN and Modbus codes) -> telegraph positions
 ETL_POSITIONS = {
     "00": "stop", "01": "dead_slow_ahead", "02": "slow_ahead", "03": "half_ahead", "04": "full_ahead",
@@ -51,11 +52,16 @@ class ControlInput:
 
 @dataclass(frozen=True)
 class Alarm:
-    """An alarm the node raises: id number, text, and whether it is active now."""
+    """An alarm the node raises: id number, text, and whether it is active now. Texts are
+    written to fit ALR whole (at most ``ALARM_TEXT_MAX`` characters, no commas): never cut."""
 
     number: int
     text: str
     active: bool
+
+    def __post_init__(self) -> None:
+        if len(self.text) > ALARM_TEXT_MAX or any(c in self.text for c in ",*$!"):
+            raise ValueError(f"alarm text {self.text!r}: at most {ALARM_TEXT_MAX} characters, no , * $ !")
 
 
 @dataclass
@@ -143,7 +149,10 @@ class RateSchedule:
 class Link(ABC):
     """A link to the console and instruments over one device (port, bus, or worker thread)
     held in ``self.device``, which may fail at any time: a failure to open it or its loss in
-    use is counted, and it is reopened after a back-off (0.1 s doubling to 1 s)."""
+    use is counted, and it is reopened after a back-off (0.1 s doubling to 1 s).
+
+    Engine orders (telegraph, lever) for another engine than the link's ``engine`` are
+    counted as ``other_engine`` and dropped: the ship has one shaft."""
 
     type_name: ClassVar[str] = ""  # the settings' ``type``; set by ``register_link``
     open_errors: ClassVar[tuple[type[Exception], ...]] = (OSError,)  # opening the device raises these
@@ -159,6 +168,7 @@ class Link(ABC):
         self._health = LinkHealth(self.name)
         self._backoff = Backoff()
         self._active = False  # between open() and close()
+        self._failed = False  # a real failure since the link was last up
 
     def open(self) -> None:
         """Open the device. A peer that is not there yet is not an error: the link reports
@@ -196,7 +206,10 @@ class Link(ABC):
         inputs = []
         try:
             for order in self._poll_device(now):  # orders before a failure are kept
-                inputs.append(order)
+                if order.kind != RUDDER and order.engine != self.settings.engine:
+                    self._count_error("other_engine")
+                else:
+                    inputs.append(order)
         except self.lost_errors:
             self._lost(now)
         self._health.inputs += len(inputs)
@@ -213,6 +226,12 @@ class Link(ABC):
     def connected(self) -> bool:
         """Whether the device is open (or, for a link with ``up_when_open`` False, the peer answers)."""
         return self._health.connected
+
+    @property
+    def failed(self) -> bool:
+        """Down after a real failure (an open or a request that failed, a device lost), until
+        the link is up again; a link still waiting for its first answer has not failed."""
+        return self._failed and not self._health.connected
 
     def health(self) -> LinkHealth:
         """A snapshot of the link's state and counters."""
@@ -270,6 +289,7 @@ class Link(ABC):
 
     def _down(self, now: float, kind: str) -> None:
         self._health.connected = False
+        self._failed = True
         self._count_error(kind)
         self._backoff.failed(now)
 

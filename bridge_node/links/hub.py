@@ -96,10 +96,10 @@ class LinkHub:
         decision = self.arbiter.decide(now)
         for alarm in decision.alarms:
             self.raise_alarm(alarm, now)
-        for i, link in enumerate(self.links):
-            number, up = LINK_DOWN_ALARM + i, link.connected
-            if up == (number in self.active_alarms):
-                self.raise_alarm(Alarm(number, f"link {link.name} {'up' if up else 'down'}", not up), now)
+        for i, link in enumerate(self.links):  # raised only after a real failure, not while a link starts
+            number, down = LINK_DOWN_ALARM + i, link.failed
+            if down != (number in self.active_alarms):
+                self.raise_alarm(Alarm(number, f"link {link.name} {'down' if down else 'up'}", down), now)
         return decision
 
     def raise_alarm(self, alarm: Alarm, now: float) -> None:
@@ -127,7 +127,7 @@ class LinkHub:
         for listener in self.listeners:
             listener.flush()
         if self.record is not None and self.record.failed and RECORD_ALARM not in self.active_alarms:
-            self.raise_alarm(Alarm(RECORD_ALARM, f"session record stopped: {self.record.failed}"[:40], True), now)
+            self.raise_alarm(Alarm(RECORD_ALARM, "session record stopped (see the log)", True), now)
 
     def errors(self) -> Counter:
         """Error counts by kind, summed over the links."""

@@ -139,7 +139,7 @@ class _Worker:
             self._client = client
             return True
         client.close()
-        self.events.put((ERROR, "connect_failed"))
+        self.events.put((DOWN, "connect_failed"))
         return False
 
     def _run(self) -> None:
@@ -249,10 +249,11 @@ class ModbusLink(Link):
                 self._health.connected = True
                 self._health.reconnects += self._answered_before
                 self._answered_before = True
-            else:  # ERROR, or DOWN: a failed request dropped the connection
+            else:  # ERROR, or DOWN: a connect or request failed
                 self._count_error(payload)
                 if event == DOWN:
                     self._health.connected = False
+                    self._failed = True
         if not alive:
             raise WorkerDied(f"modbus link {self.name}: polling thread ended")
 

@@ -17,16 +17,24 @@ from bridge_node.links.base import ETL_POSITIONS, LEVER, RUDDER, RUDDER_ORDER_LI
 from sim_core.frames.units import KNOT
 from sim_core.ship.outputs import ShipOutputs
 
-MAX_LENGTH = 82  # characters including $ and CR LF
-# sentence -> default talker, as a real installation would send them
-DEFAULT_TALKERS = {"RMC": "GP", "GGA": "GP", "VTG": "GP", "ZDA": "GP", "HDT": "HE", "ROT": "HE", "RSA": "II",
+# sentence -> default talker. Heading and rate of turn go out as IN (integrated navigation):
+# gpsd up to 3.23 (Debian 12, Ubuntu 22.04) drops the gyro's HE talker in its packet lexer,
+# and every gpsd accepts GP, II and IN; OpenCPN takes any talker.
+DEFAULT_TALKERS = {"RMC": "GP", "GGA": "GP", "VTG": "GP", "ZDA": "GP", "HDT": "IN", "ROT": "IN", "RSA": "II",
                    "RPM": "II", "VBW": "II", "XDR": "II", "ALR": "II"}
+# talkers whose orders are taken by default: autopilot (general AG, magnetic AP), propulsion
+# and remote control RC, integrated instrumentation II and integrated navigation IN
+COMMON_ORDER_TALKERS = ("AG", "AP", "RC", "II", "IN")
 DEFAULT_RATES = {"RMC": 1.0, "GGA": 1.0, "VTG": 1.0, "ZDA": 1.0, "HDT": 10.0, "ROT": 5.0, "RSA": 5.0,
                  "RPM": 2.0, "VBW": 1.0, "XDR": 1.0}  # Hz
 TYPICAL_LENGTH = {"RMC": 72, "GGA": 74, "VTG": 40, "ZDA": 36, "HDT": 18, "ROT": 18, "RSA": 22, "RPM": 28,
                   "VBW": 44, "XDR": 34}  # characters with CR LF, to budget a line's baud rate
 
 _DECIMAL = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)")
+# a framed sentence: $ or !, an address (talker + type, or a proprietary P...), fields of
+# printable characters other than the delimiters, and a two-digit checksum
+_FRAME = re.compile(r"[$!](?P<address>[A-Z][A-Z0-9]{1,7})(?P<fields>,[\x20-\x7e]*)?\*(?P<checksum>[0-9A-Fa-f]{2})")
+_DELIMITERS = re.compile(r"[$!*]")
 
 
 def nmea_decimal(text: str) -> float:
@@ -70,6 +78,9 @@ class ALR(pynmea2.TalkerSentence):
               ("Acknowledged", "acknowledged"), ("Text", "text"))
 
 
+ORDER_SENTENCES = {"ROR": ROR, "ETL": ETL, "PRC": PRC}
+
+
 class SentenceError(ValueError):
     """A sentence that is not a usable order; ``kind`` names the error for the counters."""
 
@@ -96,48 +107,68 @@ def _finite(value, what: str, limit: float) -> float:
     return float(value)
 
 
+def checksum(body: str) -> int:
+    """NMEA 0183 checksum: XOR of the characters between ``$``/``!`` and ``*``."""
+    value = 0
+    for c in body:
+        value ^= ord(c)
+    return value
+
+
 def parse_order(line: str, now: float, source: str,
-                allowed_talkers: frozenset[str] = frozenset()) -> list[ControlInput]:
-    """The orders in one console sentence. Raises SentenceError (with a kind for the
-    counters) for anything malformed, unchecked, out of range or not an order."""
+                allowed_talkers: frozenset[str] | None = frozenset(COMMON_ORDER_TALKERS)) -> list[ControlInput]:
+    """The orders in one console sentence (``allowed_talkers`` None: any talker). Raises
+    SentenceError (with a kind for the counters): ``malformed`` only for what cannot be
+    framed as a sentence; ``ignored`` for a well-formed sentence that is not an order (AIS,
+    position, types this node does not read, of any length); the rest for orders that are
+    unchecked, out of range or invalid."""
     line = line.strip()
-    if not line.startswith("$") or len(line) + 2 > MAX_LENGTH:
-        raise SentenceError("malformed", "not a sentence, or longer than 82 characters")
+    if not line.startswith(("$", "!")):
+        raise SentenceError("malformed", "not a sentence")
     if "*" not in line:
         raise SentenceError("no_checksum", "checksum missing")
+    frame = _FRAME.fullmatch(line)
+    if frame is None or _DELIMITERS.search(frame["fields"] or ""):
+        raise SentenceError("malformed", "cannot be framed as a sentence")
+    if checksum(line[1:line.index("*")]) != int(frame["checksum"], 16):
+        raise SentenceError("bad_checksum", "checksum does not match")
+    address = frame["address"]
+    if line[0] != "$" or len(address) != 5 or address[2:] not in ORDER_SENTENCES:
+        raise SentenceError("ignored", f"{address} is not a console order")
+    if allowed_talkers is not None and address[:2] not in allowed_talkers:
+        raise SentenceError("talker_not_allowed", f"talker {address[:2]!r}")
     try:
-        msg = pynmea2.parse(line, check=True)
-    except pynmea2.ChecksumError:
-        raise SentenceError("bad_checksum", "checksum does not match") from None
-    except (pynmea2.ParseError, ValueError, TypeError, AttributeError):
-        raise SentenceError("malformed", "cannot parse") from None
-    if allowed_talkers and getattr(msg, "talker", "") not in allowed_talkers:
-        raise SentenceError("talker_not_allowed", f"talker {getattr(msg, 'talker', '')!r}")
-    try:
-        return _orders(msg, now, source)
-    except (ValueError, TypeError) as exc:
-        if isinstance(exc, SentenceError):
-            raise
+        return _orders(pynmea2.parse(line, check=True), now, source)
+    except SentenceError:
+        raise
+    except (pynmea2.ParseError, ValueError, TypeError, AttributeError) as exc:
         raise SentenceError("bad_field", str(exc)) from None
+
+
+def _rudder_order(msg: ROR) -> float:
+    """ROR's order, rad. The ship model has one rudder: the starboard field is a single
+    rudder's, and a ship whose single rudder is wired as port sends only the port field;
+    with both valid (twin rudders, moved together in the model) the order is their mean,
+    which is the twin rudders' lift while it is linear in the angle."""
+    valid = [_finite(order, "rudder order", RUDDER_ORDER_LIMIT_DEG)
+             for order, status in ((msg.stbd, msg.stbd_status), (msg.port, msg.port_status)) if status == "A"]
+    if not valid:
+        raise SentenceError("invalid_status", "ROR has no valid order (status A)")
+    return math.radians(sum(valid) / len(valid))
 
 
 def _orders(msg, now: float, source: str) -> list[ControlInput]:
     if isinstance(msg, ROR):
-        if msg.stbd_status != "A":
-            raise SentenceError("invalid_status", "ROR status is not A")
-        deg = _finite(msg.stbd, "rudder order", RUDDER_ORDER_LIMIT_DEG)
-        return [ControlInput(now, source, RUDDER, math.radians(deg))]
+        return [ControlInput(now, source, RUDDER, _rudder_order(msg))]
     if isinstance(msg, ETL):
         if msg.message_type != "O":
-            raise SentenceError("not_an_order", "ETL answer-back")
+            raise SentenceError("ignored", "ETL answer-back")
         if msg.position not in ETL_POSITIONS:
             raise SentenceError("out_of_range", f"ETL position {msg.position!r}")
         return [ControlInput(now, source, TELEGRAPH, ETL_POSITIONS[msg.position], _engine(msg.engine))]
-    if isinstance(msg, PRC):
-        if msg.lever_status != "A":
-            raise SentenceError("invalid_status", "PRC lever status is not A")
-        return [ControlInput(now, source, LEVER, _finite(msg.lever, "lever", 100.0), _engine(msg.engine))]
-    raise SentenceError("not_an_order", f"{type(msg).__name__} is not a console order")
+    if msg.lever_status != "A":  # PRC
+        raise SentenceError("invalid_status", "PRC lever status is not A")
+    return [ControlInput(now, source, LEVER, _finite(msg.lever, "lever", 100.0), _engine(msg.engine))]
 
 
 def _lat(rad: float) -> tuple[str, str]:
@@ -183,7 +214,6 @@ def render_outputs(names: list[str], s: ShipOutputs, utc: dt.datetime, talkers: 
 
 
 def render_alarm(alarm: Alarm, utc: dt.datetime, talker: str = "II") -> str:
-    """ALR sentence for an alarm (text cut to fit 82 characters, no commas or asterisks)."""
+    """ALR sentence for an alarm; its text fits whole (see ``Alarm``)."""
     hms = utc.strftime("%H%M%S.") + f"{utc.microsecond // 10000:02d}"
-    text = alarm.text.replace(",", ";").replace("*", "").replace("$", "")[:40]
-    return str(ALR(talker, "ALR", (hms, f"{alarm.number:03d}", "A" if alarm.active else "V", "V", text)))
+    return str(ALR(talker, "ALR", (hms, f"{alarm.number:03d}", "A" if alarm.active else "V", "V", alarm.text)))

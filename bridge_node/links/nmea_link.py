@@ -1,6 +1,7 @@
 """NMEA 0183 link: console orders from a serial line, instrument sentences out on the same
-line (paced within its baud budget) and mirrored on UDP (port 10110, loopback by default)
-for chart plotters such as OpenCPN. Without a serial port the link sends on UDP only."""
+line (paced within its baud budget) and, where the settings say so, copied to UDP (port
+10110 on the loopback by default) for chart plotters such as OpenCPN. A link without a
+serial port sends on UDP only; one with a port copies to UDP only if ``udp_output``."""
 from __future__ import annotations
 
 import datetime as dt
@@ -42,13 +43,13 @@ class NmeaLink(Link):
         self._pending = b""
         self._schedule = RateSchedule(settings.output_rates())
         self._talkers = settings.talkers
-        self._allowed = frozenset(settings.allowed_talkers)
+        self._allowed = settings.order_talkers()
         self._budget = settings.baudrate / 10.0  # characters per second, 8N1
         self._tokens = self._budget
         self._last_refill = time.monotonic()
 
     def open(self) -> None:
-        if self.settings.udp_port and self._udp is None:
+        if self.settings.sends_udp() and self._udp is None:
             self._udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
             if is_loopback_host(self.settings.udp_host):  # never open a port off the host
                 self._udp.bind(("127.0.0.1", 0))

@@ -7,11 +7,12 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from bridge_node.links.nmea0183 import DEFAULT_RATES, DEFAULT_TALKERS, TYPICAL_LENGTH
+from bridge_node.links.nmea0183 import COMMON_ORDER_TALKERS, DEFAULT_RATES, DEFAULT_TALKERS, TYPICAL_LENGTH
 from bridge_node.node.network import NETWORK_CAN_INTERFACES, loopback_unless, serial_port_unless
 from sim_core.params import Params
 
-Name = Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9_\-]+$")]
+NAME_MAX = 24  # characters: every alarm text naming a link then fits an ALR sentence
+Name = Annotated[str, Field(min_length=1, max_length=NAME_MAX, pattern=r"^[A-Za-z0-9_\-]+$")]
 BAUD_RATES = (4800, 9600, 19200, 38400, 57600, 115200)
 BAUD_BUDGET_SHARE = 0.8  # outputs may use this share of a serial line's characters per second
 
@@ -19,6 +20,8 @@ BAUD_BUDGET_SHARE = 0.8  # outputs may use this share of a serial line's charact
 class _LinkBase(Params):
     name: Name
     timeout_s: float = Field(1.0, gt=0.05, le=60.0, description="a source silent this long is stale, s")
+    engine: int = Field(0, ge=0, le=9, description="the engine number (0 centre or single, odd starboard, even "
+                        "port) whose telegraph and lever orders are taken; others are counted as other_engine")
 
 
 def _known_keys(v: dict, allowed: dict, what: str) -> dict:
@@ -28,18 +31,23 @@ def _known_keys(v: dict, allowed: dict, what: str) -> dict:
     return v
 
 
+Talker = Annotated[str, Field(pattern=r"^[A-Z]{2}$")]
+
+
 class NmeaLinkSettings(_LinkBase):
-    """Serial NMEA 0183 console and instruments, with a UDP mirror of the outputs."""
+    """Serial NMEA 0183 console and instruments, with a UDP copy of the outputs."""
 
     type: Literal["nmea0183"]
     port: str | None = Field(None, min_length=1, description="serial port or pyserial URL; unset: UDP output only")
     baudrate: Literal[BAUD_RATES] = 38400
-    talkers: dict[str, Annotated[str, Field(pattern=r"^[A-Z]{2}$")]] = Field(default_factory=dict)
+    talkers: dict[str, Talker] = Field(default_factory=dict)
     rates: dict[str, Annotated[float, Field(ge=0.0, le=20.0)]] = Field(default_factory=dict, description="Hz")
+    udp_output: bool | None = Field(None, description="send the outputs on UDP too; unset: only without a port")
     udp_host: str = "127.0.0.1"
-    udp_port: int | None = Field(10110, ge=1, le=65535, description="unset: no UDP output")
+    udp_port: int = Field(10110, ge=1, le=65535)
     allow_network: bool = False
-    allowed_talkers: list[Annotated[str, Field(pattern=r"^[A-Z]{2}$")]] = Field(default_factory=list)
+    allowed_talkers: Annotated[list[Talker], Field(min_length=1)] | Literal["any"] = Field(
+        list(COMMON_ORDER_TALKERS), description='talkers whose orders are taken, or "any"')
 
     @field_validator("talkers", "rates")
     @classmethod
@@ -60,6 +68,14 @@ class NmeaLinkSettings(_LinkBase):
 
     def output_rates(self) -> dict[str, float]:
         return DEFAULT_RATES | self.rates
+
+    def sends_udp(self) -> bool:
+        """Whether the outputs also go to ``udp_host:udp_port``."""
+        return self.udp_output if self.udp_output is not None else not self.port
+
+    def order_talkers(self) -> frozenset[str] | None:
+        """Talkers whose orders are taken; None: any."""
+        return None if self.allowed_talkers == "any" else frozenset(self.allowed_talkers)
 
 
 N2K_OUTPUTS = {"rudder": 10.0, "engine_rapid": 10.0, "engine_dynamic": 2.0, "heading": 10.0,

@@ -93,6 +93,14 @@ class NodeConfig(Params):
             unknown = [n for n in getattr(self.arbitration, order) if n not in names]
             if unknown:
                 raise ValueError(f"arbitration.{order}: unknown link(s) {unknown}; links: {names}")
+        udp: dict[tuple[str, int], str] = {}  # destination -> the link that sends there
+        for i, link in enumerate(self.links):
+            if link.type == "nmea0183" and link.sends_udp():
+                other = udp.setdefault((link.udp_host, link.udp_port), link.name)
+                if other != link.name:
+                    raise ValueError(f"links.{i}.udp_port = {link.udp_port}: link {link.name!r} would send to "
+                                     f"{link.udp_host}:{link.udp_port} as link {other!r} does; give it another "
+                                     "udp_port, or udp_output = false")
         return self
 
 

@@ -16,6 +16,7 @@ from sim_core.ship.model import OrderRejection
 
 log = logging.getLogger("icebridge.orders")
 REFUSED_ALARM = {"rudder": 121, "telegraph": 122, "lever": 122}  # alarm number per order channel
+REFUSED_TEXT = {121: "rudder orders refused repeatedly", 122: "engine orders refused repeatedly"}
 REFUSALS_FOR_ALARM = 3  # refusals of one channel within the window raise its alarm
 WINDOW_S = 10.0  # s; the alarm clears after a window without a refusal
 
@@ -44,7 +45,7 @@ class OrderRefusals:
                 recent.popleft()
             if len(recent) >= REFUSALS_FOR_ALARM and number not in self._raised:
                 self._raised.add(number)
-                changes.append(Alarm(number, f"orders refused repeatedly: {recent[-1][1]}", True))
+                changes.append(Alarm(number, REFUSED_TEXT[number], True))  # the reasons are logged above
             elif not recent and number in self._raised:
                 self._raised.discard(number)
                 changes.append(Alarm(number, "refused orders stopped", False))
