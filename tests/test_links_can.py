@@ -70,7 +70,7 @@ def test_outputs_decode_with_an_independent_decoder(can_hub):
     hub, peer = can_hub
     tick(hub, STATE, time.monotonic())
     out = decoded_outputs(peer)
-    assert set(out) == {127245, 127488, 127489, 127250, 127251, 129025, 129026}
+    assert set(out) == {60928, 127245, 127488, 127489, 127250, 127251, 129025, 129026}  # the claim, then outputs
     assert out[127245][1] == 0x09F10D23  # priority 2, our source address 0x23
     assert out[127245][0]["position"] == pytest.approx(STATE.rudder_angle, abs=1e-4)
     assert out[127245][0]["angleOrder"] is None  # not available

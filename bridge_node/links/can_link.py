@@ -1,6 +1,8 @@
 """CAN link (python-can): console frames in (decoded with the user's DBC), NMEA 2000 PGN
 127245 rudder orders in as a helm source, and the ship's state out as NMEA 2000 PGNs
-127245, 127488, 127489 (fast packet), 127250, 127251, 129025, 129026 at their rates."""
+127245, 127488, 127489 (fast packet), 127250, 127251, 129025, 129026 at their rates and
+at the priorities of canboat's database. The node is an NMEA 2000 citizen: it claims and
+defends its address, answers ISO requests and sends its heartbeat (``n2k_network``)."""
 from __future__ import annotations
 
 import functools
@@ -23,6 +25,7 @@ from bridge_node.links.base import (
     register_link,
 )
 from bridge_node.links.n2k_frames import fast_packet_frames, identifier, parse_identifier
+from bridge_node.links.n2k_network import FAST_PACKET_PGNS, GLOBAL_ADDRESS, NETWORK_PGNS, Frame, NetworkManager
 from bridge_node.links.settings import CanLinkSettings
 from sim_core.ship.outputs import ShipOutputs
 
@@ -31,11 +34,12 @@ N2K_DBC = CONFIG_DIR / "nmea2000.dbc"
 ID_MASK = 0x03FFFF00  # match any priority and source
 MAX_FRAMES_PER_POLL = 1000
 RUDDER_PGN = 127245
-# output name -> (DBC message, PGN, priority)
+# output name -> (DBC message, PGN, priority); the priorities of canboat's database (docs/canboat.json)
 OUTPUTS = {"rudder": ("Rudder", 127245, 2), "engine_rapid": ("EngineRapid", 127488, 2),
-           "engine_dynamic": ("EngineDynamic", 127489, 3), "heading": ("VesselHeading", 127250, 2),
+           "engine_dynamic": ("EngineDynamic", 127489, 2), "heading": ("VesselHeading", 127250, 2),
            "rate_of_turn": ("RateOfTurn", 127251, 2), "position": ("PositionRapid", 129025, 2),
            "cog_sog": ("CogSogRapid", 129026, 2)}
+FAST_PGNS = FAST_PACKET_PGNS | {127489}
 
 
 @functools.cache
@@ -90,15 +94,22 @@ class CanLink(Link):
         self._allowed = None if settings.allowed_sources == "any" else frozenset(settings.allowed_sources)
         self._sid = 0
         self._fast_seq: dict[int, int] = {}
+        received = {(m.frame_id >> 8) & 0x3FFFF for m in self.console.messages}
+        self.network = NetworkManager(settings.n2k_name, settings.source_address, settings.n2k_product,
+                                      settings.heartbeat_s, [pgn for _, pgn, _ in OUTPUTS.values()],
+                                      received | ({RUDDER_PGN} if settings.rudder_order_pgn else set()))
 
     def _open_device(self) -> can.BusABC:
         s = self.settings
-        return can.Bus(interface=s.interface, channel=s.channel, bitrate=s.bitrate)
+        bus = can.Bus(interface=s.interface, channel=s.channel, bitrate=s.bitrate)
+        self.network.restart()  # a new bus: claim the address again
+        return bus
 
     def _close_device(self, bus: can.BusABC) -> None:
         bus.shutdown()
 
     def _poll_device(self, now: float) -> Iterator[ControlInput]:
+        self._transmit(self.network.tick(now))
         for _ in range(MAX_FRAMES_PER_POLL):
             msg = self.device.recv(timeout=0.0)
             if msg is None:
@@ -117,8 +128,15 @@ class CanLink(Link):
         if msg.is_fd or len(msg.data) > 8:  # consoles and NMEA 2000 speak classic CAN
             self._count_error("fd_frame")
             return []
-        _, pgn, source = parse_identifier(msg.arbitration_id)
-        if source == self.settings.source_address:  # our own address: another node claims it, or an echo
+        _, pgn, source, destination = parse_identifier(msg.arbitration_id)
+        if pgn in NETWORK_PGNS:  # address claims and ISO requests, from any device
+            answer = self.network.on_frame(pgn, source, destination, bytes(msg.data), now)
+            if answer is None:
+                self._count_error("wrong_dlc")
+            else:
+                self._transmit(answer)
+            return []
+        if source == self.network.address:  # our own address: a device that has not claimed it, or an echo
             self._count_error("own_address")
             return []
         if self._allowed is not None and source not in self._allowed:
@@ -188,36 +206,48 @@ class CanLink(Link):
         return [ControlInput(now, self.name, RUDDER, angle)]
 
     def publish(self, state: ShipOutputs, now: float) -> None:
-        if self.device is None:
+        if self.device is None or not self.network.can_send:
             return
         due = self._schedule.due(now)
         if due:
             self._sid = (self._sid + 1) % 253
+        frames = []
         for name in due:
             message, pgn, priority = OUTPUTS[name]
             payload = self.n2k.get_message_by_name(message).encode(_n2k_fields(name, state, self._sid), strict=False)
-            if len(payload) > 8:
-                seq = self._fast_seq.get(pgn, -1) + 1
-                self._fast_seq[pgn] = seq % 8
-                frames = fast_packet_frames(payload, seq)
-            else:
-                frames = [payload]
-            can_id = identifier(priority, pgn, self.settings.source_address)
-            for data in frames:
-                if not self._send(can.Message(timestamp=time.time(), arbitration_id=can_id, data=data,
-                                              is_extended_id=True, is_rx=False), now):
-                    return
+            frames.append(Frame(priority, pgn, self.network.address, GLOBAL_ADDRESS, payload))
+        try:
+            self._transmit(frames)
+        except self.lost_errors:
+            self._lost(now)
 
-    def _send(self, msg: can.Message, now: float) -> bool:
-        """Send one frame; False if the bus was lost (the rest of this cycle is dropped)."""
+    def _transmit(self, frames: list[Frame]) -> None:
+        """Send PGNs (fast packet for the PGNs defined so); raises one of ``lost_errors`` if
+        the bus was lost. A node that cannot claim an address reports itself down, once."""
+        if self.network.state == "cannot_claim" and self._health.connected:
+            self._health.connected = False
+            self._failed = True
+            self._count_error("cannot_claim")
+        if self.device is None:
+            return
+        for f in frames:
+            if f.pgn in FAST_PGNS:
+                seq = self._fast_seq.get(f.pgn, -1) + 1
+                self._fast_seq[f.pgn] = seq % 8
+                datas = fast_packet_frames(f.payload, seq)
+            else:
+                datas = [f.payload]
+            can_id = identifier(f.priority, f.pgn, f.source, f.destination)
+            for data in datas:
+                self._send(can.Message(timestamp=time.time(), arbitration_id=can_id, data=data, is_extended_id=True,
+                                       is_rx=False))
+
+    def _send(self, msg: can.Message) -> None:
+        """Send one frame; a full transmit buffer drops it (counted), the next cycle follows."""
         try:
             self.device.send(msg, timeout=0.0)
         except can.CanOperationError:
-            self._count_error("send_failed")  # transmit buffer full: drop, the next cycle follows
-            return True
-        except self.lost_errors:
-            self._lost(now)
-            return False
+            self._count_error("send_failed")
+            return
         self._health.outputs += 1
         self._report("tx", msg, msg.timestamp)
-        return True

@@ -17,19 +17,22 @@ def identifier(priority: int, pgn: int, source: int, destination: int = 0xFF) ->
     return ((priority & 0x7) << 26) | ((pgn & 0x3FFFF) << 8) | (source & 0xFF)
 
 
-def parse_identifier(can_id: int) -> tuple[int, int, int]:
-    """(priority, PGN, source) of a 29-bit identifier (the destination dropped from PDU1)."""
+def parse_identifier(can_id: int) -> tuple[int, int, int, int]:
+    """(priority, PGN, source, destination) of a 29-bit identifier; the destination is the
+    PS byte of a PDU1 PGN (PF < 240), else 255 (all)."""
     pgn = (can_id >> 8) & 0x3FFFF
+    destination = 0xFF
     if (pgn >> 8) & 0xFF < 240:
-        pgn &= 0x3FF00
-    return (can_id >> 26) & 0x7, pgn, can_id & 0xFF
+        pgn, destination = pgn & 0x3FF00, pgn & 0xFF
+    return (can_id >> 26) & 0x7, pgn, can_id & 0xFF, destination
 
 
 def fast_packet_frames(payload: bytes, sequence: int) -> list[bytes]:
     """Split a payload into fast-packet frames: frame 0 = [seq<<5 | 0, length, 6 bytes],
-    then [seq<<5 | n, 7 bytes]; the last frame padded with 0xFF."""
-    if not 8 < len(payload) <= FAST_PACKET_MAX:
-        raise ValueError(f"fast packet carries 9..{FAST_PACKET_MAX} bytes, got {len(payload)}")
+    then [seq<<5 | n, 7 bytes]; the last frame padded with 0xFF. A fast-packet PGN goes out
+    so even when its payload is short."""
+    if not 0 < len(payload) <= FAST_PACKET_MAX:
+        raise ValueError(f"fast packet carries 1..{FAST_PACKET_MAX} bytes, got {len(payload)}")
     head = (sequence & 0x7) << 5
     frames = [bytes([head, len(payload)]) + payload[:6]]
     rest = payload[6:]

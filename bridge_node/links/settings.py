@@ -7,6 +7,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from bridge_node.links.n2k_network import N2kName, N2kProduct
 from bridge_node.links.nmea0183 import COMMON_ORDER_TALKERS, DEFAULT_RATES, DEFAULT_TALKERS, TYPICAL_LENGTH
 from bridge_node.node.network import NETWORK_CAN_INTERFACES, loopback_unless, serial_port_unless
 from sim_core.params import Params
@@ -92,7 +93,11 @@ class CanLinkSettings(_LinkBase):
     bitrate: int = Field(250_000, ge=10_000, le=1_000_000)
     dbc: str = Field("console.dbc", min_length=1,
                      description="console frames: relative to the config file's folder, else to config/")
-    source_address: int = Field(0x23, ge=0, le=251, description="this node's NMEA 2000 source address")
+    source_address: int = Field(0x23, ge=0, le=251, description="this node's preferred NMEA 2000 source address, "
+                                "claimed and defended per ISO 11783-5")
+    n2k_name: N2kName = Field(default_factory=N2kName, description="the node's ISO NAME (PGN 60928)")
+    n2k_product: N2kProduct = Field(default_factory=N2kProduct, description="product information (PGN 126996)")
+    heartbeat_s: float = Field(60.0, ge=1.0, le=60.0, description="heartbeat (PGN 126993) period, s")
     allowed_sources: Annotated[list[Annotated[int, Field(ge=0, le=253)]], Field(min_length=1)] | Literal["any"] = Field(
         description='source addresses whose orders are taken (the console\'s), or "any": every device on the bus')
     allow_network: bool = Field(False, description="allow interfaces and channels that reach a network")
