@@ -2,17 +2,15 @@
 twin-engine telegraphs, sentences that are not orders, heading that gpsd accepts, the UDP
 copy per link, alarm texts that fit ALR, and no Modbus link-down alarm before a real failure."""
 import datetime as dt
-import json
 import math
-import shutil
 import socket
-import subprocess
 import time
 
 import pynmea2
 import pytest
 import serial
 from conftest import free_port
+from gpsd_client import gpsd, gpsd_version
 from links_helpers import STATE, node_config, paced_write, pty_pair, tick, wait_for
 from modbus_console import ModbusConsole
 from pydantic import ValidationError
@@ -141,39 +139,12 @@ def test_non_order_traffic_on_the_line_is_ignored_not_malformed(tmp_path):
 
 
 def gpsd_headings(talkers: dict, tmp_path) -> list:
-    """Run the node's UDP output into a real gpsd for a while; the headings gpsd reports."""
-    if shutil.which("gpsd") is None:
-        raise RuntimeError("gpsd is missing: run scripts/setup.sh, which installs it")
-    udp_port, gpsd_port = free_port(), free_port()
-    proc = subprocess.Popen(["gpsd", "-N", "-n", "-b", "-S", str(gpsd_port), "-F", str(tmp_path / "gpsd.sock"),
-                             f"udp://127.0.0.1:{udp_port}"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    cfg = node_config([{"type": "nmea0183", "name": "instruments", "udp_port": udp_port, "talkers": talkers}])
-    reports = []
-    try:
-        client = None
-        deadline = time.monotonic() + 10.0
-        while client is None:
-            try:
-                client = socket.create_connection(("127.0.0.1", gpsd_port))
-            except ConnectionRefusedError:
-                assert time.monotonic() < deadline, "gpsd did not start"
-                time.sleep(0.05)
-        client.sendall(b'?WATCH={"enable":true,"json":true};\n')
-        client.settimeout(0.05)
-        text = b""
+    """Run the node's UDP output into a real gpsd; the headings gpsd reports."""
+    with gpsd(tmp_path) as (udp_port, collect):
+        cfg = node_config([{"type": "nmea0183", "name": "instruments", "udp_port": udp_port, "talkers": talkers}])
         with LinkHub(cfg.links, cfg.arbitration) as hub:
-            t0 = time.monotonic()
-            while time.monotonic() - t0 < 3.0 and b'"TPV"' not in text or time.monotonic() - t0 < 1.5:
-                tick(hub, STATE, time.monotonic())
-                try:
-                    text += client.recv(65536)
-                except socket.timeout:
-                    pass
-        client.close()
-        reports = [json.loads(line) for line in text.decode().splitlines() if line.startswith("{")]
-    finally:
-        proc.terminate()
-        proc.wait(5.0)
+            reports = collect(lambda: tick(hub, STATE, time.monotonic()), 3.0,
+                              lambda r: sum(x["class"] == "TPV" for x in r) >= 2)
     assert any(r["class"] == "TPV" and r.get("lat") == pytest.approx(74.0012345, abs=1e-5) for r in reports)
     return [r["heading"] for r in reports if r["class"] == "ATT" and "heading" in r]
 
@@ -182,7 +153,7 @@ def test_gpsd_shows_the_heading_of_the_default_talkers(tmp_path):
     """gpsd as Debian 12 ships it (3.22) takes the default HDT; a gyro's HE talker it drops."""
     headings = gpsd_headings({}, tmp_path)
     assert headings and all(h == pytest.approx(123.4, abs=0.05) for h in headings)
-    if subprocess.run(["gpsd", "-V"], capture_output=True, text=True).stdout.split()[1] < "3.24":
+    if gpsd_version() < (3, 24):
         assert gpsd_headings({"HDT": "HE"}, tmp_path) == []  # why HE is no longer the default
 
 

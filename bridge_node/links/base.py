@@ -64,6 +64,26 @@ class Alarm:
             raise ValueError(f"alarm text {self.text!r}: at most {ALARM_TEXT_MAX} characters, no , * $ !")
 
 
+@dataclass(frozen=True)
+class Vessel:
+    """Another vessel the node knows of (one a DIS simulator sends, say), SI: rad, m/s, m.
+    ``time`` is the node's monotonic clock when it was last heard of, s; dimensions 0 are
+    unknown."""
+
+    key: str  # unique among the vessels: the source and its own id
+    mmsi: int
+    name: str
+    time: float
+    latitude: float
+    longitude: float
+    heading: float  # true, [0, 2 pi)
+    course_over_ground: float
+    speed_over_ground: float
+    rate_of_turn: float  # + to starboard
+    length: float = 0.0
+    beam: float = 0.0
+
+
 @dataclass
 class LinkHealth:
     """What a link reports about itself; ``Link.health()`` hands out a copy."""
@@ -221,6 +241,13 @@ class Link(ABC):
 
     def publish_alarm(self, alarm: Alarm, now: float) -> None:
         """Announce an alarm on this link, where its protocol has a way to (default: none)."""
+
+    def vessels(self, now: float) -> list[Vessel]:
+        """The other vessels this link hears of, as of ``now`` (monotonic s; default: none)."""
+        return []
+
+    def publish_vessels(self, vessels: list[Vessel], now: float) -> None:
+        """Send the other vessels that are due, where the protocol has a way to (default: none)."""
 
     @property
     def connected(self) -> bool:

@@ -2,8 +2,9 @@
 
 Each tick has two phases. ``poll`` polls every link, arbitrates the orders, and collects the
 alarm changes (the arbiter's, and a link-down alarm per link). ``publish`` sends the ship
-state on every link, announces the pending alarm changes (and every active alarm again each
-``ALARM_REPEAT_S``), and flushes the listeners. The links' raw traffic goes to the hub's
+state and the other vessels the links hear of (from DIS) on every link, announces the
+pending alarm changes (and every active alarm again each ``ALARM_REPEAT_S``), and flushes
+the listeners. The links' raw traffic goes to the hub's
 listeners; given a record folder, the hub adds a ``SessionRecord``.
 """
 from __future__ import annotations
@@ -120,8 +121,10 @@ class LinkHub:
         if now - self._last_announce >= ALARM_REPEAT_S:
             self._last_announce = now
             changes += [a for a in self.active_alarms.values() if a not in changes]
+        vessels = [v for link in self.links for v in link.vessels(now)]
         for link in self.links:
             link.publish(state, now)
+            link.publish_vessels(vessels, now)
             for alarm in changes:
                 link.publish_alarm(alarm, now)
         for listener in self.listeners:

@@ -1,7 +1,8 @@
 """NMEA 0183 link: console orders from a serial line, instrument sentences out on the same
 line (paced within its baud budget) and, where the settings say so, copied to UDP (port
 10110 on the loopback by default) for chart plotters such as OpenCPN. A link without a
-serial port sends on UDP only; one with a port copies to UDP only if ``udp_output``."""
+serial port sends on UDP only; one with a port copies to UDP only if ``udp_output``. With
+``[links.ais]`` the own ship also goes out as ``!AIVDO`` and the other vessels as ``!AIVDM``."""
 from __future__ import annotations
 
 import datetime as dt
@@ -11,7 +12,8 @@ from collections.abc import Iterator
 
 import serial
 
-from bridge_node.links.base import Alarm, ControlInput, Link, RateSchedule, register_link
+from bridge_node.links.ais import AisReporter
+from bridge_node.links.base import Alarm, ControlInput, Link, RateSchedule, Vessel, register_link
 from bridge_node.links.nmea0183 import SentenceError, parse_order, render_alarm, render_outputs
 from bridge_node.links.settings import NmeaLinkSettings
 from bridge_node.node.network import is_loopback_host
@@ -44,6 +46,7 @@ class NmeaLink(Link):
         self._schedule = RateSchedule(settings.output_rates())
         self._talkers = settings.talkers
         self._allowed = settings.order_talkers()
+        self._ais = AisReporter(settings.ais) if settings.ais is not None else None
         self._budget = settings.baudrate / 10.0  # characters per second, 8N1
         self._tokens = self._budget
         self._last_refill = time.monotonic()
@@ -119,9 +122,16 @@ class NmeaLink(Link):
             self._health.outputs += 1
 
     def publish(self, state: ShipOutputs, now: float) -> None:
-        due = self._schedule.due(now)
-        if due:
-            self._send(render_outputs(due, state, dt.datetime.now(dt.timezone.utc), self._talkers), now)
+        utc = dt.datetime.now(dt.timezone.utc)
+        sentences = render_outputs(self._schedule.due(now), state, utc, self._talkers)
+        if self._ais is not None:
+            sentences += self._ais.own_ship(state, now, utc)
+        if sentences:
+            self._send(sentences, now)
+
+    def publish_vessels(self, vessels: list[Vessel], now: float) -> None:
+        if self._ais is not None and vessels:
+            self._send(self._ais.others(vessels, now, dt.datetime.now(dt.timezone.utc)), now)
 
     def publish_alarm(self, alarm: Alarm, now: float) -> None:
         talker = self._talkers.get("ALR", "II")

@@ -7,6 +7,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from bridge_node.links.ais import AisSettings
 from bridge_node.links.n2k_network import N2kName, N2kProduct
 from bridge_node.links.nmea0183 import COMMON_ORDER_TALKERS, DEFAULT_RATES, DEFAULT_TALKERS, TYPICAL_LENGTH
 from bridge_node.node.network import NETWORK_CAN_INTERFACES, loopback_unless, serial_port_unless
@@ -49,6 +50,7 @@ class NmeaLinkSettings(_LinkBase):
     allow_network: bool = False
     allowed_talkers: Annotated[list[Talker], Field(min_length=1)] | Literal["any"] = Field(
         list(COMMON_ORDER_TALKERS), description='talkers whose orders are taken, or "any"')
+    ais: AisSettings | None = Field(None, description="own ship as !AIVDO and other vessels as !AIVDM; unset: no AIS")
 
     @field_validator("talkers", "rates")
     @classmethod
