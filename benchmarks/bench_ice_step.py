@@ -1,11 +1,14 @@
-"""Benchmark: the ice step with 1000, 3000 and 10000 live floes, and buoyancy alone.
+"""Benchmark: the ice step with 1000, 3000 and 10000 live floes, against the bare engine.
 
 A broken channel holding the wanted number of live floes (broken and simulated) is laid
 ahead of a ship; then the whole ice step is timed while the ship steams into it: hull
-contact, floe contacts, breaking and buoyancy. Median and p99 are printed. Buoyancy alone is timed for
-the numba kernel and for the plain numpy reference, run in the same process, with their
-ratio. Targets (2 cores): buoyancy for 3000 floes <= 1.5 ms; ice step with 3000 live
-floes <= 6 ms. Run: .venv/bin/python benchmarks/bench_ice_step.py
+contact, floe contacts, breaking and buoyancy. Inside the same steps the bare Chipmunk step
+(``cpSpaceStep`` of the same space) is timed too, so the ratio of the two medians says what
+the Python and numba glue around the engine costs, whatever the machine's speed. Median,
+p99 and that ratio are printed beside the core count. Buoyancy alone is timed for the numba
+kernel and for the plain numpy reference, run in the same process, with their ratio.
+Targets: ice step <= 1.5 x the bare engine step; median within one 60 Hz period at 10 000
+live floes. Run: .venv/bin/python benchmarks/bench_ice_step.py
 """
 from __future__ import annotations
 
@@ -49,8 +52,18 @@ def live_field(target: int):
     return model, data, (150.0, 0.0, 0.5 * math.pi)
 
 
-def time_steps(model, data, pose, n: int = 240) -> np.ndarray:
+def time_steps(model, data, pose, n: int = 240) -> tuple[np.ndarray, np.ndarray]:
+    """Wall times (ms) of n whole ice steps and of the bare engine step inside each."""
     x, y, heading = pose
+    space = data.contacts
+    engine_step, engine = space.step, []
+
+    def timed_engine_step(dt: float) -> None:
+        t0 = time.perf_counter()
+        engine_step(dt)
+        engine.append(time.perf_counter() - t0)
+
+    space.step = timed_engine_step
     out = []
     for _ in range(n):
         v = SPEED * np.array([math.cos(heading), math.sin(heading)])
@@ -58,7 +71,8 @@ def time_steps(model, data, pose, n: int = 240) -> np.ndarray:
         ice_step(model, data, HullMotion(np.array([x, y]), heading, v, 0.0), DT)
         out.append(time.perf_counter() - t0)
         x, y = x + v[0] * DT, y + v[1] * DT
-    return np.array(out) * 1e3
+    space.step = engine_step
+    return np.array(out) * 1e3, np.array(engine) * 1e3
 
 
 def bench_buoyancy(model, n: int) -> tuple[float, float]:
@@ -86,11 +100,12 @@ def main() -> None:
     with Progress(transient=True) as progress:
         for target in progress.track((1000, 3000, 10000), description="ice step at 1000/3000/10000 floes"):
             model, data, pose = live_field(target)
-            ms = time_steps(model, data, pose)
-            rows.append((data.state.count(FloeStatus.FREE), data.state.n, ms))
-    for live, total, ms in rows:
-        print(f"ice step, {live:6d} live floes ({total} cells placed so far): median {np.median(ms):6.2f} ms, "
-              f"p99 {np.percentile(ms, 99):6.2f} ms")
+            ms, engine = time_steps(model, data, pose)
+            rows.append((data.state.count(FloeStatus.FREE), data.state.n, ms, engine))
+    for live, total, ms, engine in rows:
+        print(f"ice step, {live:6d} live floes ({total} cells placed): median {np.median(ms):6.2f} ms, "
+              f"p99 {np.percentile(ms, 99):6.2f} ms; bare engine median {np.median(engine):6.2f} ms; "
+              f"ratio {np.median(ms) / np.median(engine):4.2f} ({os.cpu_count()} cores)")
     for n in (1000, 3000, 10000):
         fast, ref = bench_buoyancy(model, n)
         print(f"buoyancy, {n:6d} floes: numba {fast:6.3f} ms, numpy reference {ref:7.2f} ms ({ref / fast:5.0f}x)")

@@ -25,7 +25,17 @@ from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.reports.transit import plot_series
 from sim_core.frames.hull_contour import waterline_contour
 from sim_core.frames.ship_frame import ship_to_world
-from sim_core.ice.tiles import freeze_tile, new_ice_data, place_tile, thaw_tile
+from sim_core.ice.floes import BreakCause
+from sim_core.ice.tiles import (
+    advance,
+    break_cells,
+    freeze_tile,
+    new_ice_data,
+    place_tile,
+    prepare_place,
+    prepare_thaw,
+    thaw_tile,
+)
 from sim_core.scene.quadtree import tiles_near_brute_force
 from sim_core.scene.scene import SceneSettings, compile_scene, new_scene_data, update_scene
 from sim_core.studies.transit import run_transit
@@ -55,22 +65,55 @@ def scene_cost(n: int, steps: int = 3000) -> tuple[np.ndarray, np.ndarray]:
     return np.array(times[100:]) * 1e3, np.array(brute) * 1e3
 
 
-def swap_cost(world) -> dict:
-    """Place, freeze and thaw one 100 m tile of the default exercise, ms (median of 5)."""
-    out = {"place": [], "freeze": [], "thaw": []}
-    for k in range(5):
+def _steps_until_swapped(data, out: list) -> None:
+    """Step the contact space until its swaps are done, recording each step's time."""
+    while data.contacts.swaps_pending:
+        t0 = time.perf_counter()
+        data.contacts.step(1 / 60)
+        out.append(time.perf_counter() - t0)
+
+
+def swap_cost(world, repeats: int = 12) -> dict:
+    """Costs (ms, one entry per repeat or per step) of one 100 m tile of the default
+    exercise: building it ahead (whole, and per chunk of 64 cells as the step spreads it),
+    switching the built tile in (the decision, then each step that moves its share of
+    objects into the space), placing it unprepared (the previous design: build and switch in
+    one step), freezing it with half its cells broken (the decision, then the steps that
+    take its objects out), and switching in its prepared thaw."""
+    out = {k: [] for k in ("prepare", "prepare_chunk", "switch", "switch_step", "unprepared", "freeze",
+                           "freeze_step", "thaw", "thaw_step")}
+    n_templates = len(world.ice.templates)
+    for k in range(repeats):
         data = new_ice_data(world.ice, world.contour, 0.1)
         t0 = time.perf_counter()
-        place_tile(world.ice, data, k % len(world.ice.templates), (0.0, 0.0), k)
-        t1 = time.perf_counter()
-        freeze_tile(data, 0)
-        t2 = time.perf_counter()
-        thaw_tile(data, 0)
-        t3 = time.perf_counter()
-        out["place"].append(t1 - t0)
-        out["freeze"].append(t2 - t1)
-        out["thaw"].append(t3 - t2)
-    return {k: float(np.median(v) * 1e3) for k, v in out.items()}
+        place_tile(world.ice, data, k % n_templates, (0.0, 0.0), k)
+        data.contacts.step(1 / 60)  # the previous design switched a whole tile in one step
+        out["unprepared"].append(time.perf_counter() - t0)
+        prepared = prepare_place(world.ice, k % n_templates, (100.0, 0.0), k)
+        t0 = time.perf_counter()
+        while not prepared.done:
+            t1 = time.perf_counter()
+            advance(data, prepared, 64)
+            out["prepare_chunk"].append(time.perf_counter() - t1)
+        out["prepare"].append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        index = place_tile(world.ice, data, k % n_templates, (100.0, 0.0), k, prepared)
+        out["switch"].append(time.perf_counter() - t0)
+        _steps_until_swapped(data, out["switch_step"])
+        rows = data.tiles.rows(index)
+        break_cells(data, rows[::2], BreakCause.HULL)
+        t0 = time.perf_counter()
+        freeze_tile(data, index)
+        out["freeze"].append(time.perf_counter() - t0)
+        _steps_until_swapped(data, out["freeze_step"])
+        prepared = prepare_thaw(data, index)
+        while not prepared.done:
+            advance(data, prepared, 64)
+        t0 = time.perf_counter()
+        thaw_tile(data, index, prepared)
+        out["thaw"].append(time.perf_counter() - t0)
+        _steps_until_swapped(data, out["thaw_step"])
+    return {k: np.array(v) * 1e3 for k, v in out.items()}
 
 
 def main() -> None:
@@ -95,15 +138,19 @@ def main() -> None:
     world = build_world(cfg, None)
     cost = swap_cost(world)
     cells = world.ice.templates[0].n_cells
-    print(f"tile swap in the ice world ({cells} cells): place {cost['place']:.1f} ms, "
-          f"freeze {cost['freeze']:.1f} ms, thaw {cost['thaw']:.1f} ms")
+    print(f"tile swaps in the ice world ({cells} cells per tile; {len(cost['switch'])} tiles; {os.cpu_count()} cores):")
+    for name, ms in cost.items():
+        print(f"  {name:13s} median {np.median(ms):6.2f} ms, p99 {np.percentile(ms, 99):6.2f} ms, max {ms.max():6.2f} ms")
+    print(f"  switching a prepared tile costs {np.median(cost['switch']) / np.median(cost['unprepared']):.2f} "
+          f"of placing it unprepared (same run)")
     data = start_world(world, cfg)
     with Progress(transient=True) as progress:
         task = progress.add_task("default exercise transit", total=args.distance)
         series = run_transit(world, data, args.distance, 1 / 60, lambda d: progress.update(task, completed=d))
     s = series.summary(True)
     print(f"world step, default exercise, {s['distance_m']} m at 60 Hz: median {s['step_ms_median']} ms, "
-          f"p99 {s['step_ms_p99']} ms; live fragments max {s['max_live']}, plateau "
+          f"p99 {s['step_ms_p99']} ms, max {s['step_ms_max']} ms ({os.cpu_count()} cores); late switches "
+          f"{data.late_switches}; live fragments max {s['max_live']}, plateau "
           f"{s['plateau_live_min']}..{s['plateau_live_max']}, frozen {s['final_frozen']}")
     plot = Path(args.out) / "bench_transit.png"
     plot_series(series, True, plot)

@@ -17,6 +17,7 @@ off the field.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,8 +27,20 @@ from sim_core.frames.ship_frame import ship_to_world, ship_vector_to_world, worl
 from sim_core.ice.floes import BreakCause, FloeStatus, TilePlacement
 from sim_core.ice.model import IceModel
 from sim_core.ice.step import HullMotion, ice_step
-from sim_core.ice.tiles import IceData, freeze_tile, new_ice_data, place_tile, thaw_tile
-from sim_core.scene.quadtree import tile_under
+from sim_core.ice.step import warm_up as warm_up_ice
+from sim_core.ice.tiles import (
+    IceData,
+    PreparedTile,
+    advance,
+    discard_prepared,
+    freeze_tile,
+    new_ice_data,
+    place_tile,
+    prepare_place,
+    prepare_thaw,
+    thaw_tile,
+)
+from sim_core.scene.quadtree import tile_under, tiles_near
 from sim_core.scene.scene import (
     SceneData,
     SceneModel,
@@ -36,6 +49,7 @@ from sim_core.scene.scene import (
     new_scene_data,
     tile_corner,
     tile_layout,
+    tiles_to_prepare,
     update_scene,
 )
 from sim_core.ship import model as ship_model
@@ -44,6 +58,7 @@ from sim_core.ship.outputs import ShipOutputs, ship_outputs
 from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
 
 BREAKING_MEMORY = 2.0  # s: the bow counts as in level ice this long after it last broke a cell
+_PREPARE_CHUNK = 64  # cells built between looks at the clock while preparing tiles ahead
 _NO_ROWS = np.zeros(0, dtype=np.int64)
 
 
@@ -69,6 +84,8 @@ class WorldData:
     seq: int = 0  # steps taken
     last_hull_break: float = -math.inf  # s
     live_rows: np.ndarray = field(default_factory=lambda: _NO_ROWS)  # rows of the breakable tiles
+    ahead: dict[int, PreparedTile] = field(default_factory=dict)  # field tile -> prepared for its switch
+    late_switches: int = 0  # tiles switched in before their preparation was done
 
 
 @dataclass
@@ -143,7 +160,24 @@ def new_world_data(model: WorldModel, north: float, east: float, heading: float,
         if refused:
             raise ValueError(refused.text)
     ice = new_ice_data(model.ice, model.contour, model.ship.material.hull_friction)
-    return WorldData(ship, ice, new_scene_data(model.scene))
+    data = WorldData(ship, ice, new_scene_data(model.scene))
+    warm_up(model, data)
+    return data
+
+
+def warm_up(model: WorldModel, data: WorldData) -> None:
+    """Do before the first step what it would otherwise do lazily: load the compiled
+    kernels, and build the tiles around the start position (and the ring beyond) in full,
+    so that the first step only switches them in."""
+    warm_up_ice(model.ice, data.ice)
+    contour, _ = hull_world(model, data.ship)
+    start = tiles_near(contour, model.scene.radius, model.scene.nx, model.scene.ny, model.scene.side)
+    for tile in start.tolist():
+        data.ahead[tile] = _prepare(model, data, tile)
+    prepare_ahead(model, data, contour, budget_s=math.inf)
+    for prepared in data.ahead.values():
+        while not prepared.done:
+            advance(data.ice, prepared, 1 << 30)
 
 
 def apply_controls(ship: ShipModel, data: ShipData, controls: Controls) -> list[OrderRejection]:
@@ -191,18 +225,60 @@ def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate) -> tupl
     new = []
     for tile in update.place.tolist():
         template, turns = tile_layout(scene, tile)
-        placement[tile] = place_tile(model.ice, data.ice, template, tile_corner(scene, tile), turns)
+        placement[tile] = place_tile(model.ice, data.ice, template, tile_corner(scene, tile), turns,
+                                     _take_prepared(model, data, tile))
         new.append(placement[tile])
     thawed = [placement[tile] for tile in update.thaw.tolist()]
     frozen = [placement[tile] for tile in update.freeze.tolist()]
-    for k in thawed:
-        thaw_tile(data.ice, k)
+    for tile, k in zip(update.thaw.tolist(), thawed):
+        thaw_tile(data.ice, k, _take_prepared(model, data, tile))
     for k in frozen:
         freeze_tile(data.ice, k)
     if new or thawed or frozen:
         data.live_rows = _tile_rows(data.ice.tiles, [placement[t] for t in data.scene.live.tolist()])
     return (_placed_tiles(data.ice.tiles, update.place.tolist(), new),
             np.array(thawed, dtype=np.int64), np.array(frozen, dtype=np.int64))
+
+
+def _prepare(model: WorldModel, data: WorldData, tile: int) -> PreparedTile:
+    """Start preparing a field tile's switch: a new placement, or the thaw of its frozen one."""
+    if data.scene.tile_state[tile] == TileState.FROZEN:
+        return prepare_thaw(data.ice, data.scene.placement[tile])
+    template, turns = tile_layout(model.scene, tile)
+    return prepare_place(model.ice, template, tile_corner(model.scene, tile), turns)
+
+
+def _take_prepared(model: WorldModel, data: WorldData, tile: int) -> PreparedTile | None:
+    """The tile's preparation for its switch now, counting a switch that finds it unfinished."""
+    prepared = data.ahead.pop(tile, None)
+    if model.scene.settings.prepare_ahead > 0.0 and (prepared is None or not prepared.done):
+        data.late_switches += 1
+    return prepared
+
+
+def prepare_ahead(model: WorldModel, data: WorldData, contour: np.ndarray, budget_s: float) -> None:
+    """Build, nearest first and for at most budget_s seconds of wall time, the engine
+    objects of the tiles that the hull (contour points (n, 2), m) will soon switch in, and
+    drop preparations the hull has left well behind. Touches no physics."""
+    scene = model.scene
+    wanted = tiles_to_prepare(scene, data.scene, contour)
+    if len(data.ahead) > len(wanted):
+        keep = set(tiles_near(contour, scene.radius + 2.0 * scene.settings.prepare_ahead,
+                              scene.nx, scene.ny, scene.side).tolist())
+        for tile in [t for t in data.ahead if t not in keep]:
+            discard_prepared(data.ice, data.ahead.pop(tile))
+    if not len(wanted):
+        return
+    order = wanted[np.argsort(np.hypot(*(scene.centre(wanted) - contour.mean(axis=0)).T), kind="stable")]
+    deadline = time.perf_counter() + budget_s
+    for tile in order.tolist():
+        if tile not in data.ahead:
+            data.ahead[tile] = _prepare(model, data, tile)
+        prepared = data.ahead[tile]
+        while not prepared.done and time.perf_counter() < deadline:
+            advance(data.ice, prepared, _PREPARE_CHUNK)
+        if time.perf_counter() >= deadline:
+            return
 
 
 def _moved_rows(data: WorldData, placed: PlacedTiles, thawed: np.ndarray, frozen: np.ndarray) -> np.ndarray:
@@ -247,6 +323,7 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
     contour, hull = hull_world(model, ship)
     placed, thawed, frozen = apply_swaps(model, data, update_scene(model.scene, data.scene, contour, hull.xy))
     report = ice_step(model.ice, data.ice, hull, dt)
+    prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3)
     load = np.array([*world_vector_to_ship(report.hull_force, ship.eta[5]), -report.hull_moment])
     ship.external[:] = load
     data.time += dt

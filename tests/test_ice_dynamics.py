@@ -99,7 +99,7 @@ def test_no_floe_accelerates_without_contact_and_energy_decays():
     data.contacts.remove(data.state, np.setdiff1d(rows, keep))
     break_cells(data, keep, BreakCause.HULL)
     rng = np.random.default_rng(2)
-    data.contacts.set_velocity(keep, rng.uniform(-0.05, 0.05, (len(keep), 2)), np.zeros(len(keep)))
+    data.contacts.set_velocity(data.state, keep, rng.uniform(-0.05, 0.05, (len(keep), 2)), np.zeros(len(keep)))
     far = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
     speeds, energies = [], []
     for _ in range(300):

@@ -75,7 +75,7 @@ def test_thawed_floes_come_back_to_life_where_they_froze():
     st = data.state
     loose = rows[np.abs(st.home[rows, 0] - 20.0) < 6.0]  # a lane through the middle
     break_cells(data, loose, BreakCause.HULL)
-    data.contacts.set_velocity(loose, np.tile([0.0, 0.3], (len(loose), 1)), np.zeros(len(loose)))
+    data.contacts.set_velocity(data.state, loose, np.tile([0.0, 0.3], (len(loose), 1)), np.zeros(len(loose)))
     far = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
     for _ in range(30):
         ice_step(model, data, far, 1 / 30)
@@ -90,7 +90,7 @@ def test_thawed_floes_come_back_to_life_where_they_froze():
     np.testing.assert_array_equal(st.yaw[loose], yaw)
     assert st.count(FloeStatus.FREE) == len(loose)
     # and alive again: the contact space moves them
-    data.contacts.set_velocity(loose, np.tile([0.0, 0.3], (len(loose), 1)), np.zeros(len(loose)))
+    data.contacts.set_velocity(data.state, loose, np.tile([0.0, 0.3], (len(loose), 1)), np.zeros(len(loose)))
     ice_step(model, data, far, 1 / 30)
     assert np.abs(st.xy[loose] - moved).max() > 1e-3
 

@@ -1,42 +1,62 @@
-"""Planar contact of hull, intact cells and free floes, on pymunk (the Chipmunk2D engine).
+"""Planar contact of hull, intact cells and free floes, on Chipmunk2D (through pymunk).
 
-Chipmunk does the collision detection and the contact impulses; this module keeps pymunk's
-bodies in step with the floe arrays. All intact cells of a placed tile are shapes of one
-static body, so the per-step body walk sees a few tile bodies, not thousands of cells. A
-contact on a tile body is traced to its cell by the Voronoi property: the cell holding a
-point is the one with the nearest seed. A contact point lies on the loaded cell's boundary,
-and the neighbour across that boundary is already broken (that is where the striker came
-from), so the nearest seed among the tile's intact cells names the loaded cell; a sphere
-collider lies inside its cell, so there the answer is exact. Breaking moves a cell's shape
-from its tile body to a new dynamic body. Colliders (mesh or sphere) carry the floe-floe
-contact, but the hull breaks whatever it touches geometrically: an intact sphere cell also
-carries its true outline, as a sensor that only the hull's query sees. The hull is a
-kinematic body driven by the ship model. State moves between pymunk and the arrays through
-``pymunk.batch`` (one C call per step, no Python loop over bodies). Water drag in the plane
-is Chipmunk's velocity damping, an exponential decay with the configured time constant,
-applied in C. A quadratic drag would need a Python callback per body and step.
+Chipmunk does the collision detection and the contact impulses; this module keeps its
+bodies in step with the floe arrays. It drives Chipmunk through the C API that pymunk
+bundles (``pymunk._chipmunk``), not through pymunk's Python classes, for the floes: a pymunk
+``Body`` or ``Shape`` is a Python object in a reference cycle with its cffi handle, so
+thousands of them cost seconds of creation per tile swap, pauses of a tenth of a second
+whenever Python's cyclic collector walks them, and about a kilobyte each. A floe here costs
+its C body and shape and two pointers in an array, and a body names its floe directly: its
+user data is the floe's code (``_ROW0 + row``, ``_TILE0 + placement`` for a tile's static
+body, ``_HULL_ID``), which ``pymunk.batch`` returns as the body id.
+
+All intact cells of a placed tile are shapes of one static body, so the per-step body walk
+sees a few tile bodies, not thousands of cells. A contact on a tile body is traced to its
+cell by the Voronoi property: the cell holding a point is the one with the nearest seed. A
+contact point lies on the loaded cell's boundary, and the neighbour across that boundary is
+already broken (that is where the striker came from), so the nearest seed among the tile's
+intact cells names the loaded cell; a sphere collider lies inside its cell, so there the
+answer is exact. The seeds are searched in one k-d tree per template, in the template's
+frame. Breaking moves a cell's shape from its tile body to a new dynamic body. Colliders
+(mesh or sphere) carry the floe-floe contact, but the hull breaks whatever it touches
+geometrically: the hull's overlap with intact cells is tested against their true outlines
+(separating axes, in numba), not through the engine. The hull is a kinematic body driven
+by the ship model. State moves between Chipmunk and the arrays through ``pymunk.batch``
+(one C call per step, no Python loop over bodies). Water drag in the plane is Chipmunk's
+velocity damping, an exponential decay with the configured time constant, applied in C. A
+quadratic drag would need a Python callback per body and step.
+
+A tile enters the space in two parts: ``build_tile`` makes its static body and shapes
+(the costly part, a few microseconds per cell, done ahead of need) and ``insert_tile``
+adds them to the space (about a microsecond per cell), so crossing the detection radius
+only switches a prepared tile in.
 """
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import pymunk
 import pymunk.batch as pb
+from pymunk._chipmunk import ffi, lib
 from scipy.spatial import cKDTree
 
-from sim_core.ice.floes import FloeState, FloeStatus
-from sim_core.ice.model import IceModel, placed_outlines
+from sim_core.ice.floes import FloeState, FloeStatus, TilePlacement
+from sim_core.ice.model import IceModel, placed_centroids, placed_outlines
 
 HULL_ROW = -1
-_HULL_BIT, _FLOE_BIT, _OUTLINE_BIT = 1, 2, 4
-_HULL = pymunk.ShapeFilter(categories=_HULL_BIT, mask=_FLOE_BIT | _OUTLINE_BIT)
-_FLOE = pymunk.ShapeFilter(categories=_FLOE_BIT, mask=_HULL_BIT | _FLOE_BIT)
-_OUTLINE = pymunk.ShapeFilter(categories=_OUTLINE_BIT, mask=_HULL_BIT)  # seen by the hull only
-_UNDER_HULL = pymunk.ShapeFilter(categories=0, mask=0)
 _NOT_A_FLOE = -2  # bodies that are not floes (the space's own static body)
-_TILE_CODE = -3  # tile t's static body is coded _TILE_CODE - t
+_TILE_CODE = -3  # a contact on tile t's static body is coded _TILE_CODE - t
+_HULL_ID, _ROW0, _TILE0 = 1, 2, 1 << 40  # body user data: the hull, floe rows, tile bodies
+_HULL_BIT, _FLOE_BIT = 1, 2
+_INTACT_IN, _FLOE_IN = 1, 2  # TileBodies.in_space flags
+_HULL = (0, _HULL_BIT, _FLOE_BIT)  # Chipmunk shape filters: (group, categories, mask)
+_FLOE = (0, _FLOE_BIT, _HULL_BIT | _FLOE_BIT)
+_UNDER_HULL = (0, 0, 0)
+_IDENTITY = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)  # cpTransform
 _NEAREST = 8  # seeds searched for the nearest intact cell; a contact's cell is always among them
 _BODY_FIELDS = (pb.BodyFields.BODY_ID | pb.BodyFields.POSITION | pb.BodyFields.ANGLE
                 | pb.BodyFields.VELOCITY | pb.BodyFields.ANGULAR_VELOCITY)
@@ -66,45 +86,204 @@ class Contacts:
         return other, impulse, np.concatenate([self.point[on_a], self.point[on_b]])
 
 
-class _BodyCodes:
-    """Sorted table of pymunk body ids (their C pointers) -> code (a floe's row, HULL_ROW,
-    or _TILE_CODE - tile), kept up to date as bodies come and go, so a step looks its
-    bodies up with one searchsorted instead of rebuilding a dict."""
-
-    def __init__(self) -> None:
-        self.keys = np.zeros(0, dtype=np.uint64)
-        self.codes = np.zeros(0, dtype=np.int64)
-
-    def add(self, ids: list[int], codes: list[int]) -> None:
-        keys = np.concatenate([self.keys, np.array(ids, dtype=np.uint64)])
-        order = np.argsort(keys, kind="stable")
-        self.keys, self.codes = keys[order], np.concatenate([self.codes, np.array(codes, dtype=np.int64)])[order]
-
-    def remove(self, ids: list[int]) -> None:
-        keep = ~np.isin(self.keys, np.array(ids, dtype=np.uint64))
-        self.keys, self.codes = self.keys[keep], self.codes[keep]
-
-    def lookup(self, ids: np.ndarray) -> np.ndarray:
-        """Codes of body ids; _NOT_A_FLOE for bodies not in the table."""
-        if not len(self.keys):
-            return np.full(len(ids), _NOT_A_FLOE, dtype=np.int64)
-        pos = np.clip(np.searchsorted(self.keys, ids), 0, len(self.keys) - 1)
-        return np.where(self.keys[pos] == ids, self.codes[pos], _NOT_A_FLOE)
+def _ptr(cdata) -> int:
+    return int(ffi.cast("uintptr_t", cdata))
 
 
-def _rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """Vectors (n, 2) rotated CCW by per-row angles (n,), rad."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.column_stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]])
+def _shape(ptr: int):
+    return ffi.cast("cpShape *", ptr)
+
+
+def _body(ptr: int):
+    return ffi.cast("cpBody *", ptr)
+
+
+def _new_shape(body, ring: list, radius: float, centre: tuple[float, float], sphere: bool, friction: float) -> int:
+    """A floe collider on a C body: a circle of radius about centre, or the convex polygon
+    ring [(x, y), ...], both in the body's frame (m)."""
+    if sphere:
+        shape = lib.cpCircleShapeNew(body, radius, centre)
+    else:
+        shape = lib.cpPolyShapeNew(body, len(ring), ffi.new("cpVect[]", ring), _IDENTITY, 0.0)
+    lib.cpShapeSetFriction(shape, friction)
+    lib.cpShapeSetFilter(shape, _FLOE)
+    return _ptr(shape)
+
+
+class TileBodies:
+    """Engine objects of one placed tile, by row offset in the tile (0 = none): the static
+    body holding its intact cells, their shapes, and its free floes' bodies and shapes;
+    which of them are in the space; and the offsets still to switch in or out."""
+
+    def __init__(self, count: int) -> None:
+        self.body = _ptr(lib.cpBodyNewStatic())
+        self.intact = np.zeros(count, dtype=np.uintp)
+        self.floe_body = np.zeros(count, dtype=np.uintp)
+        self.floe_shape = np.zeros(count, dtype=np.uintp)
+        self.in_space = np.zeros(count, dtype=np.uint8)  # _INTACT_IN | _FLOE_IN
+        self.queue = np.zeros(0, dtype=np.int64)  # offsets to switch in (entering) or out (leaving)
+
+    def insert(self, space, offsets: np.ndarray) -> int:
+        """Add the built objects at offsets to the space; returns how many went in."""
+        flags = self.in_space[offsets]
+        cells = offsets[(self.intact[offsets] != 0) & (flags & _INTACT_IN == 0)]
+        floes = offsets[(self.floe_body[offsets] != 0) & (flags & _FLOE_IN == 0)]
+        add_shape, add_body, cast = lib.cpSpaceAddShape, lib.cpSpaceAddBody, ffi.cast
+        for p in self.intact[cells].tolist():
+            add_shape(space, cast("cpShape *", p))
+        for b, p in zip(self.floe_body[floes].tolist(), self.floe_shape[floes].tolist()):
+            add_body(space, cast("cpBody *", b))
+            add_shape(space, cast("cpShape *", p))
+        self.in_space[cells] |= _INTACT_IN
+        self.in_space[floes] |= _FLOE_IN
+        return len(cells) + 2 * len(floes)
+
+    def remove(self, space, offsets: np.ndarray) -> int:
+        """Take the objects at offsets out of the space and free them; returns how many."""
+        flags = self.in_space[offsets]
+        cast = ffi.cast
+        cells = offsets[self.intact[offsets] != 0]
+        for p, inside in zip(self.intact[cells].tolist(), (flags[self.intact[offsets] != 0] & _INTACT_IN).tolist()):
+            shape = cast("cpShape *", p)
+            if inside:
+                lib.cpSpaceRemoveShape(space, shape)
+            lib.cpShapeFree(shape)
+        has_floe = self.floe_body[offsets] != 0
+        floes = offsets[has_floe]
+        for b, p, inside in zip(self.floe_body[floes].tolist(), self.floe_shape[floes].tolist(),
+                                (flags[has_floe] & _FLOE_IN).tolist()):
+            body, shape = cast("cpBody *", b), cast("cpShape *", p)
+            if inside:
+                lib.cpSpaceRemoveShape(space, shape)
+                lib.cpSpaceRemoveBody(space, body)
+            lib.cpShapeFree(shape)
+            lib.cpBodyFree(body)
+        self.intact[offsets] = self.floe_body[offsets] = self.floe_shape[offsets] = 0
+        self.in_space[offsets] = 0
+        return len(cells) + 2 * len(floes)
+
+    def built(self) -> np.ndarray:
+        """Offsets holding any object."""
+        return np.nonzero((self.intact != 0) | (self.floe_body != 0))[0]
+
+    def release(self, space) -> None:
+        """Take everything out of the space and free it, the static body last."""
+        self.remove(space, self.built())
+        body = _body(self.body)
+        if lib.cpBodyGetSpace(body) != ffi.NULL:
+            lib.cpSpaceRemoveBody(space, body)
+        lib.cpBodyFree(body)
+        self.body = 0
+
+
+def _free_all(space: pymunk.Space, tiles: dict, leaving: list, hull: tuple[int, int]) -> None:
+    """Free every C object the contact space made, before the space itself goes."""
+    for bodies in [*tiles.values(), *(b for _, b in leaving)]:
+        bodies.release(space._space)
+    hull_body, hull_shape = _body(hull[0]), _shape(hull[1])
+    lib.cpSpaceRemoveShape(space._space, hull_shape)
+    lib.cpSpaceRemoveBody(space._space, hull_body)
+    lib.cpShapeFree(hull_shape)
+    lib.cpBodyFree(hull_body)
+
+
+@numba.njit(cache=True)
+def _separated(p: np.ndarray, q: np.ndarray) -> bool:
+    """True if convex polygons p (n, 2) and q (m, 2) are apart along an edge normal of p."""
+    n = p.shape[0]
+    for i in range(n):
+        nx, ny = p[(i + 1) % n, 1] - p[i, 1], p[i, 0] - p[(i + 1) % n, 0]
+        lo_p = hi_p = nx * p[0, 0] + ny * p[0, 1]
+        for k in range(1, n):
+            d = nx * p[k, 0] + ny * p[k, 1]
+            lo_p, hi_p = min(lo_p, d), max(hi_p, d)
+        lo_q = hi_q = nx * q[0, 0] + ny * q[0, 1]
+        for k in range(1, q.shape[0]):
+            d = nx * q[k, 0] + ny * q[k, 1]
+            lo_q, hi_q = min(lo_q, d), max(hi_q, d)
+        if lo_q > hi_p or hi_q < lo_p:
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def _hull_overlaps(offsets, present, status, gcell, xy, yaw, outline, outline_start, extent,
+                   hull, hull_xy, hull_c, hull_s, box):
+    """Offsets (into one tile's rows) of intact cells in the space whose outline overlaps
+    the hull polygon (world m). The hull's body-frame box [x0, x1, y0, y1] screens first."""
+    out = np.empty(len(offsets), np.int64)
+    n_out = 0
+    for k in range(len(offsets)):
+        j = offsets[k]
+        if present[j] == 0 or status[j] != 0:
+            continue
+        g = gcell[j]
+        dx, dy = xy[j, 0] - hull_xy[0], xy[j, 1] - hull_xy[1]
+        u, v, e = hull_c * dx + hull_s * dy, -hull_s * dx + hull_c * dy, extent[g]
+        if u < box[0] - e or u > box[1] + e or v < box[2] - e or v > box[3] + e:
+            continue
+        a, b = outline_start[g], outline_start[g + 1]
+        c, s = math.cos(yaw[j]), math.sin(yaw[j])
+        cell = np.empty((b - a, 2))
+        for i in range(b - a):
+            ox, oy = outline[a + i, 0], outline[a + i, 1]
+            cell[i, 0] = xy[j, 0] + c * ox - s * oy
+            cell[i, 1] = xy[j, 1] + s * ox + c * oy
+        if not _separated(hull, cell) and not _separated(cell, hull):
+            out[n_out] = j
+            n_out += 1
+    return out[:n_out]
+
+
+_TURN_COS, _TURN_SIN = np.array([1, 0, -1, 0]), np.array([0, 1, 0, -1])
+
+
+def _to_template(points: np.ndarray, corner: np.ndarray, quarter_turns: np.ndarray, side: np.ndarray) -> np.ndarray:
+    """World points (n, 2) in the frames of templates placed at corners (n, 2) m, turned by
+    quarter turns (n,) about their centres, of sides (n,) m; inverse of ``place_tile``."""
+    k = (-quarter_turns) % 4
+    c, s, half = _TURN_COS[k], _TURN_SIN[k], 0.5 * side
+    rx, ry = points[:, 0] - corner[:, 0] - half, points[:, 1] - corner[:, 1] - half
+    return np.column_stack([c * rx - s * ry + half, s * rx + c * ry + half])
+
+
+def _decode(ids: np.ndarray) -> np.ndarray:
+    """Codes of body ids (n,) int64: floe rows, HULL_ROW, _TILE_CODE - placement, or _NOT_A_FLOE."""
+    return np.where(ids >= _TILE0, _TILE_CODE - (ids - _TILE0),
+                    np.where(ids >= _ROW0, ids - _ROW0, np.where(ids == _HULL_ID, HULL_ROW, _NOT_A_FLOE)))
+
+
+@numba.njit(cache=True)
+def _scatter_free(ids, f, status, xy, yaw, vel, yaw_rate):
+    """Write the pose and velocity rows f (n, 6) of floe bodies with these ids into the
+    arrays, but not of rows already frozen (bodies of a tile still leaving the space)."""
+    for k in range(len(ids)):
+        if ids[k] >= _ROW0 and ids[k] < _TILE0 and status[ids[k] - _ROW0] == 1:
+            i = ids[k] - _ROW0
+            xy[i, 0], xy[i, 1], yaw[i] = f[k, 0], f[k, 1], f[k, 2]
+            vel[i, 0], vel[i, 1], yaw_rate[i] = f[k, 3], f[k, 4], f[k, 5]
+
+
+def warm_up() -> None:
+    """Load the compiled kernels of this module (numba compiles or loads on first call)."""
+    none = np.zeros(0, dtype=np.int64)
+    _scatter_free(none.astype(np.uintp), np.zeros((0, 6)), none.astype(np.uint8), np.zeros((0, 2)), np.zeros(0),
+                  np.zeros((0, 2), np.float32), np.zeros(0, np.float32))
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    _hull_overlaps(none, none.astype(np.uint8), none.astype(np.uint8), none.astype(np.int32),
+                   np.zeros((0, 2)), np.zeros(0), square, np.array([0, 4]), np.ones(1),
+                   square, np.zeros(2), 1.0, 0.0, np.zeros(4))
 
 
 class ContactSpace:
-    """pymunk space holding the hull and the floes of breakable tiles."""
+    """Chipmunk space holding the hull and the floes of breakable tiles."""
 
-    def __init__(self, model: IceModel, hull_outline: np.ndarray, hull_friction: float) -> None:
+    def __init__(self, model: IceModel, tiles: TilePlacement, hull_outline: np.ndarray,
+                 hull_friction: float) -> None:
         s = model.settings
-        self.model = model
+        self.model, self.tiles = model, tiles
         self.space = pymunk.Space()
+        self._cp = self.space._space  # the C space, for the C API calls below
         self.space.iterations = s.solver_iterations
         self.space.collision_slop = s.collision_slop
         # Sleeping stays off. With sleeping enabled (idle speed set, since with no gravity in
@@ -112,196 +291,256 @@ class ContactSpace:
         # a few thousand steps of a mesh-collider run, with every state finite. Not investigated
         # further; with intact ice in a few static tile bodies, the step does not need it.
         self.space.damping = math.exp(-1.0 / s.drag_time_s)  # per second: v *= damping ** dt
-        self.hull = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
-        self.hull_shape = pymunk.Poly(self.hull, [tuple(p) for p in hull_outline])
-        # the outline as pymunk keeps it: convex, counter-clockwise, body frame (y to port)
-        self.hull_outline = np.array([tuple(v) for v in self.hull_shape.get_vertices()])
+        hull = lib.cpBodyNewKinematic()
+        lib.cpBodySetUserData(hull, ffi.cast("void *", _HULL_ID))
+        ring = [tuple(p) for p in np.asarray(hull_outline, dtype=float).tolist()]
+        hull_shape = lib.cpPolyShapeNew(hull, len(ring), ffi.new("cpVect[]", ring), _IDENTITY, 0.0)
+        lib.cpShapeSetFriction(hull_shape, hull_friction)
+        lib.cpShapeSetFilter(hull_shape, _HULL)
+        lib.cpSpaceAddBody(self._cp, hull)
+        lib.cpSpaceAddShape(self._cp, hull_shape)
+        self._hull = hull
+        # the outline as Chipmunk keeps it: convex, counter-clockwise, body frame (y to port)
+        verts = [lib.cpPolyShapeGetVert(hull_shape, i) for i in range(lib.cpPolyShapeGetCount(hull_shape))]
+        self.hull_outline = np.array([(v.x, v.y) for v in verts])
         self.hull_half_beam = float(np.abs(self.hull_outline[:, 1]).max())
-        self.hull_shape.friction = hull_friction
-        self.hull_shape.filter = _HULL
-        self.space.add(self.hull, self.hull_shape)
-        self._tile_rows: dict[int, tuple[np.ndarray, cKDTree]] = {}  # rows, tree of their seeds (world m)
-        # per floe row (lists indexed by row, grown as rows are added): its dynamic body,
-        # its collider shape, and the outline sensor of an intact sphere cell
-        self._floe_body: list[pymunk.Body | None] = []
-        self._shape: list[pymunk.Shape | None] = []
-        self._sensor: list[pymunk.Shape | None] = []
-        self._codes = _BodyCodes()
-        self._codes.add([self.hull.id], [HULL_ROW])
+        self._hull_box = np.array([self.hull_outline[:, 0].min(), self.hull_outline[:, 0].max(),
+                                   self.hull_outline[:, 1].min(), self.hull_outline[:, 1].max()])
+        self._hull_pose = (np.zeros(2), 0.0)
+        self._tiles: dict[int, TileBodies] = {}  # placement -> its engine objects
+        self._entering: list[TileBodies] = []  # switched in, objects still going into the space
+        self._leaving: list[tuple[int, TileBodies]] = []  # switched out, objects still to take out
+        self._budget = s.swap_objects_per_step
+        d = np.hypot(model.outline[:, 0], model.outline[:, 1])
+        self._extent = np.maximum.reduceat(d, model.outline_start[:-1]) if len(d) else np.zeros(0)
+        self._seeds = [cKDTree(model.centroid[a:b, :2] + model.seed_offset[a:b])
+                       for a, b in zip(model.template_start[:-1], model.template_start[1:])]
+        self._sides = np.array([t.side for t in model.templates], dtype=float)
         self._buffer = pb.Buffer()
-
-    def _grow(self, rows: int) -> None:
-        """Make room in the per-row lists for rows [0, rows)."""
-        extra = rows - len(self._shape)
-        if extra > 0:
-            for table in (self._floe_body, self._shape, self._sensor):
-                table.extend([None] * extra)
+        weakref.finalize(self, _free_all, self.space, self._tiles, self._leaving, (_ptr(hull), _ptr(hull_shape)))
 
     # -- building -------------------------------------------------------------------------
-    def _collider(self, body: pymunk.Body, row: int, g: int, centre: list[float], ring: list) -> pymunk.Shape:
-        """The cell's collider on body: a circle about centre or the polygon ring, both in
-        the body's frame; the shape carries its floe row."""
+    def build_cells(self, bodies: TileBodies, template: int, corner: tuple[float, float] | np.ndarray,
+                    quarter_turns: int, cells: np.ndarray) -> None:
+        """Make, outside the space, the intact-cell shapes of cells (offsets in the template)
+        of a template laid at corner (m) turned by quarter turns, on the tile's static
+        body; ``insert_tile`` switches them in."""
         m = self.model
-        shape = pymunk.Circle(body, float(m.radius[g]), centre) if m.is_sphere[g] else pymunk.Poly(body, ring)
-        shape.friction = m.settings.ice_friction
-        shape.filter = _FLOE
-        shape.row = row
-        self._shape[row] = shape
-        return shape
+        g = int(m.template_start[template]) + cells
+        home, yaw = placed_centroids(m, template, corner, quarter_turns)
+        home = home[cells]
+        body = _body(bodies.body)
+        rings = self._rings(g, home, np.full(len(cells), yaw))
+        friction = m.settings.ice_friction
+        for j, gi, centre, ring, sphere in zip(cells.tolist(), g.tolist(), home.tolist(), rings,
+                                               m.is_sphere[g].tolist()):
+            bodies.intact[j] = _new_shape(body, ring, float(m.radius[gi]), tuple(centre), sphere, friction)
+
+    def build_floes(self, bodies: TileBodies, state: FloeState, rows: np.ndarray) -> None:
+        """Make, outside the space, dynamic bodies for rows of a tile at their current pose
+        and velocity; ``insert_tile`` or ``TileBodies.insert`` switch them in."""
+        m = self.model
+        start = int(self.tiles.row_start[state.tile[rows[0]]]) if len(rows) else 0
+        g = state.gcell[rows]
+        rings = self._rings(g, np.zeros((len(rows), 2)), np.zeros(len(rows)))
+        friction = m.settings.ice_friction
+        for i, gi, ring, sphere in zip(rows.tolist(), g.tolist(), rings, m.is_sphere[g].tolist()):
+            body = lib.cpBodyNew(float(m.mass[gi]), float(m.inertia[gi, 2]))
+            lib.cpBodySetUserData(body, ffi.cast("void *", _ROW0 + i))
+            lib.cpBodySetPosition(body, tuple(state.xy[i].tolist()))
+            lib.cpBodySetAngle(body, float(state.yaw[i]))
+            lib.cpBodySetVelocity(body, tuple(state.vel[i].tolist()))
+            lib.cpBodySetAngularVelocity(body, float(state.yaw_rate[i]))
+            bodies.floe_body[i - start] = _ptr(body)
+            bodies.floe_shape[i - start] = _new_shape(body, ring, float(m.radius[gi]), (0.0, 0.0), sphere, friction)
+
+    def insert_tile(self, bodies: TileBodies, placement: int) -> None:
+        """Switch a built tile into the space as placement: its static body now, its intact
+        shapes and floe bodies over the coming steps (``swap_objects_per_step`` a step, so
+        no step pays for a whole tile; the hull cannot reach a tile's cells within the few
+        steps that takes, since R_T keeps it at least a third of a tile away)."""
+        for k, leaving in enumerate(self._leaving):
+            if leaving[0] == placement:  # thawed before its freeze had finished: finish that first
+                del self._leaving[k]
+                leaving[1].release(self._cp)
+                break
+        lib.cpBodySetUserData(_body(bodies.body), ffi.cast("void *", _TILE0 + placement))
+        lib.cpSpaceAddBody(self._cp, _body(bodies.body))
+        bodies.queue = bodies.built()
+        self._tiles[placement] = bodies
+        self._entering.append(bodies)
+
+    def drop_tile(self, placement: int) -> None:
+        """Switch a tile out: it leaves the tiles the space works with now, and its objects
+        leave the space over the coming steps. Its floes are frozen in the arrays meanwhile
+        (``read_free`` does not copy FROZEN rows)."""
+        bodies = self._tiles.pop(placement)
+        if bodies in self._entering:
+            self._entering.remove(bodies)
+        bodies.queue = bodies.built()
+        self._leaving.append((placement, bodies))
+
+    def _swap_work(self, budget: int) -> None:
+        """Switch up to budget objects of entering tiles in, then of leaving tiles out."""
+        while budget > 0 and self._entering:
+            bodies = self._entering[0]
+            chunk, bodies.queue = bodies.queue[:budget], bodies.queue[budget:]
+            budget -= max(bodies.insert(self._cp, chunk), 1)
+            if not len(bodies.queue):
+                self._entering.pop(0)
+        while budget > 0 and self._leaving:
+            _, bodies = self._leaving[0]
+            chunk, bodies.queue = bodies.queue[:budget], bodies.queue[budget:]
+            budget -= max(bodies.remove(self._cp, chunk), 1)
+            if not len(bodies.queue):
+                self._leaving.pop(0)[1].release(self._cp)
+
+    @property
+    def swaps_pending(self) -> int:
+        """Tiles still switching in or out."""
+        return len(self._entering) + len(self._leaving)
 
     def _rings(self, g: np.ndarray, at: np.ndarray, angle: np.ndarray) -> list[list]:
-        """Outlines of cells g placed at (at, angle), as lists of (x, y) for pymunk."""
+        """Outlines of cells g placed at (at, angle), as lists of (x, y) for Chipmunk."""
         pts, counts = placed_outlines(self.model, g, at, angle)
         pts, ends = pts.tolist(), np.cumsum(counts).tolist()
         return [pts[a:b] for a, b in zip([0] + ends[:-1], ends)]
 
-    def add_tile(self, state: FloeState, tile: int, rows: np.ndarray) -> None:
-        """Add a tile's intact rows, at their current pose, as shapes of one static body."""
-        m = self.model
-        self._grow(state.n)
-        body = pymunk.Body(body_type=pymunk.Body.STATIC)
-        body.tile = tile
-        g, xy, yaw = state.gcell[rows], state.xy[rows], state.yaw[rows]
-        rings, centres, sphere = self._rings(g, xy, yaw), xy.tolist(), m.is_sphere[g].tolist()
-        shapes = []
-        for i, gi, centre, ring, is_sphere in zip(rows.tolist(), g.tolist(), centres, rings, sphere):
-            shapes.append(self._collider(body, i, gi, centre, ring))
-            if is_sphere:
-                sensor = pymunk.Poly(body, ring)
-                sensor.sensor = True
-                sensor.filter = _OUTLINE
-                sensor.row = i
-                shapes.append(sensor)
-                self._sensor[i] = sensor
-        self.space.add(body, *shapes)
-        seeds = xy + _rotate(m.seed_offset[g], yaw)
-        self._tile_rows[tile] = (np.asarray(rows), cKDTree(seeds))
-        self._codes.add([body.id], [_TILE_CODE - tile])
-
-    def _drop_intact_shapes(self, i: int) -> pymunk.Body:
-        shape, sensor = self._shape[i], self._sensor[i]
-        self._shape[i] = self._sensor[i] = None
-        self.space.remove(*(s for s in (shape, sensor) if s is not None))
-        return shape.body
-
     def free(self, state: FloeState, rows: np.ndarray) -> None:
-        """Intact rows leave their tile body, each for a dynamic body of its own."""
-        for i in rows.tolist():
-            self._drop_intact_shapes(i)
-        self.add_floes(state, rows)
+        """Intact rows leave their tile body, each for a dynamic body of its own, now."""
+        for tile in np.unique(state.tile[rows]).tolist():
+            bodies, start = self._tiles[tile], int(self.tiles.row_start[tile])
+            mine = rows[state.tile[rows] == tile]
+            j = mine - start
+            bodies.remove(self._cp, j)
+            self.build_floes(bodies, state, mine)
+            bodies.insert(self._cp, j)
 
-    def add_floes(self, state: FloeState, rows: np.ndarray) -> None:
-        """Add rows as free floes, each a dynamic body at its current pose and velocity."""
-        m = self.model
-        self._grow(state.n)
-        g = state.gcell[rows]
-        rings = self._rings(g, np.zeros((len(rows), 2)), np.zeros(len(rows)))
-        ids = []
-        for i, gi, ring in zip(rows.tolist(), g.tolist(), rings):
-            body = pymunk.Body(float(m.mass[gi]), float(m.inertia[gi, 2]))
-            body.position = tuple(state.xy[i])
-            body.angle = float(state.yaw[i])
-            body.velocity = tuple(state.vel[i])
-            body.angular_velocity = float(state.yaw_rate[i])
-            self.space.add(body, self._collider(body, i, gi, [0.0, 0.0], ring))
-            self._floe_body[i] = body
-            ids.append(body.id)
-        self._codes.add(ids, rows.tolist())
+    def remove(self, state: FloeState, rows: np.ndarray) -> None:
+        """Take intact or free rows of tiles in the space out of it, now, and free their
+        engine objects."""
+        for tile in np.unique(state.tile[rows]).tolist():
+            bodies, start = self._tiles[tile], int(self.tiles.row_start[tile])
+            bodies.remove(self._cp, rows[state.tile[rows] == tile] - start)
 
-    def set_submerged(self, rows: np.ndarray, submerged: bool) -> None:
+    def discard(self, bodies: TileBodies) -> None:
+        """Free a built tile that was never switched in."""
+        bodies.release(self._cp)
+
+    def has_tile(self, placement: int) -> bool:
+        """Whether the placement's bodies are in the space."""
+        return placement in self._tiles
+
+    def _floe_shapes(self, state: FloeState, rows: np.ndarray) -> list[int]:
+        out = []
+        for i, tile in zip(rows.tolist(), state.tile[rows].tolist()):
+            out.append(int(self._tiles[tile].floe_shape[i - int(self.tiles.row_start[tile])]))
+        return out
+
+    def _floe_bodies(self, state: FloeState, rows: np.ndarray) -> list[int]:
+        out = []
+        for i, tile in zip(rows.tolist(), state.tile[rows].tolist()):
+            out.append(int(self._tiles[tile].floe_body[i - int(self.tiles.row_start[tile])]))
+        return out
+
+    def set_submerged(self, state: FloeState, rows: np.ndarray, submerged: bool) -> None:
         """Take free rows out of (or back into) all planar contact: floes under the hull. A
         floe going under is pinned by the hull and loses its planar velocity."""
         f = _UNDER_HULL if submerged else _FLOE
-        for i in rows.tolist():
-            self._shape[i].filter = f
-            if submerged:
-                self.set_velocity(np.array([i]), np.zeros((1, 2)), np.zeros(1))
+        for p in self._floe_shapes(state, rows):
+            lib.cpShapeSetFilter(_shape(p), f)
+        if submerged:
+            self.set_velocity(state, rows, np.zeros((len(rows), 2)), np.zeros(len(rows)))
 
-    def set_velocity(self, rows: np.ndarray, velocity: np.ndarray, yaw_rate: np.ndarray) -> None:
+    def set_velocity(self, state: FloeState, rows: np.ndarray, velocity: np.ndarray, yaw_rate: np.ndarray) -> None:
         """Give free rows a planar velocity (n, 2) m/s and yaw rate (n,) rad/s."""
-        for i, v, w in zip(rows.tolist(), velocity.tolist(), yaw_rate.tolist()):
-            body = self._floe_body[i]
-            body.velocity = (v[0], v[1])
-            body.angular_velocity = w
-
-    def remove(self, state: FloeState, rows: np.ndarray) -> None:
-        """Take intact or free rows out of the space (frozen or discarded floes); a tile body
-        goes when its last intact cell has gone."""
-        gone = []
-        for i, intact in zip(rows.tolist(), (state.status[rows] == FloeStatus.INTACT).tolist()):
-            if intact:
-                body = self._drop_intact_shapes(i)
-                if not body.shapes:
-                    del self._tile_rows[body.tile]
-                    self.space.remove(body)
-                    gone.append(body.id)
-            else:
-                body, shape = self._floe_body[i], self._shape[i]
-                self._floe_body[i] = self._shape[i] = None
-                self.space.remove(body, shape)
-                gone.append(body.id)
-        self._codes.remove(gone)
+        for p, v, w in zip(self._floe_bodies(state, rows), velocity.tolist(), yaw_rate.tolist()):
+            lib.cpBodySetVelocity(_body(p), (v[0], v[1]))
+            lib.cpBodySetAngularVelocity(_body(p), w)
 
     # -- per step -------------------------------------------------------------------------
     def set_hull(self, xy: np.ndarray, angle: float, velocity: np.ndarray, angular_velocity: float) -> None:
         """Pose (world m, rad CCW) and velocity of the kinematic hull for the coming step."""
-        self.hull.position = (float(xy[0]), float(xy[1]))
-        self.hull.angle = float(angle)
-        self.hull.velocity = (float(velocity[0]), float(velocity[1]))
-        self.hull.angular_velocity = float(angular_velocity)
-        self.space.reindex_shapes_for_body(self.hull)
+        lib.cpBodySetPosition(self._hull, (float(xy[0]), float(xy[1])))
+        lib.cpBodySetAngle(self._hull, float(angle))
+        lib.cpBodySetVelocity(self._hull, (float(velocity[0]), float(velocity[1])))
+        lib.cpBodySetAngularVelocity(self._hull, float(angular_velocity))
+        lib.cpSpaceReindexShapesForBody(self._cp, self._hull)
+        self._hull_pose = (np.array([float(xy[0]), float(xy[1])]), float(angle))
 
     def hull_touching(self, state: FloeState) -> np.ndarray:
-        """Rows of intact cells the hull overlaps now (kinematic-static pairs make no contacts
-        in Chipmunk, so they are found by a shape query)."""
-        rows = {getattr(q.shape, "row", _NOT_A_FLOE) for q in self.space.shape_query(self.hull_shape)}
-        rows = np.array(sorted(r for r in rows if r >= 0), dtype=np.int64)
-        return rows[state.status[rows] == FloeStatus.INTACT] if len(rows) else rows
+        """Rows of intact cells in the space whose true outline the hull overlaps now
+        (kinematic-static pairs make no contacts in Chipmunk, and sphere colliders are not
+        the cells' outlines)."""
+        m = self.model
+        xy, angle = self._hull_pose
+        c, s = math.cos(angle), math.sin(angle)
+        hull = self.hull_outline @ np.array([[c, s], [-s, c]]) + xy
+        reach = float(np.hypot(*np.abs(self.hull_outline).max(axis=0))) + float(self._extent.max(initial=0.0))
+        found = []
+        for tile, bodies in self._tiles.items():
+            start, count = int(self.tiles.row_start[tile]), int(self.tiles.row_count[tile])
+            side = m.templates[int(self.tiles.template[tile])].side
+            centre = self.tiles.corner[tile] + 0.5 * side
+            if np.hypot(*(centre - xy)) > reach + side / math.sqrt(2.0):
+                continue
+            rows = slice(start, start + count)
+            hit = _hull_overlaps(np.arange(count), bodies.in_space & _INTACT_IN, state.status[rows], state.gcell[rows],
+                                 state.xy[rows], state.yaw[rows], m.outline, m.outline_start, self._extent,
+                                 hull, xy, c, s, self._hull_box)
+            found.append(hit + start)
+        return np.sort(np.concatenate(found)) if found else np.zeros(0, dtype=np.int64)
 
     def step(self, dt: float) -> None:
+        """Switch the step's share of tile objects in or out, then step the engine by dt (s)."""
+        self._swap_work(self._budget)
         self.space.step(dt)
 
     def _rows_at(self, state: FloeState, ids: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Rows of the bodies in a contact list; on a tile body, the intact cell with the
         seed nearest the contact point (world m). The point lies on its cell's boundary,
         so that cell is among the few seeds nearest to it."""
-        rows = self._codes.lookup(ids)
-        on_tile = rows <= _TILE_CODE
-        tiles = _TILE_CODE - rows[on_tile]
-        at = np.nonzero(on_tile)[0]
-        rows[on_tile] = _NOT_A_FLOE
-        for tile in np.unique(tiles):
-            k = at[tiles == tile]
-            cells, tree = self._tile_rows[int(tile)]
-            near = tree.query(points[k], k=min(_NEAREST, len(cells)))[1].reshape(len(k), -1)
-            intact = state.status[cells[near]] == FloeStatus.INTACT
-            first = np.argmax(intact, axis=1)
-            rows[k] = np.where(intact.any(axis=1), cells[near[np.arange(len(k)), first]], _NOT_A_FLOE)
+        rows = _decode(ids.astype(np.int64))
+        at = np.nonzero(rows <= _TILE_CODE)[0]
+        if not len(at):
+            return rows
+        tiles, sides = self.tiles, self._sides
+        placement = _TILE_CODE - rows[at]
+        working = np.isin(placement, np.fromiter(self._tiles, dtype=np.int64, count=len(self._tiles)))
+        rows[at[~working]] = _NOT_A_FLOE
+        at, placement = at[working], placement[working]
+        if not len(at):
+            return rows
+        template = tiles.template[placement]
+        local = _to_template(points[at], tiles.corner[placement], tiles.quarter_turns[placement], sides[template])
+        cells = np.empty((len(at), _NEAREST), dtype=np.int64)
+        for t in np.unique(template).tolist():
+            k = np.nonzero(template == t)[0]
+            tree = self._seeds[t]
+            near = tree.query(local[k], k=_NEAREST)[1].reshape(len(k), -1)
+            cells[k] = np.minimum(near, tree.n - 1)  # fewer seeds than _NEAREST: repeats
+        cells += tiles.row_start[placement][:, None]
+        intact = state.status[cells] == FloeStatus.INTACT
+        first = np.argmax(intact, axis=1)
+        rows[at] = np.where(intact.any(axis=1), cells[np.arange(len(at)), first], _NOT_A_FLOE)
         return rows
 
     def read_free(self, state: FloeState) -> None:
-        """Copy pose and velocity of the free floes from pymunk into the arrays."""
+        """Copy pose and velocity of the free floes from Chipmunk into the arrays."""
         buf = self._buffer
         buf.clear()
         pb.get_space_bodies(self.space, _BODY_FIELDS, buf)
-        ids = np.frombuffer(buf.int_buf(), dtype=np.uintp).astype(np.uint64)
-        f = np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ids), 6)
-        rows = self._codes.lookup(ids)
-        sel = rows >= 0
-        rows, f = rows[sel], f[sel]
-        state.xy[rows] = f[:, 0:2]
-        state.yaw[rows] = f[:, 2]
-        state.vel[rows] = f[:, 3:5]
-        state.yaw_rate[rows] = f[:, 5]
+        ids = np.frombuffer(buf.int_buf(), dtype=np.uintp)
+        _scatter_free(ids, np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ids), 6), state.status,
+                      state.xy, state.yaw, state.vel, state.yaw_rate)
 
     def read_contacts(self, state: FloeState) -> Contacts:
         """Contacts of the last step."""
         buf = self._buffer
         buf.clear()
         pb.get_space_arbiters(self.space, _ARB_FIELDS, buf)
-        ints = np.frombuffer(buf.int_buf(), dtype=np.uintp).astype(np.uint64).reshape(-1, 3)
+        ints = np.frombuffer(buf.int_buf(), dtype=np.uintp).reshape(-1, 3)
         f = np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ints), 12)
-        count = ints[:, 2].astype(np.float64)
-        point = np.where(count[:, None] > 1, 0.5 * (f[:, 4:6] + f[:, 8:10]), f[:, 4:6])
-        return Contacts(self._rows_at(state, ints[:, 0], point), self._rows_at(state, ints[:, 1], point),
-                        f[:, 0:2].copy(), f[:, 2:4].copy(), point)
+        point = np.where(ints[:, 2:3] > 1, 0.5 * (f[:, 4:6] + f[:, 8:10]), f[:, 4:6])
+        rows = self._rows_at(state, ints[:, :2].T.ravel(), np.concatenate([point, point]))
+        return Contacts(rows[:len(ints)], rows[len(ints):], f[:, 0:2].copy(), f[:, 2:4].copy(), point)

@@ -15,7 +15,6 @@ pushed under the hull: they collide with nothing until the hull has passed over 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from enum import IntEnum
 
 import numpy as np
@@ -38,7 +37,7 @@ class BreakCause(IntEnum):
 
 
 class _Column:
-    """A per-row array of the state: reads give the rows in use, ``[0, n)``."""
+    """A per-row array of a ``_Table``: reads give the rows in use, ``[0, n)``."""
 
     def __init__(self, dtype: type, width: int | None = None) -> None:
         self.dtype, self.width = dtype, width
@@ -47,54 +46,76 @@ class _Column:
         self.name = "_" + name
         owner._columns = (*getattr(owner, "_columns", ()), self)
 
-    def allocate(self, state: FloeState, capacity: int) -> None:
+    def allocate(self, table: _Table, capacity: int) -> None:
         shape = (capacity,) if self.width is None else (capacity, self.width)
         grown = np.zeros(shape, dtype=self.dtype)
-        old = getattr(state, self.name, None)
+        old = getattr(table, self.name, None)
         if old is not None:
-            grown[: state.n] = old[: state.n]
-        setattr(state, self.name, grown)
+            grown[: table.n] = old[: table.n]
+        setattr(table, self.name, grown)
 
-    def __get__(self, state: FloeState | None, owner: type | None = None) -> np.ndarray:
-        if state is None:
+    def __get__(self, table: _Table | None, owner: type | None = None) -> np.ndarray:
+        if table is None:
             return self  # type: ignore[return-value]
-        return getattr(state, self.name)[: state.n]
+        return getattr(table, self.name)[: table.n]
 
 
-class FloeState:
-    """Growable struct of arrays, one row per floe; only rows ``[0, n)`` are in use."""
+class _Table:
+    """Growable struct of arrays: the subclass declares ``_Column``s; rows ``[0, n)`` are in
+    use. Capacity grows by half when full, so a long exercise wastes at most a third."""
+
+    _columns: tuple[_Column, ...] = ()
+
+    def __init__(self, capacity: int) -> None:
+        self.n = 0
+        self._capacity = capacity
+        for column in self._columns:
+            column.allocate(self, capacity)
+
+    def _append(self, count: int) -> slice:
+        """Make room for ``count`` more zeroed rows; returns their slice."""
+        if self.n + count > self._capacity:
+            self._capacity = max(self._capacity + self._capacity // 2, self.n + count)
+            for column in self._columns:
+                column.allocate(self, self._capacity)
+        rows = slice(self.n, self.n + count)
+        self.n += count
+        return rows
+
+    def nbytes_per_row(self) -> int:
+        """Bytes one row takes in the columns."""
+        return sum(np.dtype(c.dtype).itemsize * (c.width or 1) for c in self._columns)
+
+
+class FloeState(_Table):
+    """One row per floe; only rows ``[0, n)`` are in use. A frozen floe costs its row and
+    nothing else (``nbytes_per_row`` bytes); rates and small angles are kept in float32,
+    positions in float64 (metre-level fields span kilometres)."""
 
     gcell = _Column(np.int32)  # global template cell of the row
     tile = _Column(np.int32)  # placement index of the row's tile
     status = _Column(np.uint8)  # FloeStatus; written only through set_status
     cause = _Column(np.uint8)  # BreakCause
     submerged = _Column(np.bool_)  # under the hull, out of planar contact
-    home = _Column(np.float64, 2)  # placed centroid in the level ice, world m
+    home = _Column(np.float32, 2)  # placed centroid in the level ice, world m
     xy = _Column(np.float64, 2)  # centre of mass, world m
     yaw = _Column(np.float64)  # rad, CCW
-    vel = _Column(np.float64, 2)  # m/s
-    yaw_rate = _Column(np.float64)  # rad/s
-    heave = _Column(np.float64)  # centre of mass above the water plane, m
-    roll = _Column(np.float64)  # rad
-    pitch = _Column(np.float64)  # rad
-    heave_rate = _Column(np.float64)  # m/s
-    roll_rate = _Column(np.float64)  # rad/s
-    pitch_rate = _Column(np.float64)  # rad/s
+    vel = _Column(np.float32, 2)  # m/s
+    yaw_rate = _Column(np.float32)  # rad/s
+    heave = _Column(np.float32)  # centre of mass above the water plane, m
+    roll = _Column(np.float32)  # rad
+    pitch = _Column(np.float32)  # rad
+    heave_rate = _Column(np.float32)  # m/s
+    roll_rate = _Column(np.float32)  # rad/s
+    pitch_rate = _Column(np.float32)  # rad/s
 
     def __init__(self, capacity: int = 1024) -> None:
-        self.n = 0
+        super().__init__(capacity)
         self._counts = np.zeros(len(FloeStatus), dtype=np.int64)
-        for column in self._columns:
-            column.allocate(self, capacity)
 
     def add_rows(self, count: int, status: FloeStatus) -> slice:
         """Append ``count`` zeroed rows with the given status; returns their slice."""
-        capacity = len(self._gcell)
-        if self.n + count > capacity:
-            for column in self._columns:
-                column.allocate(self, max(2 * capacity, self.n + count))
-        rows = slice(self.n, self.n + count)
-        self.n += count
+        rows = self._append(count)
         self._status[rows] = status
         self._counts[status] += count
         return rows
@@ -110,27 +131,27 @@ class FloeState:
         return int(self._counts[status])
 
 
-@dataclass
-class TilePlacement:
+class TilePlacement(_Table):
     """Placed breakable tiles, by placement index: template, south-west corner (m),
     rotation (quarter turns CCW about the centre), first row and row count."""
 
-    template: list[int] = field(default_factory=list)
-    corner: list[tuple[float, float]] = field(default_factory=list)
-    quarter_turns: list[int] = field(default_factory=list)
-    row_start: list[int] = field(default_factory=list)
-    row_count: list[int] = field(default_factory=list)
+    template = _Column(np.int64)
+    corner = _Column(np.float64, 2)
+    quarter_turns = _Column(np.int64)
+    row_start = _Column(np.int64)
+    row_count = _Column(np.int64)
+
+    def __init__(self, capacity: int = 64) -> None:
+        super().__init__(capacity)
 
     def add(self, template: int, corner: tuple[float, float], quarter_turns: int, rows: slice) -> int:
         """Record a placement; returns its index."""
-        self.template.append(template)
-        self.corner.append(corner)
-        self.quarter_turns.append(quarter_turns)
-        self.row_start.append(rows.start)
-        self.row_count.append(rows.stop - rows.start)
-        return len(self.template) - 1
+        k = self._append(1).start
+        self._template[k], self._corner[k], self._quarter_turns[k] = template, corner, quarter_turns
+        self._row_start[k], self._row_count[k] = rows.start, rows.stop - rows.start
+        return k
 
     def rows(self, placement: int) -> np.ndarray:
         """Rows of a placed tile."""
-        start = self.row_start[placement]
-        return np.arange(start, start + self.row_count[placement])
+        start = int(self._row_start[placement])
+        return np.arange(start, start + int(self._row_count[placement]))

@@ -30,6 +30,8 @@ class IceDynamicsSettings(Params):
     wedge_coefficient: float = Field(WEDGE_COEFFICIENT, gt=0.0, le=2.0, description="C_w in F_s = C_w sigma_f h^2")
     solver_iterations: int = Field(10, ge=1, le=100)
     collision_slop: float = Field(0.01, ge=0.0, le=0.5, description="allowed overlap, m")
+    swap_objects_per_step: int = Field(
+        800, ge=1, le=1_000_000, description="engine objects a step switches in or out for tile swaps")
 
 
 @dataclass(frozen=True)
@@ -140,3 +142,16 @@ def placed_outlines(model: IceModel, gcell: np.ndarray, at: np.ndarray,
     ring = model.outline[gather_ranges(start, stop)]
     c, s = np.cos(angle)[owner], np.sin(angle)[owner]
     return np.column_stack([c * ring[:, 0] - s * ring[:, 1], s * ring[:, 0] + c * ring[:, 1]]) + at[owner], counts
+
+
+def placed_centroids(model: IceModel, template: int, corner: tuple[float, float] | np.ndarray,
+                     quarter_turns: int) -> tuple[np.ndarray, float]:
+    """World centroids (n, 2) m of a template's cells laid with the tile's south-west corner
+    at corner (m), turned by quarter turns CCW about the tile's centre, and their yaw, rad."""
+    t, g0 = model.templates[template], int(model.template_start[template])
+    k = quarter_turns % 4
+    c, s = round(math.cos(k * math.pi / 2)), round(math.sin(k * math.pi / 2))
+    rel = model.centroid[g0:g0 + t.n_cells, :2] - 0.5 * t.side
+    home = np.column_stack([c * rel[:, 0] - s * rel[:, 1], s * rel[:, 0] + c * rel[:, 1]]) + 0.5 * t.side
+    return home + np.asarray(corner, dtype=float), k * math.pi / 2
+

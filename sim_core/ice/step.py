@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sim_core.ice import contact
+from sim_core.ice import vertical
 from sim_core.ice.breaking import breaks
 from sim_core.ice.contact import Contacts
 from sim_core.ice.floes import BreakCause, FloeState, FloeStatus
@@ -103,7 +105,7 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
         struck = struck[(st.status[struck] == FloeStatus.FREE) & ~st.submerged[struck]]
         under = struck[np.abs(hull_frame(st.xy[struck], hull)[:, 1]) < beam_half]
         st.submerged[under] = True
-        space.set_submerged(under, True)
+        space.set_submerged(st, under, True)
         g = st.gcell[under]
         st.heave[under] = model.z_equilibrium[g] - model.thickness[g]
         st.roll[under] = _PUSHED_DOWN_TILT
@@ -117,7 +119,7 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
         passed = (local[:, 0] < 0.0) | (np.abs(local[:, 1]) >= beam_half) | (local[:, 0] > stem + _CLEAR_AHEAD)
         up = down[passed & ~inside_outline(local, space.hull_outline)]
         st.submerged[up] = False
-        space.set_submerged(up, False)
+        space.set_submerged(st, up, False)
 
 
 def _unsettled(model: IceModel, st: FloeState, rows: np.ndarray) -> np.ndarray:
@@ -153,3 +155,10 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
     _update_submersion(model, data, hull, struck[struck >= 0])
     force, moment = _hull_load(impulse, point, hull, dt)
     return IceStepReport(by_hull, by_contact, force, moment)
+
+
+def warm_up(model: IceModel, data: IceData) -> None:
+    """Load every compiled kernel the ice step uses, so that no step waits for a compile."""
+    contact.warm_up()
+    vertical.warm_up(model.tris, model.tri_start, model.mass, model.inertia, model.damping)
+

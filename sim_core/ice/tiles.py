@@ -4,17 +4,23 @@ This is the one module that changes a floe's status (through ``FloeState.set_sta
 ``place_tile`` adds rows INTACT, ``break_cells`` makes them FREE, ``freeze_tile`` makes
 a tile's free floes FROZEN and ``thaw_tile`` FREE again. The contact space follows each
 change. ``IceData`` is the dynamic half of the ice world.
+
+Laying or thawing a tile builds a thousand or more engine objects. That work needs no row
+and touches no physics, so it can be done ahead of need: ``prepare_place`` and
+``prepare_thaw`` start a ``PreparedTile``, ``advance`` builds it a chunk at a time, and
+``place_tile`` or ``thaw_tile`` given it only switch the built objects into the space. The
+physics is the same either way: the objects are built from the same geometry and poses
+and enter the space in the same order, at the same step.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from sim_core.ice.contact import ContactSpace
+from sim_core.ice.contact import ContactSpace, TileBodies
 from sim_core.ice.floes import BreakCause, FloeState, FloeStatus, TilePlacement
-from sim_core.ice.model import IceModel
+from sim_core.ice.model import IceModel, placed_centroids
 
 
 @dataclass
@@ -26,34 +32,92 @@ class IceData:
     contacts: ContactSpace
 
 
+@dataclass
+class PreparedTile:
+    """Engine objects of a tile built ahead of its switch: the template, corner (m) and
+    quarter turns it is laid with, the placement it thaws (-1 for a new one), and the cell
+    offsets and floe rows still to build."""
+
+    template: int
+    corner: tuple[float, float]
+    quarter_turns: int
+    placement: int
+    bodies: TileBodies
+    cells: np.ndarray
+    floes: np.ndarray
+
+    @property
+    def done(self) -> bool:
+        return not len(self.cells) and not len(self.floes)
+
+
 def new_ice_data(model: IceModel, hull_contour: np.ndarray, hull_friction: float) -> IceData:
     """Empty ice world with a hull of the given ship-frame contour (x forward, y starboard)."""
     outline = np.column_stack([hull_contour[:, 0], -hull_contour[:, 1]])  # body frame: y to port
-    return IceData(FloeState(), TilePlacement(), ContactSpace(model, outline, hull_friction))
+    tiles = TilePlacement()
+    return IceData(FloeState(), tiles, ContactSpace(model, tiles, outline, hull_friction))
+
+
+def prepare_place(model: IceModel, template: int, corner: tuple[float, float], quarter_turns: int) -> PreparedTile:
+    """Start preparing a new tile of the template laid at corner (m), turned by quarter turns."""
+    n = model.templates[template].n_cells
+    return PreparedTile(template, (float(corner[0]), float(corner[1])), quarter_turns % 4, -1,
+                        TileBodies(n), np.arange(n), np.zeros(0, dtype=np.int64))
+
+
+def prepare_thaw(data: IceData, placement: int) -> PreparedTile:
+    """Start preparing a frozen tile's return: its intact cells and its frozen floes, at
+    the poses they froze with (they do not change while frozen)."""
+    tiles, st = data.tiles, data.state
+    rows = tiles.rows(placement)
+    status = st.status[rows]
+    return PreparedTile(int(tiles.template[placement]), tuple(tiles.corner[placement].tolist()),
+                        int(tiles.quarter_turns[placement]), placement, TileBodies(len(rows)),
+                        np.nonzero(status == FloeStatus.INTACT)[0], rows[status == FloeStatus.FROZEN])
+
+
+def advance(data: IceData, prepared: PreparedTile, max_items: int) -> int:
+    """Build up to max_items more cells or floes of a prepared tile; returns how many."""
+    cells, prepared.cells = prepared.cells[:max_items], prepared.cells[max_items:]
+    if len(cells):
+        data.contacts.build_cells(prepared.bodies, prepared.template, prepared.corner, prepared.quarter_turns, cells)
+    floes, prepared.floes = prepared.floes[:max_items - len(cells)], prepared.floes[max_items - len(cells):]
+    if len(floes):
+        data.contacts.build_floes(prepared.bodies, data.state, floes)
+    return len(cells) + len(floes)
+
+
+def discard_prepared(data: IceData, prepared: PreparedTile) -> None:
+    """Free the engine objects of a preparation that will not be switched in."""
+    data.contacts.discard(prepared.bodies)
+
+
+def _finish(data: IceData, prepared: PreparedTile) -> None:
+    while not prepared.done:
+        advance(data, prepared, 1 << 30)
 
 
 def place_tile(model: IceModel, data: IceData, template: int, corner: tuple[float, float],
-               quarter_turns: int = 0) -> int:
+               quarter_turns: int = 0, prepared: PreparedTile | None = None) -> int:
     """Lay a breakable tile with its south-west corner at (x, y) m, rotated by quarter turns
-    about its centre; all its cells intact at their floating height. Returns the tile's
-    placement index (its rows: ``data.tiles.rows(index)``)."""
+    about its centre; all its cells intact at their floating height. With a tile prepared
+    for this layout, only switch it in. Returns the tile's placement index (its rows:
+    ``data.tiles.rows(index)``)."""
+    prepared = prepared or prepare_place(model, template, corner, quarter_turns)
+    _finish(data, prepared)
     t = model.templates[template]
     g0 = model.template_start[template]
     st = data.state
     rows = st.add_rows(t.n_cells, FloeStatus.INTACT)
-    k = quarter_turns % 4
-    c, s = round(math.cos(k * math.pi / 2)), round(math.sin(k * math.pi / 2))
-    rel = model.centroid[g0:g0 + t.n_cells, :2] - 0.5 * t.side
-    home = np.column_stack([c * rel[:, 0] - s * rel[:, 1], s * rel[:, 0] + c * rel[:, 1]]) + 0.5 * t.side
-    home += np.asarray(corner, dtype=float)
-    index = data.tiles.add(template, (float(corner[0]), float(corner[1])), k, rows)
+    index = data.tiles.add(template, prepared.corner, prepared.quarter_turns, rows)
+    home, yaw = placed_centroids(model, template, prepared.corner, prepared.quarter_turns)
     st.gcell[rows] = np.arange(g0, g0 + t.n_cells)
     st.tile[rows] = index
     st.home[rows] = home
     st.xy[rows] = home
-    st.yaw[rows] = k * math.pi / 2
+    st.yaw[rows] = yaw
     st.heave[rows] = model.z_equilibrium[g0:g0 + t.n_cells]
-    data.contacts.add_tile(st, index, np.arange(rows.start, rows.stop))
+    data.contacts.insert_tile(prepared.bodies, index)
     return index
 
 
@@ -66,27 +130,22 @@ def break_cells(data: IceData, rows: np.ndarray, cause: BreakCause) -> None:
 
 def freeze_tile(data: IceData, placement: int) -> None:
     """Stop simulating a tile: its bodies leave the contact space, free floes keep their
-    last pose as FROZEN, intact cells stay INTACT (drawn, not simulated)."""
+    last pose and velocity as FROZEN (a row and nothing else), intact cells stay INTACT
+    (drawn, not simulated)."""
     rows = data.tiles.rows(placement)
     st = data.state
     st.submerged[rows] = False  # a frozen floe keeps its pose; it surfaces if thawed
-    status = st.status[rows]
-    data.contacts.remove(st, rows[(status == FloeStatus.INTACT) | (status == FloeStatus.FREE)])
-    free = rows[status == FloeStatus.FREE]
-    st.set_status(free, FloeStatus.FROZEN)
-    st.vel[free] = 0.0
-    st.yaw_rate[free] = 0.0
+    data.contacts.drop_tile(placement)
+    st.set_status(rows[st.status[rows] == FloeStatus.FREE], FloeStatus.FROZEN)
 
 
-def thaw_tile(data: IceData, placement: int) -> None:
+def thaw_tile(data: IceData, placement: int, prepared: PreparedTile | None = None) -> None:
     """Simulate a frozen tile again: intact cells rejoin as a tile body, frozen floes come
-    back as free floes at rest, at the poses they froze with."""
+    back as free floes with the poses and velocities they froze with. With a tile prepared for
+    this thaw, only switch it in."""
+    prepared = prepared or prepare_thaw(data, placement)
+    _finish(data, prepared)
     rows = data.tiles.rows(placement)
-    st = data.state
-    status = st.status[rows]
-    intact = rows[status == FloeStatus.INTACT]
-    if len(intact):
-        data.contacts.add_tile(st, placement, intact)
-    frozen = rows[status == FloeStatus.FROZEN]
-    data.contacts.add_floes(st, frozen)
-    st.set_status(frozen, FloeStatus.FREE)
+    frozen = rows[data.state.status[rows] == FloeStatus.FROZEN]
+    data.contacts.insert_tile(prepared.bodies, placement)
+    data.state.set_status(frozen, FloeStatus.FREE)

@@ -5,6 +5,11 @@ roll and pitch, with M_B the moment of the buoyancy force about the centre of ma
 V_sub and the centre of buoyancy come from clipping the floe's triangles at the water plane
 (``buoyancy``). Rotations use the small-angle form (Euler rates = body rates); the
 hydrostatics themselves are exact at any angle. Semi-implicit Euler, sub-stepped.
+
+The kernel is compiled twice, serial and parallel over floes. The parallel one pays only
+for many floes: on a loaded machine a parallel region waits for its slowest thread, and a
+thread that has lost its core costs a scheduler time slice (milliseconds), far more than
+clipping a few hundred floes serially.
 """
 from __future__ import annotations
 
@@ -14,9 +19,11 @@ import numpy as np
 from sim_core.ice.buoyancy import _floe_submerged
 
 
-@numba.njit(cache=True, parallel=True)
-def vertical_step(rows, gcell, tris, tri_start, mass, inertia, damping, added_mass,
-                  rho_g, g, heave, roll, pitch, heave_rate, roll_rate, pitch_rate, dt, n_sub):
+PARALLEL_FROM = 4000  # floes: below this the serial kernel runs
+
+
+def _vertical_kernel(rows, gcell, tris, tri_start, mass, inertia, damping, added_mass,
+                     rho_g, g, heave, roll, pitch, heave_rate, roll_rate, pitch_rate, dt, n_sub):
     """Advance heave/roll/pitch of floe rows by dt (n_sub semi-implicit sub-steps)."""
     h = dt / n_sub
     for k in numba.prange(len(rows)):
@@ -39,3 +46,28 @@ def vertical_step(rows, gcell, tris, tri_start, mass, inertia, damping, added_ma
             heave[i] += h * heave_rate[i]
             roll[i] += h * roll_rate[i]
             pitch[i] += h * pitch_rate[i]
+
+
+_serial = numba.njit(cache=True)(_vertical_kernel)
+_parallel = numba.njit(cache=True, parallel=True)(_vertical_kernel)
+
+
+def vertical_step(rows: np.ndarray, gcell: np.ndarray, tris: np.ndarray, tri_start: np.ndarray, mass: np.ndarray,
+                  inertia: np.ndarray, damping: np.ndarray, added_mass: float, rho_g: float, g: float,
+                  heave: np.ndarray, roll: np.ndarray, pitch: np.ndarray, heave_rate: np.ndarray,
+                  roll_rate: np.ndarray, pitch_rate: np.ndarray, dt: float, n_sub: int) -> None:
+    """Advance heave (m), roll and pitch (rad) and their rates of floe rows (n,) by dt (s)
+    in n_sub semi-implicit sub-steps, in place. rho_g: sea water density times g, N/m3."""
+    kernel = _parallel if len(rows) >= PARALLEL_FROM else _serial
+    kernel(rows, gcell, tris, tri_start, mass, inertia, damping, added_mass, rho_g, g,
+           heave, roll, pitch, heave_rate, roll_rate, pitch_rate, dt, n_sub)
+
+
+def warm_up(tris: np.ndarray, tri_start: np.ndarray, mass: np.ndarray, inertia: np.ndarray,
+            damping: np.ndarray) -> None:
+    """Load both compiled kernels (numba compiles or loads on first call) for the state's dtypes."""
+    rows, f32 = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.float32)
+    for kernel in (_serial, _parallel):
+        kernel(rows, np.zeros(0, np.int32), tris, tri_start, mass, inertia, damping, 0.5, 1.0e4, 9.81,
+               f32, f32, f32, f32, f32, f32, 0.01, 1)
+

@@ -7,7 +7,9 @@ their last pose and are drawn, but cost no physics. Unlike the paper's reverse r
 freezing keeps the broken channel behind the ship in the scene.
 
 ``update_scene`` is pure scene logic over the tile-state array: from the hull's contour
-points it decides which tiles to place, thaw and freeze. The world step applies those
+points it decides which tiles to place, thaw and freeze. ``tiles_to_prepare`` names the
+tiles in an outer ring beyond R_T that will soon need placing or thawing, so that their
+engine objects can be built ahead (R_T itself stays the paper's). The world step applies those
 decisions to the ice world. Tile variants and rotations are drawn from a hash of the tile's
 index, so neighbours do not repeat and a rerun lays out the same field.
 """
@@ -39,6 +41,10 @@ class SceneSettings(Params):
         "contour", description="contour: the paper's 34 contour points and R_T; origin: the traditional test")
     reverse_replacement: bool = Field(True, description="freeze breakable tiles far from the ship")
     reverse_distance: float = Field(700.0, gt=0.0, le=1.0e5, description="freeze beyond this distance, m")
+    prepare_ahead: float = Field(
+        60.0, ge=0.0, le=1000.0,
+        description="tiles within R_T plus this (m) are prepared ahead of their switch; 0 builds them at the switch")
+    prepare_budget_ms: float = Field(1.0, gt=0.0, le=50.0, description="wall time per step spent preparing tiles, ms")
 
 
 @dataclass(frozen=True)
@@ -108,6 +114,15 @@ def detected_tiles(model: SceneModel, contour: np.ndarray, origin: np.ndarray) -
         tile = tile_under(origin, model.nx, model.ny, model.side)
         return np.array([tile] if tile >= 0 else [], dtype=np.int64)
     return tiles_near(contour, model.radius, model.nx, model.ny, model.side)
+
+
+def tiles_to_prepare(model: SceneModel, data: SceneData, contour: np.ndarray) -> np.ndarray:
+    """Unbreakable or frozen tiles within R_T + ``prepare_ahead`` of the contour points (n, 2) m:
+    those a switch may soon need."""
+    if model.settings.prepare_ahead <= 0.0:
+        return np.zeros(0, dtype=np.int64)
+    near = tiles_near(contour, model.radius + model.settings.prepare_ahead, model.nx, model.ny, model.side)
+    return near[data.tile_state[near] != TileState.BREAKABLE]
 
 
 def update_scene(model: SceneModel, data: SceneData, contour: np.ndarray, origin: np.ndarray) -> SceneUpdate:

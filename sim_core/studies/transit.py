@@ -37,6 +37,7 @@ class TransitSeries:
             "final_frozen": int(self.frozen[-1]), "max_live_tiles": int(self.live_tiles.max()),
             "step_ms_median": round(float(np.median(self.step_ms)), 2),
             "step_ms_p99": round(float(np.percentile(self.step_ms, 99)), 2),
+            "step_ms_max": round(float(np.max(self.step_ms)), 2),
         }
 
 

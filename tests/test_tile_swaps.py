@@ -1,0 +1,79 @@
+"""Tile swaps off the critical path: tiles prepared ahead switch in with the same physics
+as tiles built at their switch, and floes that leave the simulation and come back keep
+their pose and momentum."""
+import numpy as np
+import pytest
+from conftest import exercise_config
+
+from bridge_node.node.world_setup import build_world, start_world
+from sim_core.fracture.tile_template import FractureSettings, build_tile
+from sim_core.frames.hull_contour import waterline_contour
+from sim_core.ice.floes import BreakCause, FloeStatus
+from sim_core.ice.model import compile_ice_model
+from sim_core.ice.step import HullMotion, ice_step
+from sim_core.ice.tiles import break_cells, freeze_tile, new_ice_data, place_tile, thaw_tile
+from sim_core.world import step
+
+
+def _transit(tmp_path, prepare_ahead: float, steps: int = 900):
+    """The default ship steaming north through a 400 m x 600 m field of 50 m tiles."""
+    cfg = exercise_config(tmp_path / "tiles", 400.0, 600.0, 50.0, start_north=-60.0, reverse_distance=205.0,
+                          prepare_ahead=prepare_ahead)
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    placed_at_start = None
+    for k in range(steps):
+        events = step(model, data, 0.1)
+        if k == 0:
+            placed_at_start = len(data.scene.placement)
+    return data, placed_at_start, events
+
+
+def test_prepared_tiles_switch_in_with_the_same_physics_as_tiles_built_at_the_switch(tmp_path):
+    ahead, at_start, events = _transit(tmp_path, prepare_ahead=60.0)
+    built, _, _ = _transit(tmp_path, prepare_ahead=0.0)
+    assert len(ahead.scene.placement) > at_start and events.floes_frozen > 0  # tiles placed, thawed none, frozen
+    assert ahead.late_switches == 0  # every switch found its tile built
+    a, b = ahead.ice.state, built.ice.state
+    assert a.n == b.n
+    for cause in (BreakCause.HULL, BreakCause.CONTACT):
+        np.testing.assert_array_equal(np.nonzero(a.cause == cause)[0], np.nonzero(b.cause == cause)[0])
+    assert np.count_nonzero(a.cause == BreakCause.CONTACT) > 0
+    np.testing.assert_array_equal(a.status, b.status)
+    # Chipmunk orders its contacts by hashes of C pointers, which differ from run to run,
+    # so poses agree to rounding (even between two runs of one mode), not bit for bit
+    np.testing.assert_allclose(a.xy, b.xy, rtol=0.0, atol=1e-6)
+
+
+@pytest.mark.parametrize("settle", [True, False], ids=["after-leaving", "while-leaving"])
+def test_floes_that_leave_and_reenter_keep_pose_and_momentum(settle):
+    tile = build_tile(0.5, 5, FractureSettings(tile_side=40.0, colliders="sphere"))
+    model = compile_ice_model([tile])
+    data = new_ice_data(model, waterline_contour(150.0, 24.0), 0.1)
+    far = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
+    rows = data.tiles.rows(place_tile(model, data, 0, (0.0, 0.0)))
+    st = data.state
+    loose = rows[np.abs(st.home[rows, 0] - 20.0) < 6.0]
+    break_cells(data, loose, BreakCause.HULL)
+    rng = np.random.default_rng(3)
+    data.contacts.set_velocity(st, loose, rng.uniform(-0.2, 0.2, (len(loose), 2)), rng.uniform(-0.05, 0.05, len(loose)))
+    for _ in range(20):
+        ice_step(model, data, far, 1 / 30)
+    pose = st.xy[loose].copy(), st.yaw[loose].copy()
+    momentum = st.vel[loose].copy(), st.yaw_rate[loose].copy()
+    assert np.abs(momentum[0]).max() > 0.01
+    freeze_tile(data, 0)
+    assert np.all(st.status[loose] == FloeStatus.FROZEN)
+    if settle:  # the tile's bodies leave the engine over the following steps
+        while data.contacts.swaps_pending:
+            ice_step(model, data, far, 1 / 30)
+    np.testing.assert_array_equal(st.xy[loose], pose[0])  # frozen floes do not move
+    thaw_tile(data, 0)
+    assert np.all(st.status[loose] == FloeStatus.FREE)
+    while data.contacts.swaps_pending:
+        data.contacts.step(1e-9)  # back into the engine, time all but still
+    data.contacts.read_free(st)
+    np.testing.assert_allclose(st.xy[loose], pose[0], atol=1e-9)
+    np.testing.assert_allclose(st.yaw[loose], pose[1], atol=1e-9)
+    np.testing.assert_allclose(st.vel[loose], momentum[0], rtol=1e-6)
+    np.testing.assert_allclose(st.yaw_rate[loose], momentum[1], rtol=1e-6)
