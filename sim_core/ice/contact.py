@@ -543,4 +543,9 @@ class ContactSpace:
         f = np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ints), 12)
         point = np.where(ints[:, 2:3] > 1, 0.5 * (f[:, 4:6] + f[:, 8:10]), f[:, 4:6])
         rows = self._rows_at(state, ints[:, :2].T.ravel(), np.concatenate([point, point]))
-        return Contacts(rows[:len(ints)], rows[len(ints):], f[:, 0:2].copy(), f[:, 2:4].copy(), point)
+        a, b = rows[:len(ints)], rows[len(ints):]
+        # Chipmunk lists its arbiters in the order of a hash of C pointers, which differs
+        # from run to run; sums over contacts (the hull load) must not, or a rerun of the
+        # same orders drifts apart by rounding and, through the ship, by whole cells
+        order = np.lexsort((point[:, 1], point[:, 0], b, a))
+        return Contacts(a[order], b[order], f[order, 0:2], f[order, 2:4], point[order])
