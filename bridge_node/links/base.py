@@ -103,11 +103,11 @@ class LinkHealth:
 @dataclass(frozen=True)
 class Traffic:
     """Raw traffic of one link as it went over the wire: a ``can.Message``, an NMEA sentence
-    (str without CR LF), or a Modbus ``RegisterAccess``."""
+    (str without CR LF), a Modbus ``RegisterAccess``, or a DIS PDU (bytes)."""
 
     unix_time: float  # wall clock, s
     link: str  # link name
-    protocol: str  # the link's registry key: "can", "nmea0183", "modbus"
+    protocol: str  # the link's registry key: "can", "nmea0183", "modbus", "dis"
     direction: str  # "rx" / "tx"; Modbus: "read" / "write"
     data: object
 

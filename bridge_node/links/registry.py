@@ -2,7 +2,7 @@
 ``@register_link``; importing them here fills ``LINK_TYPES``."""
 from __future__ import annotations
 
-from bridge_node.links import can_link, modbus_link, nmea_link  # noqa: F401  (they register themselves)
+from bridge_node.links import can_link, dis_link, modbus_link, nmea_link  # noqa: F401  (they register themselves)
 from bridge_node.links.base import LINK_TYPES, Link
 from bridge_node.links.settings import LinkSettings
 

@@ -3,8 +3,8 @@
 
 One folder per session: ``can.log`` in python-can's candump log format (written by
 ``can.Logger``, read back by ``can.LogReader``), ``nmea.log`` with one raw sentence per line
-(``<unix time> <link> <rx|tx> <sentence>``), and ``modbus.csv`` with one row per register
-read or write. ``flush()`` is called every tick and writes to the OS at most a second after
+(``<unix time> <link> <rx|tx> <sentence>``), ``modbus.csv`` with one row per register
+read or write, and ``dis.log`` with one PDU per line (``<unix time> <link> <rx|tx> <hex>``). ``flush()`` is called every tick and writes to the OS at most a second after
 a line was added, so a killed node loses at most the last second.
 
 Every complete line ends with a newline, and lines are only appended, so after a power cut
@@ -47,16 +47,19 @@ class SessionRecord(Listener):
     def __init__(self, folder: str | Path) -> None:
         self.folder = Path(folder)
         self.folder.mkdir(parents=True, exist_ok=True)
-        self.torn_tails_cut = sum(cut_torn_tail(self.folder / name) for name in ("can.log", "nmea.log", "modbus.csv"))
+        self.torn_tails_cut = sum(cut_torn_tail(self.folder / name)
+                                  for name in ("can.log", "nmea.log", "modbus.csv", "dis.log"))
         self._can = can.Logger(str(self.folder / "can.log"), append=True)
         self._nmea = open(self.folder / "nmea.log", "a", encoding="ascii", errors="replace")
+        self._dis = open(self.folder / "dis.log", "a", encoding="ascii")
         new_csv = not (self.folder / "modbus.csv").exists()
         self._modbus_file = open(self.folder / "modbus.csv", "a", newline="", encoding="utf-8")
         self._modbus = csv.writer(self._modbus_file)
         if new_csv:
             self._modbus.writerow(["unix_time", "link", "op", "table", "address", "raw", "value"])
         self._last_flush = time.monotonic()
-        self._writers = {"can": self._can_frame, "nmea0183": self._sentence, "modbus": self._register}
+        self._writers = {"can": self._can_frame, "nmea0183": self._sentence, "modbus": self._register,
+                         "dis": self._pdu}
         self._stopped = False
         self.failed: str | None = None  # why recording stopped (a full disk, say); the node goes on
 
@@ -77,6 +80,9 @@ class SessionRecord(Listener):
     def _sentence(self, t: Traffic) -> None:
         self._nmea.write(f"{t.unix_time:.3f} {t.link} {t.direction} {t.data.strip()}\n")
 
+    def _pdu(self, t: Traffic) -> None:
+        self._dis.write(f"{t.unix_time:.3f} {t.link} {t.direction} {t.data.hex()}\n")
+
     def _register(self, t: Traffic) -> None:
         a = t.data  # a modbus_link.RegisterAccess
         self._modbus.writerow([f"{t.unix_time:.3f}", t.link, t.direction, a.table, a.address, a.raw, a.value])
@@ -88,6 +94,7 @@ class SessionRecord(Listener):
             try:
                 self._can.file.flush()
                 self._nmea.flush()
+                self._dis.flush()
                 self._modbus_file.flush()
             except OSError as exc:
                 self._fail(exc)
@@ -99,7 +106,7 @@ class SessionRecord(Listener):
             return
         self._stopped = True
         self.flush(force=True)
-        for close in (self._can.stop, self._nmea.close, self._modbus_file.close):
+        for close in (self._can.stop, self._nmea.close, self._dis.close, self._modbus_file.close):
             try:
                 close()
             except OSError as exc:  # the data that did not fit is lost either way; say so once
