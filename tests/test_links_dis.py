@@ -12,6 +12,8 @@ import zlib
 import numpy as np
 import pytest
 from conftest import free_port
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from links_helpers import STATE, node_config, tick, wait_for
 from opendis.DataOutputStream import DataOutputStream
 from opendis.dis7 import EntityStatePdu
@@ -20,7 +22,9 @@ from opendis.RangeCoordinates import GPS
 from pyais import decode
 from pydantic import ValidationError
 
+from bridge_node.links.dis_link import DisLink, PduError
 from bridge_node.links.hub import LinkHub
+from bridge_node.links.settings import DisLinkSettings
 from sim_core.frames.units import KNOT
 
 
@@ -177,3 +181,25 @@ def test_dis_goes_off_the_host_only_when_allowed():
     with pytest.raises(ValidationError, match="send_to"):
         node_config([{"type": "dis", "name": "dis", "send_to": ["192.168.1.20:3000"]}])
     node_config([{"type": "dis", "name": "dis", "send_to": ["192.168.1.20:3000"], "allow_network": True}])
+
+
+@settings(max_examples=2000, deadline=None)
+@given(st.binary(max_size=200), st.integers(0, 143), st.integers(0, 255))
+def test_any_datagram_is_a_vessel_or_a_counted_kind(data, where, value):
+    """Random datagrams, and real PDUs with one byte changed, never crash the parser."""
+    link = DisLink(DisLinkSettings(type="dis", name="fuzz"))
+    corrupted = bytearray(GOOD)
+    corrupted[where] = value
+    for pdu in (data, bytes(corrupted)):
+        try:
+            entity = link._entity(pdu, 0.0)
+        except PduError as exc:
+            assert exc.kind in ("malformed", "ignored", "bad_field")
+            continue
+        if entity is not None:
+            v = entity.at(1.0)
+            assert all(math.isfinite(x) for x in (v.latitude, v.longitude, v.heading))
+            assert v.speed_over_ground <= 100.0
+
+
+GOOD = other_simulator_pdu(74.0, 20.0, 1.0, 5.0)

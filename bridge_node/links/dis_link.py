@@ -15,7 +15,7 @@ NMEA links send them as AIS targets).
   from ``mmsi_base`` (200 000 000: no country's MID) and its entity id. The node's own
   PDUs, looped back, are skipped; other PDU types, exercises and entities are ``ignored``;
   a PDU that is short or whose length field is wrong is ``malformed``; non-finite or
-  off-Earth values are ``bad_field``.
+  off-Earth positions and speeds over 100 m/s are ``bad_field``.
 
 PDUs are packed and unpacked with ``struct`` (144 bytes, big-endian, no variable
 parameters); the tests decode and encode them with the independent opendis package.
@@ -43,6 +43,7 @@ ESPDU = struct.Struct(">BBBBIHBB HHH BB BBHBBBB BBHBBBB 3f 3d 3f I B15s 3f 3f B1
 MAX_PDUS_PER_POLL = 1000
 WGS84_A, WGS84_E2 = 6378137.0, 6.69437999014e-3
 EARTH_SHELL_M = (6.30e6, 6.45e6)  # |ECEF location| of a vessel lies within this
+MAX_SPEED_MPS = 100.0  # no vessel is faster: a PDU saying so is bad
 
 
 def ned_to_ecef(lat: float, lon: float) -> np.ndarray:
@@ -195,7 +196,7 @@ class DisLink(Link):
         velocity, location, (psi, theta, phi) = np.array(f[27:30]), np.array(f[30:33]), f[33:36]
         rate = f[44]  # angular velocity about the body's z (down): yaw rate, + to starboard
         values = (*velocity, *location, psi, theta, phi, rate)
-        if not all(math.isfinite(v) for v in values) or \
+        if not all(math.isfinite(v) for v in values) or float(np.linalg.norm(velocity)) > MAX_SPEED_MPS or \
                 not EARTH_SHELL_M[0] < float(np.linalg.norm(location)) < EARTH_SHELL_M[1]:
             raise PduError("bad_field")
         lat, lon = ecef_to_geodetic(location)
