@@ -88,14 +88,31 @@ class WorldData:
     late_switches: int = 0  # tiles switched in before their preparation was done
 
 
+@dataclass(frozen=True)
+class KinematicPose:
+    """Where a logged track puts the ship at the end of a step, instead of its manoeuvring
+    model (replay): north, east m from the field's corner, heading rad clockwise from north,
+    surge and sway m/s, yaw rate rad/s (+ to starboard)."""
+
+    north: float
+    east: float
+    heading: float
+    surge: float
+    sway: float = 0.0
+    yaw_rate: float = 0.0
+
+
 @dataclass
 class Controls:
     """Console orders for one step; None leaves an order as it was. Rudder in rad (+ to
-    starboard); engine by telegraph position name or lever percent (-100..100)."""
+    starboard); engine by telegraph position name or lever percent (-100..100). With
+    ``kinematic`` set the ship follows that pose instead of its model; the hull then breaks
+    the ice along it as a driven ship does."""
 
     rudder: float | None = None
     telegraph: str | None = None
     lever: float | None = None
+    kinematic: KinematicPose | None = None
 
 
 @dataclass(frozen=True)
@@ -319,7 +336,12 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
     ship = data.ship
     contour, _ = hull_world(model, ship)
     ship.ice_h, ship.ice_condition = _ice_condition(model, data, contour[0])  # contour[0] is the stem
-    ship_model.step(model.ship, ship, dt)
+    if controls is not None and controls.kinematic is not None:
+        k = controls.kinematic
+        ship.eta[0], ship.eta[1], ship.eta[5] = k.north, k.east, k.heading
+        ship.nu[0], ship.nu[1], ship.nu[5] = k.surge, k.sway, k.yaw_rate
+    else:
+        ship_model.step(model.ship, ship, dt)
     contour, hull = hull_world(model, ship)
     placed, thawed, frozen = apply_swaps(model, data, update_scene(model.scene, data.scene, contour, hull.xy))
     report = ice_step(model.ice, data.ice, hull, dt)
