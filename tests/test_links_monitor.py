@@ -119,5 +119,6 @@ def test_shipped_console_example_config_is_valid():
     from bridge_node.node.config import DEFAULT_CONFIG, load_config
 
     cfg = load_config(DEFAULT_CONFIG.parent / "bridge_console.toml")
-    assert [link.type for link in cfg.links] == ["can", "nmea0183", "modbus"]
+    assert [link.type for link in cfg.links] == ["can", "nmea0183", "modbus", "dis"]
+    assert cfg.links[1].ais is not None and cfg.links[1].sends_udp()
     assert cfg.arbitration.rudder == ["console_can", "console_nmea", "wing_io"]
