@@ -78,7 +78,7 @@ class ALR(pynmea2.TalkerSentence):
               ("Acknowledged", "acknowledged"), ("Text", "text"))
 
 
-ORDER_SENTENCES = {"ROR": ROR, "ETL": ETL, "PRC": PRC}
+ORDER_SENTENCES = frozenset({"ROR", "ETL", "PRC"})  # the sentence types that carry orders
 
 
 class SentenceError(ValueError):
