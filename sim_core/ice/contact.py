@@ -42,7 +42,6 @@ import numpy as np
 import pymunk
 import pymunk.batch as pb
 from pymunk._chipmunk import ffi, lib
-from scipy.spatial import cKDTree
 
 from sim_core.ice.floes import FloeState, FloeStatus, TilePlacement
 from sim_core.ice.model import IceModel, placed_centroids, placed_outlines
@@ -57,7 +56,7 @@ _HULL = (0, _HULL_BIT, _FLOE_BIT)  # Chipmunk shape filters: (group, categories,
 _FLOE = (0, _FLOE_BIT, _HULL_BIT | _FLOE_BIT)
 _UNDER_HULL = (0, 0, 0)
 _IDENTITY = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)  # cpTransform
-_NEAREST = 8  # seeds searched for the nearest intact cell; a contact's cell is always among them
+_SEEDS_PER_BUCKET = 4  # mean Voronoi seeds per bucket of a template's seed grid
 _BODY_FIELDS = (pb.BodyFields.BODY_ID | pb.BodyFields.POSITION | pb.BodyFields.ANGLE
                 | pb.BodyFields.VELOCITY | pb.BodyFields.ANGULAR_VELOCITY)
 _ARB_FIELDS = (pb.ArbiterFields.BODY_A_ID | pb.ArbiterFields.BODY_B_ID | pb.ArbiterFields.TOTAL_IMPULSE
@@ -235,24 +234,6 @@ def _hull_overlaps(offsets, present, status, gcell, xy, yaw, outline, outline_st
     return out[:n_out]
 
 
-_TURN_COS, _TURN_SIN = np.array([1, 0, -1, 0]), np.array([0, 1, 0, -1])
-
-
-def _to_template(points: np.ndarray, corner: np.ndarray, quarter_turns: np.ndarray, side: np.ndarray) -> np.ndarray:
-    """World points (n, 2) in the frames of templates placed at corners (n, 2) m, turned by
-    quarter turns (n,) about their centres, of sides (n,) m; inverse of ``place_tile``."""
-    k = (-quarter_turns) % 4
-    c, s, half = _TURN_COS[k], _TURN_SIN[k], 0.5 * side
-    rx, ry = points[:, 0] - corner[:, 0] - half, points[:, 1] - corner[:, 1] - half
-    return np.column_stack([c * rx - s * ry + half, s * rx + c * ry + half])
-
-
-def _decode(ids: np.ndarray) -> np.ndarray:
-    """Codes of body ids (n,) int64: floe rows, HULL_ROW, _TILE_CODE - placement, or _NOT_A_FLOE."""
-    return np.where(ids >= _TILE0, _TILE_CODE - (ids - _TILE0),
-                    np.where(ids >= _ROW0, ids - _ROW0, np.where(ids == _HULL_ID, HULL_ROW, _NOT_A_FLOE)))
-
-
 @numba.njit(cache=True)
 def _scatter_free(ids, f, status, xy, yaw, vel, yaw_rate):
     """Write the pose and velocity rows f (n, 6) of floe bodies with these ids into the
@@ -264,12 +245,109 @@ def _scatter_free(ids, f, status, xy, yaw, vel, yaw_rate):
             vel[i, 0], vel[i, 1], yaw_rate[i] = f[k, 3], f[k, 4], f[k, 5]
 
 
+def _seed_grid(model: IceModel) -> tuple[np.ndarray, ...]:
+    """Every template's Voronoi seeds (template frame, m) bucketed in a uniform grid of about
+    _SEEDS_PER_BUCKET seeds a bucket: per template its first bucket, buckets per side and
+    bucket side (m); the buckets' first entries (CSR) and entries (cell offsets in the
+    template); and the seeds by global cell (G, 2). A k-d tree would do the search too, but
+    it is called from numba, once per contact, with the seeds of broken cells skipped."""
+    seeds = model.centroid[:, :2] + model.seed_offset
+    first_bucket, per_side, size, counts, entries = [0], [], [], [], []
+    for t, (a, b) in enumerate(zip(model.template_start[:-1], model.template_start[1:])):
+        side = model.templates[t].side
+        n = max(1, int(math.sqrt((b - a) / _SEEDS_PER_BUCKET)))
+        cell = np.clip((seeds[a:b] / (side / n)).astype(np.int64), 0, n - 1)
+        bucket = cell[:, 0] + n * cell[:, 1]
+        entries.append(np.argsort(bucket, kind="stable"))
+        counts.append(np.bincount(bucket, minlength=n * n))
+        first_bucket.append(first_bucket[-1] + n * n)
+        per_side.append(n)
+        size.append(side / n)
+    first = np.concatenate([[0], np.cumsum(np.concatenate(counts))]) if counts else np.zeros(1, np.int64)
+    return (np.array(first_bucket[:-1], dtype=np.int64), np.array(per_side, dtype=np.int64),
+            np.array(size, dtype=float), first.astype(np.int64),
+            np.concatenate(entries).astype(np.int64) if entries else np.zeros(0, np.int64),
+            np.ascontiguousarray(seeds), model.template_start.astype(np.int64))
+
+
+@numba.njit(cache=True)
+def _nearest_intact(qx, qy, t, row_start, status, bucket0, per_side, size, first, entries, seeds, g0):
+    """Row of the intact cell whose seed is nearest (qx, qy), template t's frame (m), among
+    the cells of the tile whose rows start at row_start; -1 if none is intact."""
+    n, h = per_side[t], size[t]
+    bx, by = min(max(int(qx / h), 0), n - 1), min(max(int(qy / h), 0), n - 1)
+    best, best_row = np.inf, -1
+    for r in range(n):
+        if best_row >= 0 and best <= ((r - 1) * h) ** 2:
+            break
+        for j in range(max(by - r, 0), min(by + r, n - 1) + 1):
+            for i in range(max(bx - r, 0), min(bx + r, n - 1) + 1):
+                if max(abs(i - bx), abs(j - by)) != r:
+                    continue
+                k = bucket0[t] + i + n * j
+                for e in range(first[k], first[k + 1]):
+                    c = entries[e]
+                    row = row_start + c
+                    if status[row] != 0:
+                        continue
+                    dx, dy = seeds[g0[t] + c, 0] - qx, seeds[g0[t] + c, 1] - qy
+                    d = dx * dx + dy * dy
+                    if d < best:
+                        best, best_row = d, row
+    return best_row
+
+
+@numba.njit(cache=True)
+def _contact_rows(ints, f, status, working, template, corner, turns, row_start, sides,
+                  bucket0, per_side, size, first, entries, seeds, g0):
+    """Rows of both bodies of each arbiter (ints (k, 3): body ids a, b and contact count;
+    f (k, 12): impulse, normal, points A1, B1, A2, B2) and the mean contact point (k, 2) m.
+    On a tile body the row is the intact cell with the seed nearest the point (the point
+    lies on its cell's boundary, the cell across is broken); on a tile no longer worked
+    (leaving the space), or a body that is not a floe, it is _NOT_A_FLOE."""
+    k_n = ints.shape[0]
+    rows = np.empty((2, k_n), np.int64)
+    point = np.empty((k_n, 2))
+    for k in range(k_n):
+        if ints[k, 2] > 1:
+            point[k, 0], point[k, 1] = 0.5 * (f[k, 4] + f[k, 8]), 0.5 * (f[k, 5] + f[k, 9])
+        else:
+            point[k, 0], point[k, 1] = f[k, 4], f[k, 5]
+        for side in range(2):
+            code = np.int64(ints[k, side])
+            if code >= _TILE0:
+                p = code - _TILE0
+                row = _NOT_A_FLOE
+                if p < len(working) and working[p]:
+                    t = template[p]
+                    half = 0.5 * sides[t]
+                    q = (-turns[p]) % 4
+                    c, s = (1, 0, -1, 0)[q], (0, 1, 0, -1)[q]
+                    rx, ry = point[k, 0] - corner[p, 0] - half, point[k, 1] - corner[p, 1] - half
+                    found = _nearest_intact(c * rx - s * ry + half, s * rx + c * ry + half, t, row_start[p],
+                                            status, bucket0, per_side, size, first, entries, seeds, g0)
+                    if found >= 0:
+                        row = found
+                rows[side, k] = row
+            elif code >= _ROW0:
+                rows[side, k] = code - _ROW0
+            elif code == _HULL_ID:
+                rows[side, k] = HULL_ROW
+            else:
+                rows[side, k] = _NOT_A_FLOE
+    return rows[0], rows[1], point
+
+
 def warm_up() -> None:
     """Load the compiled kernels of this module (numba compiles or loads on first call)."""
     none = np.zeros(0, dtype=np.int64)
     _scatter_free(none.astype(np.uintp), np.zeros((0, 6)), none.astype(np.uint8), np.zeros((0, 2)), np.zeros(0),
                   np.zeros((0, 2), np.float32), np.zeros(0, np.float32))
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    one = np.zeros(1, dtype=np.int64)
+    _contact_rows(np.zeros((0, 3), np.uintp), np.zeros((0, 12)), none.astype(np.uint8), none.astype(np.uint8),
+                  none, np.zeros((0, 2)), none, none, np.ones(1), one, one + 1, np.ones(1), np.zeros(2, np.int64),
+                  none, np.zeros((0, 2)), np.zeros(2, np.int64))
     _hull_overlaps(none, none.astype(np.uint8), none.astype(np.uint8), none.astype(np.int32),
                    np.zeros((0, 2)), np.zeros(0), square, np.array([0, 4]), np.ones(1),
                    square, np.zeros(2), 1.0, 0.0, np.zeros(4))
@@ -313,8 +391,7 @@ class ContactSpace:
         self._budget = s.swap_objects_per_step
         d = np.hypot(model.outline[:, 0], model.outline[:, 1])
         self._extent = np.maximum.reduceat(d, model.outline_start[:-1]) if len(d) else np.zeros(0)
-        self._seeds = [cKDTree(model.centroid[a:b, :2] + model.seed_offset[a:b])
-                       for a, b in zip(model.template_start[:-1], model.template_start[1:])]
+        self._grid = _seed_grid(model)
         self._sides = np.array([t.side for t in model.templates], dtype=float)
         self._buffer = pb.Buffer()
         weakref.finalize(self, _free_all, self.space, self._tiles, self._leaving, (_ptr(hull), _ptr(hull_shape)))
@@ -496,35 +573,6 @@ class ContactSpace:
         self._swap_work(self._budget)
         self.space.step(dt)
 
-    def _rows_at(self, state: FloeState, ids: np.ndarray, points: np.ndarray) -> np.ndarray:
-        """Rows of the bodies in a contact list; on a tile body, the intact cell with the
-        seed nearest the contact point (world m). The point lies on its cell's boundary,
-        so that cell is among the few seeds nearest to it."""
-        rows = _decode(ids.astype(np.int64))
-        at = np.nonzero(rows <= _TILE_CODE)[0]
-        if not len(at):
-            return rows
-        tiles, sides = self.tiles, self._sides
-        placement = _TILE_CODE - rows[at]
-        working = np.isin(placement, np.fromiter(self._tiles, dtype=np.int64, count=len(self._tiles)))
-        rows[at[~working]] = _NOT_A_FLOE
-        at, placement = at[working], placement[working]
-        if not len(at):
-            return rows
-        template = tiles.template[placement]
-        local = _to_template(points[at], tiles.corner[placement], tiles.quarter_turns[placement], sides[template])
-        cells = np.empty((len(at), _NEAREST), dtype=np.int64)
-        for t in np.unique(template).tolist():
-            k = np.nonzero(template == t)[0]
-            tree = self._seeds[t]
-            near = tree.query(local[k], k=_NEAREST)[1].reshape(len(k), -1)
-            cells[k] = np.minimum(near, tree.n - 1)  # fewer seeds than _NEAREST: repeats
-        cells += tiles.row_start[placement][:, None]
-        intact = state.status[cells] == FloeStatus.INTACT
-        first = np.argmax(intact, axis=1)
-        rows[at] = np.where(intact.any(axis=1), cells[np.arange(len(at)), first], _NOT_A_FLOE)
-        return rows
-
     def read_free(self, state: FloeState) -> None:
         """Copy pose and velocity of the free floes from Chipmunk into the arrays."""
         buf = self._buffer
@@ -535,17 +583,16 @@ class ContactSpace:
                       state.xy, state.yaw, state.vel, state.yaw_rate)
 
     def read_contacts(self, state: FloeState) -> Contacts:
-        """Contacts of the last step."""
+        """Contacts of the last step, in Chipmunk's order (which follows hashes of C
+        pointers and so differs from run to run: sums over contacts must not depend on it)."""
         buf = self._buffer
         buf.clear()
         pb.get_space_arbiters(self.space, _ARB_FIELDS, buf)
         ints = np.frombuffer(buf.int_buf(), dtype=np.uintp).reshape(-1, 3)
         f = np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ints), 12)
-        point = np.where(ints[:, 2:3] > 1, 0.5 * (f[:, 4:6] + f[:, 8:10]), f[:, 4:6])
-        rows = self._rows_at(state, ints[:, :2].T.ravel(), np.concatenate([point, point]))
-        a, b = rows[:len(ints)], rows[len(ints):]
-        # Chipmunk lists its arbiters in the order of a hash of C pointers, which differs
-        # from run to run; sums over contacts (the hull load) must not, or a rerun of the
-        # same orders drifts apart by rounding and, through the ship, by whole cells
-        order = np.lexsort((point[:, 1], point[:, 0], b, a))
-        return Contacts(a[order], b[order], f[order, 0:2], f[order, 2:4], point[order])
+        tiles = self.tiles
+        working = np.zeros(tiles.n, dtype=np.uint8)
+        working[list(self._tiles)] = 1
+        a, b, point = _contact_rows(ints, f, state.status, working, tiles.template, tiles.corner,
+                                    tiles.quarter_turns, tiles.row_start, self._sides, *self._grid)
+        return Contacts(a, b, f[:, 0:2].copy(), f[:, 2:4].copy(), point)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from sim_core.ice import contact
@@ -73,10 +74,13 @@ def _contact_breaks(model: IceModel, st: FloeState, con: Contacts, velocity: np.
 
 def _hull_load(impulse: np.ndarray, point: np.ndarray, hull: HullMotion, dt: float) -> tuple[np.ndarray, float]:
     """Force (N, world) and moment (N m, CCW about the hull's reference point) of the hull's
-    contact impulses (N s) at points (m) over dt (s)."""
+    contact impulses (N s) at points (m) over dt (s). Summed exactly rounded (``math.fsum``):
+    the engine lists contacts in a run-dependent order, and a sum that depended on it would
+    make reruns of the same orders drift apart, through the ship, by whole cells."""
     force = impulse / dt
     arm = point - hull.xy
-    return force.sum(axis=0), float((arm[:, 0] * force[:, 1] - arm[:, 1] * force[:, 0]).sum())
+    moment = math.fsum(np.concatenate([arm[:, 0] * force[:, 1], -arm[:, 1] * force[:, 0]]).tolist())
+    return np.array([math.fsum(force[:, 0].tolist()), math.fsum(force[:, 1].tolist())]), moment
 
 
 def hull_frame(points: np.ndarray, hull: HullMotion) -> np.ndarray:
@@ -86,11 +90,44 @@ def hull_frame(points: np.ndarray, hull: HullMotion) -> np.ndarray:
     return np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]])
 
 
-def inside_outline(points: np.ndarray, outline: np.ndarray) -> np.ndarray:
-    """Points (n, 2) inside a convex counter-clockwise outline (m, 2), same frame."""
-    edge = np.roll(outline, -1, axis=0) - outline
-    rel = points[:, None, :] - outline[None, :, :]
-    return np.all(edge[None, :, 0] * rel[..., 1] - edge[None, :, 1] * rel[..., 0] >= 0.0, axis=1)
+@numba.njit(cache=True)
+def _surfacing(down, xy, hull_xy, c, s, outline, beam_half, stem, clear_ahead):
+    """Of submerged rows, those the hull has passed: centre outside the hull's convex CCW
+    outline (body frame, m) and aft of midship, beyond the beam lines, or clear ahead."""
+    out = np.zeros(len(down), np.bool_)
+    n = outline.shape[0]
+    for k in range(len(down)):
+        i = down[k]
+        dx, dy = xy[i, 0] - hull_xy[0], xy[i, 1] - hull_xy[1]
+        u, v = c * dx + s * dy, -s * dx + c * dy
+        if not (u < 0.0 or abs(v) >= beam_half or u > stem + clear_ahead):
+            continue
+        inside = True
+        for e in range(n):
+            ex, ey = outline[(e + 1) % n, 0] - outline[e, 0], outline[(e + 1) % n, 1] - outline[e, 1]
+            if ex * (v - outline[e, 1]) - ey * (u - outline[e, 0]) < 0.0:
+                inside = False
+                break
+        out[k] = not inside
+    return out
+
+
+@numba.njit(cache=True)
+def _unsettled_free(status, submerged, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate, pitch_rate):
+    """Free rows above water not yet at rest at their floating draft. In-plane contact does
+    not couple into heave, roll or pitch, so a settled floe stays settled and needs no
+    vertical update."""
+    out = np.empty(len(status), np.int64)
+    n = 0
+    for i in range(len(status)):
+        if status[i] != 1 or submerged[i]:
+            continue
+        off = abs(heave[i] - z_equilibrium[gcell[i]]) + abs(roll[i]) + abs(pitch[i])
+        rates = abs(heave_rate[i]) + abs(roll_rate[i]) + abs(pitch_rate[i])
+        if off > _SETTLED or rates > _SETTLED:
+            out[n] = i
+            n += 1
+    return out[:n]
 
 
 def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck: np.ndarray) -> None:
@@ -114,20 +151,10 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
         st.yaw_rate[under] = 0.0
     down = np.nonzero(st.submerged)[0]
     if len(down):
-        local = hull_frame(st.xy[down], hull)
-        stem = space.hull_outline[:, 0].max()
-        passed = (local[:, 0] < 0.0) | (np.abs(local[:, 1]) >= beam_half) | (local[:, 0] > stem + _CLEAR_AHEAD)
-        up = down[passed & ~inside_outline(local, space.hull_outline)]
+        up = down[_surfacing(down, st.xy, hull.xy, math.cos(hull.angle), math.sin(hull.angle), space.hull_outline,
+                             beam_half, float(space.hull_outline[:, 0].max()), _CLEAR_AHEAD)]
         st.submerged[up] = False
         space.set_submerged(st, up, False)
-
-
-def _unsettled(model: IceModel, st: FloeState, rows: np.ndarray) -> np.ndarray:
-    """Rows not yet at rest at their floating draft. In-plane contact does not couple into
-    heave, roll or pitch, so a settled floe stays settled and needs no vertical update."""
-    off = np.abs(st.heave[rows] - model.z_equilibrium[st.gcell[rows]]) + np.abs(st.roll[rows]) + np.abs(st.pitch[rows])
-    rates = np.abs(st.heave_rate[rows]) + np.abs(st.roll_rate[rows]) + np.abs(st.pitch_rate[rows])
-    return rows[(off > _SETTLED) | (rates > _SETTLED)]
 
 
 def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> IceStepReport:
@@ -144,7 +171,8 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
     space.read_free(st)
     if len(by_contact):
         break_cells(data, by_contact, BreakCause.CONTACT)
-    free = _unsettled(model, st, np.nonzero((st.status == FloeStatus.FREE) & ~st.submerged)[0])
+    free = _unsettled_free(st.status, st.submerged, st.gcell, model.z_equilibrium, st.heave, st.roll, st.pitch,
+                           st.heave_rate, st.roll_rate, st.pitch_rate)
     if len(free):
         mat = model.material
         vertical_step(free, st.gcell, model.tris, model.tri_start, model.mass, model.inertia, model.damping,
@@ -160,5 +188,9 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
 def warm_up(model: IceModel, data: IceData) -> None:
     """Load every compiled kernel the ice step uses, so that no step waits for a compile."""
     contact.warm_up()
+    none, f32 = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.float32)
+    _surfacing(none, np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hull_outline, 1.0, 1.0, 1.0)
+    _unsettled_free(none.astype(np.uint8), none.astype(np.bool_), none.astype(np.int32), model.z_equilibrium,
+                    f32, f32, f32, f32, f32, f32)
     vertical.warm_up(model.tris, model.tri_start, model.mass, model.inertia, model.damping)
 
