@@ -222,10 +222,19 @@ def test_every_alarm_text_fits_alr_whole_with_the_longest_link_names():
         node_config([{"type": "nmea0183", "name": "n" * (NAME_MAX + 1)}])
 
 
+def accepts(port: int) -> bool:
+    try:
+        socket.create_connection(("127.0.0.1", port), timeout=0.5).close()
+    except OSError:
+        return False
+    return True
+
+
 def test_modbus_link_raises_no_down_alarm_while_starting_only_after_a_real_failure():
     console = ModbusConsole("tcp")
     console.start()
     try:
+        wait_for(lambda: accepts(console.port))  # the console is up: a refused connection would be a failure
         cfg = node_config([{"type": "modbus", "name": "io", "port": console.port, "poll_hz": 50,
                             "registers": [{"order": "rudder", "address": 0}]}], rudder=["io"])
         with LinkHub(cfg.links, cfg.arbitration) as hub:
