@@ -107,7 +107,7 @@ def test_rejected_orders_are_published_counted_and_alarmed(small_world):
     assert refusals.note((refused,), 0.0) == [] and refusals.note((refused,), 1.0) == []
     raised = refusals.note((refused,), 2.0)
     assert [(a.number, a.active) for a in raised] == [(REFUSED_ALARM["telegraph"], True)]
-    assert "warp_nine" in raised[0].text
+    assert raised[0].text == "engine orders refused repeatedly"  # fits ALR's text field; the reason is logged
     assert refusals.note((refused,), 3.0) == []  # raised once
     cleared = refusals.note((), 20.0)
     assert [(a.number, a.active) for a in cleared] == [(REFUSED_ALARM["telegraph"], False)]

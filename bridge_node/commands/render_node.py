@@ -49,6 +49,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--summary", default=None, metavar="FILE", help="write a JSON summary at the end")
     p.add_argument("--out", default="out", help="folder for the frames (default: out)")
     p.add_argument("--wait", type=float, default=30.0, help="seconds to wait for the node's first snapshot")
+    p.add_argument("--niceness", type=int, default=0, choices=range(20), metavar="0..19",
+                   help="lower this process's CPU priority by this much (the node passes render.niceness)")
     p.add_argument("--drop-every", type=int, default=None, metavar="N", help="fault injection: drop every N-th step")
     p.add_argument("--frame-delay", type=float, default=0.0, metavar="S", help="fault injection: slow every frame")
 
@@ -157,6 +159,7 @@ def _write_summary(summary: dict, path: str | None) -> None:
 def run(args: argparse.Namespace) -> int:
     stop = threading.Event()  # SIGTERM from here on ends the work cleanly, with its outputs
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    os.nice(args.niceness)
     cfg = load_config(args.config)
     _check(args)
     cfg = select_channels(cfg, args.channels.split(",") if args.channels else None)

@@ -63,7 +63,7 @@ class RenderProcesses:
             tag = "" if len(groups) == 1 else f"_{k + 1}"
             command = [sys.executable, "-m", "bridge_node", "render-node", "--channels", ",".join(group),
                        "--fps", f"{fps:g}", "--out", str(out), "--wait", "600", "--idle-exit", "60",
-                       "--summary", str(out / f"render{tag}.json")]
+                       "--summary", str(out / f"render{tag}.json"), "--niceness", str(cfg.render.niceness)]
             if config_path:
                 command += ["--config", str(config_path)]
             if frames_every:

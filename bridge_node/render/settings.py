@@ -71,6 +71,8 @@ class RenderSettings(Params):
         None, description="channels per render process (one display/GPU each); unset: all channels in one")
     fps: float = Field(60.0, ge=1.0, le=240.0, description="frame rate of render processes with window channels")
     headless_fps: float = Field(5.0, ge=1.0, le=60.0, description="frame rate of headless render processes")
+    niceness: int = Field(
+        10, ge=0, le=19, description="scheduling niceness of render processes: the physics loop comes first for the CPU")
 
     @model_validator(mode="after")
     def _unique_names(self) -> "RenderSettings":
