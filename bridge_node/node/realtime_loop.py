@@ -9,7 +9,8 @@ is the input-to-outputs transport delay. A tick that overruns its period is
 counted; the loop never catches up in a burst: tick k never starts before k periods after
 the start, and if the loop falls more than a period behind, the schedule restarts from
 now, so simulated time runs slower than real time and the real-time factor reports it.
-Simulated time is always ticks x period.
+Simulated time is always ticks x period. With a session record, the loop also writes its
+tick log (``tick_record``): what each tick read, so that the run can be re-simulated.
 """
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ import numpy as np
 
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.order_refusals import OrderRefusals
+from bridge_node.node.tick_record import TickRecord
 from sim_core.world import WorldData, WorldEvents, WorldModel, step
 
 
@@ -55,11 +57,13 @@ def distribution(ms: list[float]) -> dict:
             "p99": round(float(np.percentile(a, 99)), 2) if len(a) else None}
 
 
-def _tick(model: WorldModel, data: WorldData, hub: LinkHub, period: float,
-          stats: LoopStats) -> tuple[WorldEvents, float | None]:
+def _tick(model: WorldModel, data: WorldData, hub: LinkHub, period: float, stats: LoopStats,
+          ticks: TickRecord | None) -> tuple[WorldEvents, float | None]:
     """One tick: poll and decide, step, note refusals, publish."""
     now = time.monotonic()
     decision = hub.poll(now)
+    if ticks is not None:
+        ticks.polled(data.seq, now)
     events = step(model, data, period, decision.controls)
     for alarm in stats.refusals.note(events.rejected, now):
         hub.raise_alarm(alarm, now)
@@ -76,6 +80,10 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
     should_stop() or Ctrl-C); ``on_events`` gets every step's events and input time."""
     period = 1.0 / rate_hz
     stats = LoopStats()
+    ticks = None
+    if hub.record is not None:
+        ticks = TickRecord(hub.record.folder, period)
+        hub.add_listener(ticks)  # stopped with the hub's other listeners
     # Everything made so far (modules, models, kernels) lives for the whole run. Moved out of
     # the collector's generations, a full collection no longer walks it: that walk, some
     # hundred thousand objects, was a tick of a tenth of a second every few minutes.
@@ -86,7 +94,7 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
     try:
         while (duration is None or time.monotonic() - start < duration) and not should_stop():
             t0 = time.monotonic()
-            events, input_time = _tick(model, data, hub, period, stats)
+            events, input_time = _tick(model, data, hub, period, stats, ticks)
             if on_events:
                 on_events(events, input_time)
             stats.ticks += 1
