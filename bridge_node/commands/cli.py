@@ -18,6 +18,7 @@ from bridge_node.commands import (
     prefracture,
     render_node,
     render_snapshot,
+    replay,
     run,
     trial,
 )
@@ -28,6 +29,7 @@ from bridge_node.node.paths import writable_dir, writable_file
 COMMANDS: dict[str, tuple] = {
     "run": (run, "run the node in real time: console links, ship, ice world, instrument outputs"),
     "prefracture": (prefracture, "build the pre-fractured tile templates (paper §2.1)"),
+    "replay": (replay, "replay a logged voyage through the ice: track logs driven, session records re-simulated"),
     "trial": (trial, "run a standard manoeuvring trial (turning, zig-zag, crash stop)"),
     "experiment": ("run the paper's ice experiments", {
         "breaking": (experiment_breaking, "channel and conduction-band widths per thickness, colliders, speed"),

@@ -16,7 +16,6 @@ import math
 import time
 from pathlib import Path
 
-import zmq
 from rich.console import Console
 from rich.live import Live
 
@@ -24,7 +23,7 @@ from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config, new_session_dir
 from bridge_node.node.errors import UserError
 from bridge_node.node.realtime_loop import run_realtime
-from bridge_node.node.render_processes import RenderProcesses
+from bridge_node.node.render_processes import RenderProcesses, open_stream, wait_for_renderers
 from bridge_node.node.world_setup import build_world, start_world, warm_up
 from bridge_node.reports.run import plot_run
 from bridge_node.stream.publisher import StatePublisher
@@ -68,26 +67,6 @@ def _check(args: argparse.Namespace, rate: float) -> None:
         raise UserError(f"--frames-every {args.frames_every} s is outside the allowed range [0.1, 3600]")
 
 
-def _wait_for_renderers(renderers: RenderProcesses | None, publisher: StatePublisher, timeout: float) -> None:
-    """Before the first tick (never during the run): give the render processes time to
-    load the exercise and take their first snapshot."""
-    if renderers is None:
-        return
-    deadline = time.monotonic() + timeout
-    while publisher.snapshots < len(renderers.processes) and time.monotonic() < deadline:
-        time.sleep(0.1)
-
-
-def _open_stream(cfg) -> StatePublisher:
-    publisher = StatePublisher(cfg.stream)
-    try:
-        publisher.open()
-    except zmq.ZMQError as exc:
-        raise UserError(f"stream: cannot bind {cfg.stream.publish} / {cfg.stream.snapshot}: {exc} "
-                        "(another node running? set [stream] endpoints)") from None
-    return publisher
-
-
 def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, renderers, record, console) -> tuple:
     """The real-time loop with its live status line; returns the statistics, the last
     events, the links' health and the active alarms."""
@@ -97,7 +76,7 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
             Live(console=console, refresh_per_second=4, transient=True) as live:
         publisher.publish(last[0])
         live.update("starting the render processes")
-        _wait_for_renderers(renderers, publisher, 300.0)
+        wait_for_renderers(renderers, publisher, 300.0)
 
         def on_events(events: WorldEvents, input_time: float | None) -> None:
             last[0] = events
@@ -120,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
     local = args.render == "local" or (args.render is None and cfg.render.processes == "local")
     renderers = RenderProcesses(cfg, args.config, out, args.frames_every) if local else None
     rendered = []
-    with _open_stream(cfg) as publisher:
+    with open_stream(cfg.stream) as publisher:
         try:
             if renderers:
                 renderers.start()  # they load the exercise while this process does

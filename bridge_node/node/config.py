@@ -18,6 +18,7 @@ from bridge_node.links.settings import ArbitrationSettings, LinkSettings
 from bridge_node.node.errors import UserError
 from bridge_node.node.paths import expand_user, writable_dir
 from bridge_node.render.settings import RenderSettings
+from bridge_node.replay.settings import ReplaySettings
 from bridge_node.stream.settings import StreamSettings
 from sim_core.fracture.tile_template import FractureSettings
 from sim_core.ice.model import IceDynamicsSettings
@@ -77,6 +78,7 @@ class NodeConfig(Params):
     ice_dynamics: IceDynamicsSettings = IceDynamicsSettings()
     scene: SceneSettings = SceneSettings()
     realtime: RealtimeSettings = RealtimeSettings()
+    replay: ReplaySettings = ReplaySettings()
     render: RenderSettings = RenderSettings()
     stream: StreamSettings = StreamSettings()
     links: list[LinkSettings] = Field(default_factory=list)

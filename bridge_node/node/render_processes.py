@@ -21,7 +21,12 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import zmq
+
 from bridge_node.node.config import NodeConfig
+from bridge_node.node.errors import UserError
+from bridge_node.stream.publisher import StatePublisher
+from bridge_node.stream.settings import StreamSettings
 
 log = logging.getLogger("icebridge.render")
 WATCH_S = 0.5  # s between the watchdog's looks
@@ -144,3 +149,24 @@ class RenderProcesses:
             out.append(summary | {"group": p.group, "restarts": p.restarts, "exit": p.proc.returncode,
                                   "errors": p.log[-3:], "log": str(p.stderr)})
         return out
+
+
+def open_stream(settings: StreamSettings) -> StatePublisher:
+    """The state stream's publisher, open; UserError if its endpoints cannot be bound."""
+    publisher = StatePublisher(settings)
+    try:
+        publisher.open()
+    except zmq.ZMQError as exc:
+        raise UserError(f"stream: cannot bind {settings.publish} / {settings.snapshot}: {exc} "
+                        "(another node running? set [stream] endpoints)") from None
+    return publisher
+
+
+def wait_for_renderers(renderers: RenderProcesses | None, publisher: StatePublisher, timeout: float) -> None:
+    """Before the first step (never during the run): give the render processes time to
+    load the exercise and take their first snapshot."""
+    if renderers is None:
+        return
+    deadline = time.monotonic() + timeout
+    while publisher.snapshots < len(renderers.processes) and time.monotonic() < deadline:
+        time.sleep(0.1)

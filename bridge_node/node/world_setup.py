@@ -75,11 +75,18 @@ def warm_up(model: WorldModel, cfg: NodeConfig) -> None:
         step(model, data, 1.0 / 30.0)
 
 
-def start_world(model: WorldModel, cfg: NodeConfig) -> WorldData:
-    """World data at the configured start: by default one ship length south of the ice
-    edge, on the centre line of the middle tile column, heading north."""
-    ex, length, scene = cfg.exercise, model.ship.particulars.length, model.scene
-    north = ex.start_north if ex.start_north is not None else -length
+def start_position(model: WorldModel, cfg: NodeConfig) -> tuple[float, float]:
+    """The configured start (north, east), m from the field's corner: by default one ship
+    length south of the ice edge, on the centre line of the middle tile column."""
+    ex, scene = cfg.exercise, model.scene
+    north = ex.start_north if ex.start_north is not None else -model.ship.particulars.length
     east = ex.start_east if ex.start_east is not None else (scene.nx // 2 + 0.5) * scene.side
-    return new_world_data(model, north, east, math.radians(ex.start_heading_deg), ex.start_speed_kn * KNOT,
-                          ex.start_telegraph)
+    return north, east
+
+
+def start_world(model: WorldModel, cfg: NodeConfig) -> WorldData:
+    """World data at the configured start (``start_position``), heading, speed and
+    telegraph order."""
+    ex = cfg.exercise
+    return new_world_data(model, *start_position(model, cfg), math.radians(ex.start_heading_deg),
+                          ex.start_speed_kn * KNOT, ex.start_telegraph)

@@ -1,0 +1,185 @@
+"""CSV tracks: one fix per row, columns found by their common names or a ``--columns``
+mapping, and GPX tracks.
+
+Columns (case, spaces and a unit in brackets do not matter): time (``time``, ``timestamp``,
+``datetime``, ``utc``, ``BaseDateTime``, ...; unix seconds, ISO 8601, or seconds from the
+start), an optional separate ``date``, ``lat``/``latitude`` and ``lon``/``lng``/``longitude``
+(decimal degrees), ``heading``/``hdg``, ``cog``/``course``, ``sog``/``speed`` (knots unless
+the column name says m/s or km/h) and ``mmsi`` (several vessels in one file: pick one with
+``--mmsi``). ``--columns time=ts,lat=y,lon=x,speed=v,speed_unit=m/s`` names others.
+"""
+from __future__ import annotations
+
+import csv
+import datetime as dt
+import math
+import re
+
+import gpxpy
+import gpxpy.gpx
+
+from bridge_node.node.errors import UserError
+from bridge_node.replay.track import TrackLog
+from sim_core.frames.units import KNOT
+
+COLUMNS = {
+    "time": ("time", "timestamp", "datetime", "date_time", "utc", "time_utc", "utc_time", "basedatetime",
+             "gps_time", "received_at"),
+    "date": ("date", "utc_date", "date_utc"),
+    "lat": ("lat", "latitude", "lat_deg", "latitude_deg"),
+    "lon": ("lon", "lng", "long", "longitude", "lon_deg", "longitude_deg"),
+    "heading": ("heading", "hdg", "true_heading", "heading_true", "hdt", "heading_deg"),
+    "course": ("cog", "course", "course_over_ground", "cog_deg", "course_deg"),
+    "speed": ("sog", "speed", "speed_over_ground", "sog_kn", "sog_kts", "speed_kn", "speed_kts", "speed_knots",
+              "sog_ms", "speed_ms", "speed_mps", "speed_kmh"),
+    "mmsi": ("mmsi",),
+}
+SPEED_UNITS = {"kn": KNOT, "m/s": 1.0, "km/h": 1.0 / 3.6}
+MAPPING_KEYS = (*COLUMNS, "speed_unit")
+NOT_AVAILABLE_ANGLE = 360.0  # AIS writes 511 for an unknown heading: >= 360 deg is none
+
+
+def _normal(name: str) -> str:
+    """A header name compared as: lower case, unit in brackets dropped, spaces and dashes as _."""
+    name = re.sub(r"[\(\[].*?[\)\]]", "", name.strip().lower()).strip()
+    return re.sub(r"[\s\-]+", "_", name)
+
+
+def _speed_unit(header: str) -> str:
+    h = header.lower().replace(" ", "")
+    if any(u in h for u in ("m/s", "mps", "_ms", "(ms)")):
+        return "m/s"
+    return "km/h" if any(u in h for u in ("km/h", "kmh", "kph")) else "kn"
+
+
+def parse_mapping(text: str | None) -> dict[str, str]:
+    """``--columns`` as {key: column}; UserError naming a bad entry."""
+    if not text:
+        return {}
+    out = {}
+    for item in text.split(","):
+        key, sep, column = (s.strip() for s in item.partition("="))
+        if not sep or not column or key not in MAPPING_KEYS:
+            raise UserError(f"--columns {text!r}: bad entry {item!r}; give KEY=COLUMN with KEY one of "
+                            f"{', '.join(MAPPING_KEYS)}")
+        if key == "speed_unit" and column not in SPEED_UNITS:
+            raise UserError(f"--columns {text!r}: speed_unit must be one of {', '.join(SPEED_UNITS)}")
+        out[key] = column
+    return out
+
+
+def find_columns(header: list[str], mapping: dict[str, str]) -> dict[str, int]:
+    """Index of each known column in the header: mapped names first, then common names."""
+    normal = [_normal(h) for h in header]
+    found = {}
+    for key, names in COLUMNS.items():
+        if key in mapping:
+            wanted = _normal(mapping[key])
+            if wanted in normal:
+                found[key] = normal.index(wanted)
+            continue
+        for i, n in enumerate(normal):
+            if n in names:
+                found[key] = i
+                break
+    return found
+
+
+def looks_like_csv_track(first_lines: list[str], mapping: dict[str, str]) -> bool:
+    """Whether the first non-comment line is a header naming latitude and longitude columns."""
+    header = next((line for line in first_lines if line.strip() and not line.startswith("#")), "")
+    try:
+        dialect = csv.Sniffer().sniff(header, delimiters=",;\t|")
+    except csv.Error:
+        return False
+    cols = find_columns(next(csv.reader([header], dialect)), mapping)
+    return "lat" in cols and "lon" in cols
+
+
+def _time(text: str) -> tuple[float, bool]:
+    """(seconds, absolute) of a time cell: unix seconds or milliseconds, ISO 8601 (UTC
+    unless it says otherwise), a time of day, or seconds from the start. ValueError."""
+    text = text.strip()
+    try:
+        x = float(text)
+    except ValueError:
+        pass
+    else:
+        if not math.isfinite(x):
+            raise ValueError(text)
+        return (x * 1e-3, True) if x > 1e11 else (x, x > 1e8)
+    try:
+        moment = dt.datetime.fromisoformat(text.replace("/", "-"))
+    except ValueError:
+        tod = dt.time.fromisoformat(text)
+        return tod.hour * 3600.0 + tod.minute * 60.0 + tod.second + tod.microsecond * 1e-6, False
+    moment = moment if moment.tzinfo else moment.replace(tzinfo=dt.timezone.utc)
+    return moment.timestamp(), True
+
+
+def _angle(cell: str) -> float | None:
+    """Degrees in a cell as rad; None when empty or not available (>= 360)."""
+    if not cell.strip():
+        return None
+    deg = float(cell)
+    return math.radians(deg) if math.isfinite(deg) and 0.0 <= deg < NOT_AVAILABLE_ANGLE else None
+
+
+def read_csv_track(path: str, lines: list[str], mapping: dict[str, str]) -> dict[int | None, TrackLog]:
+    """The fixes of a CSV track as track logs by MMSI (None: the file has no MMSI column);
+    rows that cannot be read are counted as ``bad_row`` on each."""
+    body = [line for line in lines if line.strip() and not line.startswith("#")]
+    dialect = csv.Sniffer().sniff(body[0], delimiters=",;\t|")
+    rows = csv.reader(body, dialect)
+    header = next(rows)
+    cols = find_columns(header, mapping)
+    unit = SPEED_UNITS[mapping.get("speed_unit") or (_speed_unit(header[cols["speed"]]) if "speed" in cols else "kn")]
+    logs: dict[int | None, TrackLog] = {}
+    bad = 0
+    for row in rows:
+        try:
+            cell = {k: row[i] for k, i in cols.items()}
+            when, absolute = _time(f"{cell['date']} {cell['time']}" if "date" in cell and "time" in cell
+                                   else cell.get("time", ""))
+            lat, lon = float(cell["lat"]), float(cell["lon"])
+            if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+                raise ValueError("position out of range")
+            mmsi = int(cell["mmsi"]) if "mmsi" in cell else None
+            speed = float(cell["speed"]) * unit if cell.get("speed", "").strip() else None
+            course, heading = _angle(cell.get("course", "")), _angle(cell.get("heading", ""))
+        except (ValueError, IndexError, KeyError):
+            bad += 1
+            continue
+        log = logs.setdefault(mmsi, TrackLog([path], vessel=None if mmsi is None else str(mmsi)))
+        log.absolute = log.absolute and absolute
+        log.fixes.append((when, math.radians(lat), math.radians(lon)))
+        log.add_motion(when, course, speed)
+        if heading is not None:
+            log.heading.append((when, heading))
+        log.read["csv row"] += 1
+    for log in logs.values():
+        if bad:
+            log.bad["bad_row"] += bad
+    return logs
+
+
+def read_gpx(path: str, text: str) -> TrackLog:
+    """The track points of a GPX file (every track and segment; speed and course where the
+    file has them); UserError if it is not GPX."""
+    try:
+        gpx = gpxpy.parse(text)
+    except gpxpy.gpx.GPXException as exc:
+        raise UserError(f"{path}: not a GPX file gpxpy can read: {exc}") from None
+    log = TrackLog([path])
+    for track in gpx.tracks:
+        for segment in track.segments:
+            for p in segment.points:
+                if p.time is None:
+                    log.bad["no_time"] += 1
+                    continue
+                moment = p.time if p.time.tzinfo else p.time.replace(tzinfo=dt.timezone.utc)
+                t = moment.timestamp()
+                log.fixes.append((t, math.radians(p.latitude), math.radians(p.longitude)))
+                log.add_motion(t, None if p.course is None else math.radians(p.course), p.speed)
+                log.read["gpx point"] += 1
+    return log

@@ -1,0 +1,154 @@
+"""What ``icebridge replay`` is given, recognised by content, not by file name.
+
+- A folder holding a session record, or a record file (``can.log``, ``modbus.csv``,
+  ``ticks.log``, or the node's ``nmea.log`` with a ``ticks.log`` beside it): re-simulated.
+- NMEA 0183 and AIS logs (any line form ``sentences`` reads; the node's ``nmea.log``
+  without a tick log beside it is a track log like any other).
+- CSV tracks (a header naming latitude and longitude columns) and GPX files.
+
+Several files of one voyage are merged. A file that holds no usable track is a clear
+error naming it and what was looked for; AIS logs (and CSV files with an MMSI column) of
+several vessels give the list of vessels when none was picked.
+"""
+from __future__ import annotations
+
+import re
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+from bridge_node.node.errors import UserError
+from bridge_node.node.tick_record import HEADER as TICKS_HEADER
+from bridge_node.node.tick_record import TICKS_FILE
+from bridge_node.replay.csv_track import looks_like_csv_track, read_csv_track, read_gpx
+from bridge_node.replay.sentences import SentenceLog
+from bridge_node.replay.session import RECORD_FILES, RecordedSession, read_session
+from bridge_node.replay.track import TrackLog
+
+_CANDUMP = re.compile(r"^\(\d+\.\d+\)\s+\S+\s+[0-9A-Fa-f]+#")
+_NODE_NMEA = re.compile(r"^\d+\.\d+ \S+ (rx|tx) [$!]")
+_MODBUS_HEADER = "unix_time,link,op,table,address,raw,value"
+_SENTENCE = re.compile(r"[$!][A-Z][A-Z0-9]{4},")
+SNIFF_LINES = 200
+LOOKED_FOR = ("NMEA 0183 RMC/GGA/GLL fixes, AIS position reports (types 1, 2, 3, 18, 19), CSV rows with "
+              "time, latitude and longitude, GPX track points with a time, or a session record")
+
+
+@dataclass
+class VesselChoice:
+    """Several vessels and none picked: their listing (MMSI, name, counts, time span)."""
+
+    vessels: list[dict]
+
+
+def _kind(path: Path, lines: list[str], mapping: dict[str, str]) -> str:
+    """``session``, ``sentences``, ``csv`` or ``gpx`` by the file's first lines; UserError."""
+    head = [line for line in lines[:SNIFF_LINES] if line.strip() and not line.startswith("#")]
+    if not head:
+        raise UserError(f"{path}: empty file: no usable track (looked for {LOOKED_FOR})")
+    first = head[0].strip()
+    if first.startswith(("<?xml", "<gpx")):
+        return "gpx"
+    if _CANDUMP.match(first) or first == _MODBUS_HEADER or lines[0].startswith(TICKS_HEADER):
+        return "session"
+    if _NODE_NMEA.match(first) and (path.parent / TICKS_FILE).is_file():
+        return "session"
+    if any(_SENTENCE.search(line) for line in head):
+        return "sentences"
+    if looks_like_csv_track(head, mapping):
+        return "csv"
+    raise UserError(f"{path}: no usable track: not a log this command reads (looked for {LOOKED_FOR})")
+
+
+def _read_text(path: Path) -> str:
+    try:
+        return path.read_bytes().decode("utf-8", errors="replace")
+    except OSError as exc:
+        raise UserError(f"{path}: cannot read: {exc.strerror or exc}") from None
+
+
+def _session_folder(path: Path) -> tuple[Path, set[str]]:
+    """A session folder and the record files in it; UserError if it is not one."""
+    names = {name for name in RECORD_FILES.values() if (path / name).is_file()}
+    if not names and not (path / TICKS_FILE).is_file():
+        raise UserError(f"{path}: a folder, but not a session record (looked for {TICKS_FILE}, "
+                        f"{', '.join(RECORD_FILES.values())})")
+    return path, names
+
+
+def _no_track(names: str, bad: Counter, what: str = "") -> UserError:
+    found = f"; bad data: {', '.join(f'{n} {k}' for k, n in sorted(bad.items()))}" if bad else ""
+    return UserError(f"{names}: no usable track{what} (looked for {LOOKED_FOR}){found}")
+
+
+def load_inputs(paths: list[str], mmsi: int | None, mapping: dict[str, str],
+                session_period: float) -> TrackLog | RecordedSession | VesselChoice:
+    """Recognise and read the given files: a track log (several files merged), a session
+    record, or the vessels to choose from. UserError for anything unusable."""
+    sessions: list[tuple[Path, set[str]]] = []
+    sentences, track_logs, by_mmsi = SentenceLog(), [], {}
+    names = ", ".join(paths)
+    for name in paths:
+        path = Path(name).expanduser()
+        if path.is_dir():
+            sessions.append(_session_folder(path))
+            continue
+        if not path.exists():
+            raise UserError(f"{name}: no such file")
+        text = _read_text(path)
+        lines = text.splitlines()
+        kind = _kind(path, lines, mapping)
+        if kind == "session":
+            sessions.append((path.parent, {path.name} & set(RECORD_FILES.values())))
+        elif kind == "gpx":
+            track_logs.append(read_gpx(name, text))
+        elif kind == "csv":
+            for key, log in read_csv_track(name, lines, mapping).items():
+                (track_logs.append(log) if key is None else by_mmsi.setdefault(key, []).append(log))
+        else:
+            sentences.read(name, lines)
+    if sessions:
+        if sentences.own.files or track_logs or by_mmsi:
+            raise UserError(f"{names}: a session record cannot be replayed together with track logs")
+        folders = {folder for folder, _ in sessions}
+        if len(folders) > 1:
+            raise UserError(f"{names}: files of {len(folders)} session records; replay one at a time")
+        try:
+            return read_session(folders.pop(), set().union(*(n for _, n in sessions)) or set(RECORD_FILES.values()),
+                                session_period)
+        except ValueError as exc:
+            raise UserError(f"{sessions[0][0] / TICKS_FILE}: {exc}") from None
+    for number, v in sentences.vessels.items():
+        if v.reports:
+            by_mmsi.setdefault(number, []).append(v.track(sentences.own.files, sentences.own.bad))
+    if mmsi is not None:
+        if mmsi not in by_mmsi:
+            heard = ", ".join(str(m) for m in sorted(by_mmsi)) or "none"
+            raise UserError(f"--mmsi {mmsi}: no position reports of that vessel in {names} "
+                            f"(vessels with positions: {heard})")
+        return _merged(by_mmsi[mmsi])
+    own = ([sentences.own] if sentences.own.fixes else []) + track_logs
+    if own:
+        return _merged(own)
+    if len(by_mmsi) == 1:
+        return _merged(next(iter(by_mmsi.values())))
+    if by_mmsi:
+        listing = {number: v.listing() for number, v in sentences.vessels.items() if number in by_mmsi}
+        for number, logs in by_mmsi.items():
+            if number not in listing:
+                t = [f[0] for log in logs for f in log.fixes]
+                listing[number] = {"mmsi": number, "name": "", "position_reports": len(t), "first": min(t),
+                                   "last": max(t)}
+        return VesselChoice([listing[n] for n in sorted(listing)])
+    bad = Counter(sentences.own.bad)
+    for log in track_logs:
+        bad.update(log.bad)
+    raise _no_track(names, bad, ": no position in it")
+
+
+def _merged(logs: list[TrackLog]) -> TrackLog:
+    """One track log from the logs of one voyage (several files)."""
+    out = TrackLog([])
+    for log in logs:
+        out.merge(log)
+    return out

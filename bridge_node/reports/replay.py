@@ -1,0 +1,91 @@
+"""Picture of a replay: the track over the ice field with the broken channel, and the
+ship's speed and heading against logged time."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.patches import Rectangle
+
+from bridge_node.replay.engine import ReplayStats
+from bridge_node.replay.track import Track
+from bridge_node.reports.figures import plt, save_figure
+from bridge_node.reports.ice import draw_floes
+from sim_core.frames.units import KNOT
+from sim_core.ice.floes import FloeStatus
+from sim_core.world import WorldData, WorldModel
+
+MAX_DRAWN_CELLS = 60_000  # beyond this only the broken cells are drawn, on squares for the placed tiles
+MARGIN = 60.0  # m around the track in the plan view
+
+
+def _plan(ax, model: WorldModel, data: WorldData, xy: np.ndarray, track_ne: np.ndarray | None) -> None:
+    """Plan view (east right, north up, m): the field, the cells near the track coloured
+    by what broke them, the replayed track and the logged fixes."""
+    scene, st = model.scene, data.ice.state
+    lo, hi = xy.min(axis=0) - MARGIN, xy.max(axis=0) + MARGIN
+    ax.add_patch(Rectangle((0.0, 0.0), scene.nx * scene.side, scene.ny * scene.side, facecolor="#e8eef3",
+                           edgecolor="#7a8793", lw=0.8, zorder=0, label="ice field (level ice)"))
+    near = np.nonzero(np.all((st.xy[:st.n] >= lo) & (st.xy[:st.n] <= hi), axis=1))[0]
+    if len(near) > MAX_DRAWN_CELLS:
+        for corner in data.ice.tiles.corner:
+            ax.add_patch(Rectangle(corner, scene.side, scene.side, facecolor="#f4f7fa", edgecolor="none", zorder=0))
+        near = near[st.status[near] != FloeStatus.INTACT]
+    if len(near):
+        draw_floes(ax, model.ice, st, near)
+    ax.plot(xy[:, 0], xy[:, 1], "-", color="#e07a1f", lw=1.0, label="replayed track")
+    if track_ne is not None:
+        ax.plot(track_ne[:, 1], track_ne[:, 0], ".", color="#222222", ms=2.5, label="logged fixes")
+    ax.plot(*xy[0], "o", color="#2a9d4b", label="start")
+    ax.plot(*xy[-1], "s", color="#c0392b", label="end")
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_aspect("equal")
+    ax.set_xlabel("east, m")
+    ax.set_ylabel("north, m")
+    handles = ax.get_legend_handles_labels()[0]
+    old = ax.get_legend()
+    ax.legend(handles=handles + (old.legend_handles if old else []), fontsize=7, loc="best")
+
+
+def plot_replay(model: WorldModel, data: WorldData, stats: ReplayStats, track: Track | None,
+                track_ne: np.ndarray | None, title: str, path: Path) -> Path:
+    """The replay's figure: plan view, speed and heading against logged time (s from the
+    first step; gaps shaded). ``track_ne``: the logged fixes placed on the field (north,
+    east m), or None. Returns the path."""
+    rows = stats.samples()
+    fig = plt.figure(figsize=(13, 7))
+    grid = fig.add_gridspec(2, 2, width_ratios=(1.0, 1.25))
+    ax, bx = fig.add_subplot(grid[:, 0]), fig.add_subplot(grid[0, 1])
+    cx = fig.add_subplot(grid[1, 1], sharex=bx)
+    t0 = rows[0, 0] if len(rows) else 0.0
+    if len(rows):
+        _plan(ax, model, data, rows[:, [2, 1]], track_ne)
+        t = rows[:, 0] - t0
+        bx.plot(t, rows[:, 4] / KNOT, color="#e07a1f", lw=1.0, label="replayed")
+        heading = np.degrees(rows[:, 3])
+        jumps = np.abs(np.diff(heading)) > 180.0  # break the line where it wraps through north
+        cx.plot(t, np.where(np.concatenate([[False], jumps]), np.nan, heading), color="#e07a1f", lw=1.0,
+                label="replayed")
+    if track is not None:
+        if track.speed is not None:
+            bx.plot(track.speed.t - t0, track.speed.value / KNOT, ".", color="#222222", ms=2.5, label="logged")
+        h = track.heading
+        cx.plot(h.t - t0, np.degrees(h.value) % 360.0, ".", color="#222222", ms=2.5,
+                label=f"logged ({track.heading_source})")
+        for gap in track.gaps:
+            for a in (bx, cx):
+                a.axvspan(gap.start - t0, gap.end - t0, color="#f2c14e", alpha=0.35, lw=0)
+    bx.set_ylabel("speed over ground, kn")
+    cx.set_ylabel("heading, deg")
+    cx.set_ylim(0.0, 360.0)
+    cx.set_yticks(range(0, 361, 90))
+    cx.set_xlabel("logged time from the start, s (shaded: gaps held)")
+    for a in (bx, cx):
+        a.grid(alpha=0.3)
+        a.legend(fontsize=7, loc="best")
+    fig.suptitle(f"{title}: {stats.distance / 1852.0:.2f} nm, cells broken {stats.broken_by_hull} by the hull, "
+                 f"{stats.broken_by_contact} by contact", fontsize=10)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
