@@ -112,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
             if renderers:  # before the stream closes, so that they draw the last state
                 rendered = renderers.stop()
     summary = stats.summary() | _end_state(last) | {
-        "rate_hz": rate, "alarms": alarms, "links": links,
+        "rate_hz": rate, "late_tile_switches": data.late_switches, "alarms": alarms, "links": links,
         "stream": {"sent": publisher.sent, "dropped": publisher.dropped, "snapshots": publisher.snapshots,
                    "error": publisher.error},
         "render_processes": rendered, "frames_rendered": sum(r.get("png_frames", 0) for r in rendered),

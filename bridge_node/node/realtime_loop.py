@@ -15,6 +15,7 @@ tick log (``tick_record``): what each tick read, so that the run can be re-simul
 from __future__ import annotations
 
 import gc
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -38,6 +39,7 @@ class LoopStats:
     sim_s: float = 0.0
     step_ms: list = field(default_factory=list)
     track: list = field(default_factory=list)  # (sim time s, north m, east m, speed m/s, live floes)
+    memory: list = field(default_factory=list)  # (sim time s, frozen floes, resident MiB), once a second
     refusals: OrderRefusals = field(default_factory=OrderRefusals)
     input_to_outputs_ms: list = field(default_factory=list)
 
@@ -47,7 +49,30 @@ class LoopStats:
                 "sim_s": round(self.sim_s, 2), "real_time_factor": round(self.sim_s / max(self.wall_s, 1e-9), 3),
                 "tick_ms_median": round(float(np.median(ms)), 2), "tick_ms_p99": round(float(np.percentile(ms, 99)), 2),
                 "tick_ms_max": round(float(ms.max()), 2), "orders_rejected": dict(self.refusals.counts),
-                "input_to_outputs_ms": distribution(self.input_to_outputs_ms)}
+                "input_to_outputs_ms": distribution(self.input_to_outputs_ms), "memory": self.memory_summary()}
+
+    def memory_summary(self) -> dict:
+        """Resident memory at the start and end (MiB) and its growth per 1000 frozen floes
+        over the last two thirds of the run (after the live-floe count has levelled off),
+        by a least-squares line; None where the platform gives no resident size or no
+        floes froze."""
+        m = np.array([r for r in self.memory if r[2] is not None]).reshape(-1, 3)
+        out = {"rss_mib_start": None, "rss_mib_end": None, "mib_per_1000_frozen": None}
+        if len(m):
+            out["rss_mib_start"], out["rss_mib_end"] = round(float(m[0, 2]), 1), round(float(m[-1, 2]), 1)
+            late = m[len(m) // 3:]
+            if len(late) > 2 and np.ptp(late[:, 1]) >= 1000:
+                out["mib_per_1000_frozen"] = round(float(np.polyfit(late[:, 1], late[:, 2], 1)[0] * 1000), 3)
+        return out
+
+
+def resident_mib() -> float | None:
+    """This process's resident memory, MiB (Linux /proc; None elsewhere)."""
+    try:
+        with open("/proc/self/statm", encoding="ascii") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+    except (OSError, ValueError, IndexError):
+        return None
 
 
 def distribution(ms: list[float]) -> dict:
@@ -103,6 +128,7 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
             if stats.ticks % max(1, round(rate_hz)) == 0:
                 s = events.ship
                 stats.track.append((events.time, s.north, s.east, s.speed_over_ground, events.floes_free))
+                stats.memory.append((events.time, events.floes_frozen, resident_mib()))
             next_tick += period
             now = time.monotonic()
             if now > next_tick:

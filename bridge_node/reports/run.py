@@ -10,8 +10,9 @@ from bridge_node.reports.figures import plt, save_figure
 
 
 def plot_run(stats: LoopStats, path: Path) -> Path:
-    """Track (north against east) and tick wall time against simulated time."""
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.5))
+    """Track (north against east), tick wall time against simulated time, and the node's
+    resident memory against the frozen floes it keeps."""
+    fig, (ax, bx, cx) = plt.subplots(1, 3, figsize=(15, 4.5))
     if stats.track:
         tr = np.array(stats.track)
         ax.plot(tr[:, 2], tr[:, 1], "-", color="C0")
@@ -30,5 +31,13 @@ def plot_run(stats: LoopStats, path: Path) -> Path:
     bx.set_title(f"{stats.ticks} ticks, {stats.overruns} overruns")
     bx.legend(fontsize=8)
     bx.grid(alpha=0.3)
+    mem = np.array([r for r in stats.memory if r[2] is not None]).reshape(-1, 3)
+    if len(mem):
+        cx.plot(mem[:, 1], mem[:, 2], ".-", ms=2, lw=0.5, color="C2")
+    slope = stats.memory_summary()["mib_per_1000_frozen"]
+    cx.set_title("resident memory" + (f": {slope} MiB per 1000 frozen floes" if slope is not None else ""))
+    cx.set_xlabel("frozen floes")
+    cx.set_ylabel("resident memory, MiB")
+    cx.grid(alpha=0.3)
     fig.tight_layout()
     return save_figure(fig, path)

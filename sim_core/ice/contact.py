@@ -388,7 +388,8 @@ class ContactSpace:
         self._tiles: dict[int, TileBodies] = {}  # placement -> its engine objects
         self._entering: list[TileBodies] = []  # switched in, objects still going into the space
         self._leaving: list[tuple[int, TileBodies]] = []  # switched out, objects still to take out
-        self._budget = s.swap_objects_per_step
+        self._insert_budget, self._removal_work = s.swap_objects_per_step, s.swap_removal_work
+        self._arbiters = 0  # contacts Chipmunk kept at the last read
         d = np.hypot(model.outline[:, 0], model.outline[:, 1])
         self._extent = np.maximum.reduceat(d, model.outline_start[:-1]) if len(d) else np.zeros(0)
         self._grid = _seed_grid(model)
@@ -457,17 +458,24 @@ class ContactSpace:
         bodies.queue = bodies.built()
         self._leaving.append((placement, bodies))
 
-    def _swap_work(self, budget: int) -> None:
-        """Switch up to budget objects of entering tiles in, then of leaving tiles out."""
+    def _swap_work(self) -> None:
+        """Switch the step's share of objects of entering tiles in, and of leaving tiles out.
+        Adding costs about a microsecond an object; removing one costs Chipmunk a walk over
+        every cached contact (cpSpaceFilterArbiters), so removals are budgeted by that work.
+        Both shares are counts, not wall times, so that reruns stay the same."""
+        budget = self._insert_budget
         while budget > 0 and self._entering:
             bodies = self._entering[0]
-            chunk, bodies.queue = bodies.queue[:budget], bodies.queue[budget:]
+            cells = max(1, budget // 2)  # a thawed floe is two objects: body and shape
+            chunk, bodies.queue = bodies.queue[:cells], bodies.queue[cells:]
             budget -= max(bodies.insert(self._cp, chunk), 1)
             if not len(bodies.queue):
                 self._entering.pop(0)
+        budget = min(self._insert_budget, max(8, self._removal_work // max(self._arbiters, 1)))
         while budget > 0 and self._leaving:
             _, bodies = self._leaving[0]
-            chunk, bodies.queue = bodies.queue[:budget], bodies.queue[budget:]
+            cells = max(1, budget // 3)  # a broken cell is up to three objects: shape, body, shape
+            chunk, bodies.queue = bodies.queue[:cells], bodies.queue[cells:]
             budget -= max(bodies.remove(self._cp, chunk), 1)
             if not len(bodies.queue):
                 self._leaving.pop(0)[1].release(self._cp)
@@ -570,7 +578,7 @@ class ContactSpace:
 
     def step(self, dt: float) -> None:
         """Switch the step's share of tile objects in or out, then step the engine by dt (s)."""
-        self._swap_work(self._budget)
+        self._swap_work()
         self.space.step(dt)
 
     def read_free(self, state: FloeState) -> None:
@@ -590,6 +598,7 @@ class ContactSpace:
         pb.get_space_arbiters(self.space, _ARB_FIELDS, buf)
         ints = np.frombuffer(buf.int_buf(), dtype=np.uintp).reshape(-1, 3)
         f = np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ints), 12)
+        self._arbiters = len(ints)
         tiles = self.tiles
         working = np.zeros(tiles.n, dtype=np.uint8)
         working[list(self._tiles)] = 1

@@ -31,7 +31,11 @@ class IceDynamicsSettings(Params):
     solver_iterations: int = Field(10, ge=1, le=100)
     collision_slop: float = Field(0.01, ge=0.0, le=0.5, description="allowed overlap, m")
     swap_objects_per_step: int = Field(
-        800, ge=1, le=1_000_000, description="engine objects a step switches in or out for tile swaps")
+        800, ge=1, le=1_000_000, description="engine objects a step switches in for tile swaps")
+    swap_removal_work: int = Field(
+        600_000, ge=1000, le=100_000_000,
+        description="removals x cached contacts a step may spend switching tiles out (Chipmunk walks every "
+                    "cached contact for each removal)")
 
 
 @dataclass(frozen=True)
