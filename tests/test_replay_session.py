@@ -1,13 +1,16 @@
-"""A recorded run re-simulated from its session record: a console on a real pty pair steers
-the ship through the ice in real time; the record, replayed through the node's own link
-code, gives the same track, the same broken cells and the same NMEA outputs."""
+"""A recorded run re-simulated from its session record: consoles on a real pty pair (NMEA
+0183 helm), a virtual CAN bus (telegraph) and Modbus TCP (lever) steer the ship through the
+ice in real time; the record, replayed through the node's own link code, gives the same
+track, the same broken cells and the same NMEA outputs."""
 import math
 import threading
 
+import can
 import numpy as np
 import serial
 from conftest import exercise_config
-from links_helpers import pty_pair
+from links_helpers import console_frame, pty_pair
+from modbus_console import ModbusConsole
 from replay_logs import sentence
 
 from bridge_node.links.hub import LinkHub
@@ -24,26 +27,42 @@ RATE = 30.0
 TIME_FIELDS = {"RMC": (1, 9), "GGA": (1,), "ZDA": (1, 2, 3, 4), "ALR": (1,)}  # wall-clock fields, by sentence
 
 
-def _config(tmp_path, port: str):
+def _config(tmp_path, port: str, modbus_port: int):
     base = exercise_config(tmp_path / "tiles", 300.0, 300.0, 50.0, start_north=-60.0)
     return type(base).model_validate(base.model_dump() | {
         "ice_field": base.ice_field.model_dump() | {"thickness": 0.3},
-        "links": [{"type": "nmea0183", "name": "console", "port": port, "udp_output": False}],
-        "arbitration": {"rudder": ["console"], "engine": ["console"], "fail_safe": "hold"}})
+        "links": [{"type": "nmea0183", "name": "helm", "port": port, "udp_output": False},
+                  {"type": "can", "name": "telegraph", "channel": "icebridge-replay-test", "allowed_sources": [0x42]},
+                  {"type": "modbus", "name": "lever", "port": modbus_port, "poll_hz": 20,
+                   "registers": [{"order": "lever", "address": 1}]}],
+        "arbitration": {"rudder": ["helm"], "engine": ["telegraph", "lever"], "fail_safe": "hold"}})
 
 
-def _console(port: str, stop: threading.Event, clock) -> None:
-    """A helmsman: starboard 20, half ahead, starboard 25, with noise on the line."""
+def _wait(clock, at: float, stop: threading.Event) -> None:
+    while clock() < at and not stop.is_set():
+        stop.wait(0.005)
+
+
+def _helm(port: str, stop: threading.Event, clock) -> None:
+    """A helmsman on NMEA 0183: starboard 20, then 25, with noise on the line."""
     script = [(0.2, sentence("RCROR,20.0,A,,V,B")), (0.5, "garbage on the line"),
-              (0.9, sentence("RCETL,120000.00,O,03,30,B,0")), (1.4, sentence("RCROR,35.0,A,,V,B")[:-2] + "00"),
-              (2.2, sentence("RCROR,25.0,A,,V,B"))]
+              (1.4, sentence("RCROR,35.0,A,,V,B")[:-2] + "00"), (2.2, sentence("RCROR,25.0,A,,V,B"))]
     with serial.Serial(port, 38400, timeout=0) as line:
         for at, text in script:
-            while clock() < at and not stop.is_set():
-                stop.wait(0.005)
+            _wait(clock, at, stop)
             line.write((text + "\r\n").encode())
         while not stop.is_set():  # the order source stays fresh
             line.write((sentence("RCROR,25.0,A,,V,B") + "\r\n").encode())
+            stop.wait(0.3)
+
+
+def _telegraph(stop: threading.Event, clock) -> None:
+    """The engine telegraph on CAN from 1 s: half ahead, repeated; one frame of another source."""
+    with can.Bus(interface="virtual", channel="icebridge-replay-test") as bus:
+        _wait(clock, 1.0, stop)
+        bus.send(console_frame("EngineOrder", source=0x43, Engine=0, Lever=0, TelegraphPosition=1, Mode=1))
+        while not stop.is_set():
+            bus.send(console_frame("EngineOrder", Engine=0, Lever=0, TelegraphPosition=3, Mode=1))
             stop.wait(0.3)
 
 
@@ -61,22 +80,32 @@ def _outputs(record: RecordedSession | None, path) -> list[str]:
 
 
 def test_a_recorded_session_replays_to_the_same_track_cells_and_outputs(tmp_path):
+    lever = ModbusConsole("tcp")
+    lever.set(1, 40)  # lever 40 % ahead until the telegraph speaks
+    lever.start()
     with pty_pair(tmp_path) as (node_end, console_end):
-        cfg = _config(tmp_path, node_end)
+        cfg = _config(tmp_path, node_end, lever.port)
         model = build_world(cfg, None)
         live = start_world(model, cfg)
         record = tmp_path / "session"
         stop = threading.Event()
-        console = threading.Thread(target=_console, args=(console_end, stop, lambda: live.time), daemon=True)
+        consoles = [threading.Thread(target=_helm, args=(console_end, stop, lambda: live.time), daemon=True),
+                    threading.Thread(target=_telegraph, args=(stop, lambda: live.time), daemon=True)]
         with LinkHub(cfg.links, cfg.arbitration, record) as hub:
-            console.start()
+            for c in consoles:
+                c.start()
             try:
                 run_realtime(model, live, hub, RATE, None, should_stop=lambda: live.time >= 4.0 - 1e-9)
             finally:
                 stop.set()
-                console.join(2.0)
-            errors = hub.links[0].health().errors
-    assert errors["malformed"] >= 1 and errors["bad_checksum"] == 1  # the noise was read, and dropped
+                for c in consoles:
+                    c.join(2.0)
+                lever.stop()
+            errors = {link.name: link.health().errors for link in hub.links}
+            counts = dict(hub.order_counts)
+    assert errors["helm"]["malformed"] >= 1 and errors["helm"]["bad_checksum"] == 1  # the noise, dropped
+    assert errors["telegraph"]["source_not_allowed"] == 1
+    assert counts["lever/lever/0"] > 0 and counts["telegraph/telegraph/0"] > 0
 
     session = load_inputs([str(record)], None, {}, 1.0 / RATE)
     assert isinstance(session, RecordedSession) and session.exact
@@ -86,11 +115,11 @@ def test_a_recorded_session_replays_to_the_same_track_cells_and_outputs(tmp_path
     with SessionSource(cfg, session) as source, LinkHub(cfg.links, cfg.arbitration, tmp_path / "replayed") as out:
         stats = run_replay(model, again, source, Playback(None), Outputs(out, None))
     assert stats.steps == 120 and again.time == live.time
-    assert source.orders["console/rudder/0"] >= 3 and source.orders["console/telegraph/0"] == 1
-    assert source.errors()["console"]["bad_checksum"] == 1
+    assert {k: source.orders[k] for k in counts} == counts  # every order decoded again
+    assert source.errors()["helm"]["bad_checksum"] == 1 and source.errors()["telegraph"]["source_not_allowed"] == 1
 
     # the same track: the ship turned under the recorded orders, and the replay follows it exactly
-    assert math.degrees(live.ship.rudder) > 5.0 and live.ship.eta[5] > 1e-4
+    assert math.degrees(live.ship.rudder) > 5.0 and live.ship.eta[5] > 1e-4 and live.ship.rps_order > 0.0
     np.testing.assert_allclose(again.ship.eta, live.ship.eta, rtol=0.0, atol=1e-9)
     np.testing.assert_allclose(again.ship.nu, live.ship.nu, rtol=0.0, atol=1e-9)
     # the same broken cells
@@ -103,3 +132,14 @@ def test_a_recorded_session_replays_to_the_same_track_cells_and_outputs(tmp_path
     sent, resent = _outputs(None, record / "nmea.log"), _outputs(None, tmp_path / "replayed" / "nmea.log")
     assert len(sent) > 100
     assert resent == sent
+
+    # without its tick log (an older record) the session replays approximately: each input at
+    # the tick its time falls in
+    (record / TICKS_FILE).unlink()
+    rough = load_inputs([str(record / "nmea.log"), str(record / "can.log"), str(record / "modbus.csv")], None, {},
+                        1.0 / RATE)
+    assert not rough.exact and abs(len(rough.ticks) - 120) <= 3
+    third = start_world(model, cfg)
+    with SessionSource(cfg, rough) as source:
+        run_replay(model, third, source, Playback(None), Outputs(None, None))
+    assert math.hypot(*(third.ship.eta[:2] - live.ship.eta[:2])) < 1.0

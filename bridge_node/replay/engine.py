@@ -122,18 +122,21 @@ class Outputs:
         self.hub, self.publisher = hub, publisher
         self._offset: float | None = None  # monotonic s - source clock s
 
-    def publish(self, events: WorldEvents, clock: float, alarms: list[Alarm], stats: ReplayStats) -> None:
-        """One step's events and alarm changes out at the source's clock (s)."""
+    def publish(self, events: WorldEvents, clock: float, alarms: list[Alarm], stats: ReplayStats,
+                send: bool = True) -> None:
+        """One step's alarm changes, and unless not ``send`` (a seek) its events, out at the
+        source's clock (s)."""
         if self._offset is None:
             self._offset = time.monotonic() - clock
         now = clock + self._offset
         if self.hub is not None:
-            for link in self.hub.links:
-                stats.console_orders_ignored += len(link.poll(now))
-            for alarm in alarms:
+            for alarm in alarms:  # raised while seeking too: announced once it ends
                 self.hub.raise_alarm(alarm, now)
-            self.hub.publish(events.ship, now)
-        if self.publisher is not None:
+            if send:
+                for link in self.hub.links:
+                    stats.console_orders_ignored += len(link.poll(now))
+                self.hub.publish(events.ship, now)
+        if self.publisher is not None and send:
             self.publisher.publish(events)
 
     def resync(self, model: WorldModel, data: WorldData) -> None:
@@ -190,9 +193,9 @@ def run_replay(model: WorldModel, data: WorldData, source: Source, playback: Pla
             _note(stats, model, data, events, logged, source.dt)
             alarms = alarms + stats.refusals.note(events.rejected, now)
             k += 1
+            outputs.publish(events, now, alarms, stats, send=not seeking)
             if seeking:
                 continue
-            outputs.publish(events, now, alarms, stats)
             if playback.speed is not None:
                 due = anchor_wall + (k - anchor_k) * source.dt / playback.speed
                 wait = due - time.monotonic()

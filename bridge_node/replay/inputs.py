@@ -1,9 +1,10 @@
 """What ``icebridge replay`` is given, recognised by content, not by file name.
 
-- A folder holding a session record, or a record file (``can.log``, ``modbus.csv``,
-  ``ticks.log``, or the node's ``nmea.log`` with a ``ticks.log`` beside it): re-simulated.
-- NMEA 0183 and AIS logs (any line form ``sentences`` reads; the node's ``nmea.log``
-  without a tick log beside it is a track log like any other).
+- A folder holding a session record, or record files (``can.log``, ``modbus.csv``,
+  ``ticks.log``; the node's ``nmea.log`` with a ``ticks.log`` beside it or given with the
+  other record files): re-simulated.
+- NMEA 0183 and AIS logs (any line form ``sentences`` reads; the node's ``nmea.log`` alone,
+  without a tick log beside it, is a track log like any other).
 - CSV tracks (a header naming latitude and longitude columns) and GPX files.
 
 Several files of one voyage are merged. A file that holds no usable track is a clear
@@ -42,7 +43,8 @@ class VesselChoice:
 
 
 def _kind(path: Path, lines: list[str], mapping: dict[str, str]) -> str:
-    """``session``, ``sentences``, ``csv`` or ``gpx`` by the file's first lines; UserError."""
+    """``session``, ``node_nmea`` (the node's own NMEA log, no tick log beside it),
+    ``sentences``, ``csv`` or ``gpx`` by the file's first lines; UserError."""
     head = [line for line in lines[:SNIFF_LINES] if line.strip() and not line.startswith("#")]
     if not head:
         raise UserError(f"{path}: empty file: no usable track (looked for {LOOKED_FOR})")
@@ -51,8 +53,8 @@ def _kind(path: Path, lines: list[str], mapping: dict[str, str]) -> str:
         return "gpx"
     if _CANDUMP.match(first) or first == _MODBUS_HEADER or lines[0].startswith(TICKS_HEADER):
         return "session"
-    if _NODE_NMEA.match(first) and (path.parent / TICKS_FILE).is_file():
-        return "session"
+    if _NODE_NMEA.match(first):
+        return "session" if (path.parent / TICKS_FILE).is_file() else "node_nmea"
     if any(_SENTENCE.search(line) for line in head):
         return "sentences"
     if looks_like_csv_track(head, mapping):
@@ -86,6 +88,7 @@ def load_inputs(paths: list[str], mmsi: int | None, mapping: dict[str, str],
     """Recognise and read the given files: a track log (several files merged), a session
     record, or the vessels to choose from. UserError for anything unusable."""
     sessions: list[tuple[Path, set[str]]] = []
+    node_nmea: list[tuple[str, Path, list[str]]] = []  # session files, or track logs when alone
     sentences, track_logs, by_mmsi = SentenceLog(), [], {}
     names = ", ".join(paths)
     for name in paths:
@@ -100,12 +103,19 @@ def load_inputs(paths: list[str], mmsi: int | None, mapping: dict[str, str],
         kind = _kind(path, lines, mapping)
         if kind == "session":
             sessions.append((path.parent, {path.name} & set(RECORD_FILES.values())))
+        elif kind == "node_nmea":
+            node_nmea.append((name, path, lines))
         elif kind == "gpx":
             track_logs.append(read_gpx(name, text))
         elif kind == "csv":
             for key, log in read_csv_track(name, lines, mapping).items():
                 (track_logs.append(log) if key is None else by_mmsi.setdefault(key, []).append(log))
         else:
+            sentences.read(name, lines)
+    if sessions:
+        sessions += [(path.parent, {path.name}) for _, path, _ in node_nmea]
+    else:
+        for name, _, lines in node_nmea:
             sentences.read(name, lines)
     if sessions:
         if sentences.own.files or track_logs or by_mmsi:

@@ -54,31 +54,30 @@ class RecordedSession:
         return Counter({p: sum(len(t[p]) for t in self.inputs) for p in PROTOCOLS})
 
 
-def _received(folder: Path, names: set[str], bad: Counter) -> dict[str, list]:
-    """The recorded inputs of each protocol, in file order (files not chosen: none)."""
-    out = {p: [] for p in PROTOCOLS}
-    readers = {"nmea0183": (read_nmea_log, lambda r: r.direction == "rx"),
-               "can": (read_can_log, lambda m: m.is_rx),
-               "modbus": (read_modbus_csv, lambda row: row.get("op") == "read")}
-    for protocol, (reader, is_input) in readers.items():
+_READERS = {"nmea0183": (read_nmea_log, lambda r: r.direction == "rx", lambda r: r.unix_time),
+            "can": (read_can_log, lambda m: m.is_rx, lambda m: m.timestamp),
+            "modbus": (read_modbus_csv, lambda row: row.get("op") == "read", lambda row: float(row["unix_time"]))}
+
+
+def _received(folder: Path, names: set[str], bad: Counter) -> tuple[dict[str, list], dict[str, list[float]]]:
+    """The recorded inputs of each protocol in file order (files not chosen: none), and the
+    unix times of every line, inputs and outputs, per protocol."""
+    inputs, times = {p: [] for p in PROTOCOLS}, {p: [] for p in PROTOCOLS}
+    for protocol, (reader, is_input, unix_time) in _READERS.items():
         path = folder / RECORD_FILES[protocol]
         if RECORD_FILES[protocol] in names and path.is_file():
             records, counts = reader(path)
-            out[protocol] = [r for r in records if is_input(r)]
+            inputs[protocol] = [r for r in records if is_input(r)]
+            times[protocol] = [unix_time(r) for r in records]
             bad.update({f"{RECORD_FILES[protocol]} {k}": n for k, n in counts.items() if n})
-    return out
-
-
-def _unix_of(protocol: str, item) -> float:
-    return {"nmea0183": lambda r: r.unix_time, "can": lambda m: m.timestamp,
-            "modbus": lambda row: float(row["unix_time"])}[protocol](item)
+    return inputs, times
 
 
 def read_session(folder: Path, names: set[str], period: float) -> RecordedSession:
     """The session record in ``folder`` (its files ``names``); ``period`` (s) is the step
     when it has no tick log. ValueError for a tick log that cannot be used."""
     bad: Counter = Counter()
-    received = _received(folder, names, bad)
+    received, line_times = _received(folder, names, bad)
     ticks_path = folder / TICKS_FILE
     if ticks_path.is_file():
         period, ticks, counts = read_ticks(ticks_path)
@@ -97,16 +96,16 @@ def read_session(folder: Path, names: set[str], period: float) -> RecordedSessio
             if len(received[p]) > taken[p]:  # recorded after the last tick line was written
                 bad[f"{RECORD_FILES[p]} after the last tick"] += len(received[p]) - taken[p]
         return RecordedSession(folder, sorted(names), period, ticks, inputs, True, bad)
-    times = [_unix_of(p, item) for p in PROTOCOLS for item in received[p]]
+    times = [t for p in PROTOCOLS for t in line_times[p]]
     if not times:
         return RecordedSession(folder, sorted(names), period, [], [], False, bad)
-    t0 = min(times)
-    n = int((max(times) - t0) / period) + 2
+    t0 = min(times)  # about the first tick: its outputs are the record's first lines
+    n = round((max(times) - t0) / period) + 1
     ticks = [Tick(k, t0 + k * period, t0 + k * period, ()) for k in range(n)]
     inputs = [{p: [] for p in PROTOCOLS} for _ in range(n)]
     for p in PROTOCOLS:
         for item in received[p]:
-            inputs[int((_unix_of(p, item) - t0) / period)][p].append(item)
+            inputs[min(n - 1, round((_READERS[p][2](item) - t0) / period))][p].append(item)
     return RecordedSession(folder, sorted(names), period, ticks, inputs, False, bad)
 
 
@@ -153,7 +152,8 @@ class SessionSource:
         self.dt, self.steps = session.period, len(session.ticks)
         self.arbiter = OrderArbiter(cfg.arbitration, {s.name: s.timeout_s for s in cfg.links})
         self.links: list[Link] = []
-        self.feeds: dict[str, object] = {}  # link name -> where its inputs are written
+        self.feeds: dict[str, can.BusABC] = {}  # CAN link name -> the bus its recorded frames are sent on
+        self._can_channels: dict[str, Link] = {}  # recorded channel -> CAN link
         self.orders: Counter = Counter()  # "link/kind/engine" -> orders decoded
         for s in cfg.links:
             if s.type == "nmea0183":
@@ -162,9 +162,9 @@ class SessionSource:
                 channel = f"icebridge-replay-{next(_channels)}"
                 self.links.append(CanLink(s.model_copy(update={"interface": "virtual", "channel": channel})))
                 self.feeds[s.name] = can.Bus(interface="virtual", channel=channel)
+                self._can_channels[s.channel] = self.links[-1]
             elif s.type == "modbus":
                 self.links.append(_RecordedModbus(s))
-        self._can_links = [link for link in self.links if isinstance(link, CanLink)]
 
     def __enter__(self) -> SessionSource:
         for link in self.links:
@@ -185,9 +185,8 @@ class SessionSource:
             link = by_name.get(record.link)
             if isinstance(link, NmeaLink):
                 link.device.write((record.sentence + "\r\n").encode("ascii", errors="replace"))
-        for msg in inputs["can"]:
-            link = next((x for x in self._can_links if x.settings.channel == msg.channel), None) or \
-                (self._can_links[0] if self._can_links else None)
+        for msg in inputs["can"]:  # the frame's link by its recorded channel, else the first CAN link
+            link = self._can_channels.get(str(msg.channel), next(iter(self._can_channels.values()), None))
             if link is not None:
                 self.feeds[link.name].send(msg)
         for row in inputs["modbus"]:

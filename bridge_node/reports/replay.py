@@ -44,8 +44,9 @@ def _plan(ax, model: WorldModel, data: WorldData, xy: np.ndarray, track_ne: np.n
     ax.set_xlabel("east, m")
     ax.set_ylabel("north, m")
     handles = ax.get_legend_handles_labels()[0]
-    old = ax.get_legend()
-    ax.legend(handles=handles + (old.legend_handles if old else []), fontsize=7, loc="best")
+    old = ax.get_legend()  # draw_floes' legend of cell colours, merged into one
+    ax.legend(handles=handles + (old.legend_handles if old else []), fontsize=7, ncol=3, loc="upper center",
+              bbox_to_anchor=(0.5, -0.08))  # below the plan: "best" would test every cell outline (seconds)
 
 
 def plot_replay(model: WorldModel, data: WorldData, stats: ReplayStats, track: Track | None,
@@ -76,14 +77,13 @@ def plot_replay(model: WorldModel, data: WorldData, stats: ReplayStats, track: T
         for gap in track.gaps:
             for a in (bx, cx):
                 a.axvspan(gap.start - t0, gap.end - t0, color="#f2c14e", alpha=0.35, lw=0)
+    bx.set_ylim(0.0, 1.15 * max(1.0, bx.get_ylim()[1]))
     bx.set_ylabel("speed over ground, kn")
     cx.set_ylabel("heading, deg")
-    cx.set_ylim(0.0, 360.0)
-    cx.set_yticks(range(0, 361, 90))
     cx.set_xlabel("logged time from the start, s (shaded: gaps held)")
     for a in (bx, cx):
         a.grid(alpha=0.3)
-        a.legend(fontsize=7, loc="best")
+        a.legend(fontsize=7, loc="upper right")
     fig.suptitle(f"{title}: {stats.distance / 1852.0:.2f} nm, cells broken {stats.broken_by_hull} by the hull, "
                  f"{stats.broken_by_contact} by contact", fontsize=10)
     fig.tight_layout()
