@@ -24,7 +24,7 @@ from sim_core.frames.hull_contour import waterline_contour
 from sim_core.ice.buoyancy import submerged_volume_centre, submerged_volume_centre_reference
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.model import compile_ice_model
-from sim_core.ice.step import HullMotion, ice_step
+from sim_core.ice.step import HullMotion, ice_step, warm_up
 from sim_core.ice.tiles import break_cells, new_ice_data, place_tile
 
 DT = 1 / 60
@@ -49,6 +49,7 @@ def live_field(target: int):
         row += 1
     for col in range(3):  # intact ice ahead of the channel
         place_tile(model, data, (row + col) % 2, (col * 100.0, row * 100.0), col)
+    warm_up(model, data)  # load the compiled kernels, as a world does before its first step
     return model, data, (150.0, 0.0, 0.5 * math.pi)
 
 

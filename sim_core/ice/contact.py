@@ -364,10 +364,14 @@ class ContactSpace:
         self._cp = self.space._space  # the C space, for the C API calls below
         self.space.iterations = s.solver_iterations
         self.space.collision_slop = s.collision_slop
-        # Sleeping stays off. With sleeping enabled (idle speed set, since with no gravity in
-        # the plane Chipmunk's default idle speed is zero), cpSpaceStep hung here for good after
-        # a few thousand steps of a mesh-collider run, with every state finite. Not investigated
-        # further; with intact ice in a few static tile bodies, the step does not need it.
+        # Chipmunk's sleeping stays off. Through the C API it no longer hung (the pymunk-object
+        # design once hung in cpSpaceStep after a few thousand mesh-collider steps; three mesh
+        # runs and two 1500 m transits with sleeping on ran through here), and it halved the
+        # median step of the default transit. But it sleeps and wakes whole touching groups,
+        # and the packed channel astern is one group of thousands: one touch, or the removal
+        # of one frozen floe, woke them all, in steps of 0.1-1.1 s. Putting single floes to
+        # sleep (cpBodySleep) breaks its rule that touching bodies sleep together, and freed
+        # its contact memory twice.
         self.space.damping = math.exp(-1.0 / s.drag_time_s)  # per second: v *= damping ** dt
         hull = lib.cpBodyNewKinematic()
         lib.cpBodySetUserData(hull, ffi.cast("void *", _HULL_ID))
