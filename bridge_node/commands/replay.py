@@ -15,6 +15,7 @@ import dataclasses
 import datetime as dt
 import json
 import math
+from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -138,7 +139,7 @@ def _track_replay(cfg: NodeConfig, args: argparse.Namespace, log: TrackLog, orig
     pose = path.pose(t0, r.step_s)
     data = new_world_data(model, pose.north, pose.east, pose.heading, pose.surge)
     info = {"kind": "track", "files": log.files, "vessel": log.vessel, "heading_from": track.heading_source,
-            "records_read": dict(log.read), "bad_data": dict(log.bad),
+            "records_read": dict(log.read), "records_ignored": dict(log.ignored), "bad_data": dict(log.bad),
             "gaps_held": [{"from": logged_text(g.start, log.absolute), "to": logged_text(g.end, log.absolute),
                            "s": round(g.end - g.start, 1)} for g in track.gaps],
             "jumps_skipped": [{"at": logged_text(j.time, log.absolute), "distance_m": round(j.distance, 1),
@@ -149,7 +150,7 @@ def _track_replay(cfg: NodeConfig, args: argparse.Namespace, log: TrackLog, orig
 
 
 def _session_replay(cfg: NodeConfig, args: argparse.Namespace, session: RecordedSession,
-                    model: WorldModel) -> tuple[_Prepared, SessionSource]:
+                    model: WorldModel) -> _Prepared:
     """A session record re-simulated on its own exercise from the first tick; --from runs ahead."""
     if args.field_origin is not None:
         raise UserError("--field-origin: a session record is re-simulated on its own exercise; leave it out")
@@ -170,7 +171,7 @@ def _session_replay(cfg: NodeConfig, args: argparse.Namespace, session: Recorded
     info = {"kind": "session", "files": [str(session.folder / f) for f in session.files],
             "ticks": len(session.ticks), "exact": session.exact, "inputs_read": dict(session.reads),
             "bad_data": dict(session.bad)}
-    return _Prepared(model, start_world(model, cfg), source, seek, info), source
+    return _Prepared(model, start_world(model, cfg), source, seek, info)
 
 
 def _summary(prep: _Prepared, stats: ReplayStats, playback: Playback) -> dict:
@@ -203,6 +204,35 @@ def _print_vessels(choice: VesselChoice, as_json: bool, console: Console) -> Non
         console.print(f"  {v['mmsi']:>9}  {v['name'] or '-':20}  {v['position_reports']:6d} positions  {span}")
 
 
+def _play(cfg: NodeConfig, args: argparse.Namespace, prep: _Prepared, playback: Playback,
+          console: Console) -> tuple[ReplayStats, dict]:
+    """Run the replay with its outputs: links, state stream, render processes, the
+    terminal; returns the statistics and what the outputs report."""
+    out = Path(args.out)
+    local = args.render == "local" or (args.render is None and cfg.render.processes == "local")
+    renderers = RenderProcesses(cfg, args.config, out, None) if local else None
+    session = prep.source if isinstance(prep.source, SessionSource) else nullcontext()
+    rendered = []
+    with open_stream(cfg.stream) as publisher:
+        try:
+            if renderers:
+                renderers.start()
+            with LinkHub(cfg.links, cfg.arbitration, Path(args.record) if args.record else None) as hub, session, \
+                    KeyReader() as keys, ReplayProgress(console, prep.source, keys) as progress:
+                publisher.publish(snapshot(prep.model, prep.data))
+                wait_for_renderers(renderers, publisher, 300.0)
+                stats = run_replay(prep.model, prep.data, prep.source, playback, Outputs(hub, publisher), progress)
+                links = [link.health().as_dict() for link in hub.links]
+                alarms = [a.text for a in hub.active_alarms.values()]
+        finally:
+            if renderers:
+                rendered = renderers.stop()
+    return stats, {"links": links, "alarms": alarms,
+                   "stream": {"sent": publisher.sent, "dropped": publisher.dropped, "error": publisher.error},
+                   "render_processes": rendered, "video": [r["video"] for r in rendered if "video" in r],
+                   "record": args.record}
+
+
 def run(args: argparse.Namespace) -> int:
     cfg = load_config(args.config)
     _check(args)
@@ -214,46 +244,18 @@ def run(args: argparse.Namespace) -> int:
         return 0
     with console.status("loading the exercise"):
         model = build_world(cfg, args.config)
-    session = None
-    if isinstance(loaded, RecordedSession):
-        prep, session = _session_replay(cfg, args, loaded, model)
-    else:
-        prep = _track_replay(cfg, args, loaded, origin, model)
+    prep = _session_replay(cfg, args, loaded, model) if isinstance(loaded, RecordedSession) else \
+        _track_replay(cfg, args, loaded, origin, model)
     playback = Playback(None if args.max else (args.speed or 1.0), seek_to=prep.seek_to)
     if playback.speed is not None:
         with console.status("compiling the ice kernels"):
             warm_up(prep.model, cfg)
-    out = Path(args.out)
-    local = args.render == "local" or (args.render is None and cfg.render.processes == "local")
-    renderers = RenderProcesses(cfg, args.config, out, None) if local else None
-    rendered = []
-    with open_stream(cfg.stream) as publisher:
-        try:
-            if renderers:
-                renderers.start()
-            with LinkHub(cfg.links, cfg.arbitration, Path(args.record) if args.record else None) as hub, \
-                    KeyReader() as keys, ReplayProgress(console, prep.source, keys) as progress:
-                publisher.publish(snapshot(prep.model, prep.data))
-                wait_for_renderers(renderers, publisher, 300.0)
-                if session is not None:
-                    with session:
-                        stats = run_replay(prep.model, prep.data, prep.source, playback, Outputs(hub, publisher),
-                                           progress)
-                else:
-                    stats = run_replay(prep.model, prep.data, prep.source, playback, Outputs(hub, publisher), progress)
-                links = [link.health().as_dict() for link in hub.links]
-                alarms = [a.text for a in hub.active_alarms.values()]
-        finally:
-            if renderers:
-                rendered = renderers.stop()
-    summary = _summary(prep, stats, playback) | {
-        "links": links, "alarms": alarms,
-        "stream": {"sent": publisher.sent, "dropped": publisher.dropped, "error": publisher.error},
-        "render_processes": rendered, "video": [r["video"] for r in rendered if "video" in r],
-        "record": args.record}
-    if session is not None:
-        summary["input"] |= {"orders": dict(session.orders), "console_errors": session.errors()}
+    stats, outputs = _play(cfg, args, prep, playback, console)
+    summary = _summary(prep, stats, playback) | outputs
+    if isinstance(prep.source, SessionSource):
+        summary["input"] |= {"orders": dict(prep.source.orders), "console_errors": prep.source.errors()}
     title = prep.info.get("vessel") or ", ".join(Path(f).name for f in prep.info["files"])
+    out = Path(args.out)
     try:  # a finished replay's summary is never lost to a plotting error
         summary["track_csv"] = str(stats.write_csv(out / "replay_track.csv", prep.model.origin))
         summary["plot"] = str(plot_replay(prep.model, prep.data, stats, prep.track, prep.track_ne,

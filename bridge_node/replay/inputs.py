@@ -78,11 +78,6 @@ def _session_folder(path: Path) -> tuple[Path, set[str]]:
     return path, names
 
 
-def _no_track(names: str, bad: Counter, what: str = "") -> UserError:
-    found = f"; bad data: {', '.join(f'{n} {k}' for k, n in sorted(bad.items()))}" if bad else ""
-    return UserError(f"{names}: no usable track{what} (looked for {LOOKED_FOR}){found}")
-
-
 def load_inputs(paths: list[str], mmsi: int | None, mapping: dict[str, str],
                 session_period: float) -> TrackLog | RecordedSession | VesselChoice:
     """Recognise and read the given files: a track log (several files merged), a session
@@ -153,7 +148,8 @@ def load_inputs(paths: list[str], mmsi: int | None, mapping: dict[str, str],
     bad = Counter(sentences.own.bad)
     for log in track_logs:
         bad.update(log.bad)
-    raise _no_track(names, bad, ": no position in it")
+    found = f"; bad data: {', '.join(f'{n} {k}' for k, n in sorted(bad.items()))}" if bad else ""
+    raise UserError(f"{names}: no usable track: no position in it (looked for {LOOKED_FOR}){found}")
 
 
 def _merged(logs: list[TrackLog]) -> TrackLog:

@@ -154,7 +154,6 @@ class SentenceLog:
     def __init__(self) -> None:
         self.own = TrackLog([])
         self.vessels: dict[int, Vessel] = {}
-        self.ignored: Counter = Counter()  # well-formed sentences not needed
         self._date: dt.date | None = None
         self._time: float | None = None  # unix s (or seconds from the first day when no date)
         self._day = 0  # days added to a time of day without a date (midnight rollovers)
@@ -188,7 +187,7 @@ class SentenceLog:
     def _clock(self, msg, kind: str) -> float | None:
         """The sentence's own time (RMC, ZDA; GGA and GLL with the last date), kept as the
         time of the untimed sentences that follow; None before any time is known."""
-        if (kind == "RMC" and msg.datestamp) or kind == "ZDA":
+        if (kind == "RMC" and msg.data[8]) or kind == "ZDA":
             moment = msg.datetime
             self._date = moment.date()
             self._time = _unix(moment)
@@ -207,7 +206,7 @@ class SentenceLog:
     def _nmea(self, sentence: str, when: float | None) -> None:
         kind = sentence[3:6] if len(sentence) >= 6 else ""
         if kind not in USED:
-            self.ignored[kind or sentence] += 1
+            self.own.ignored[kind or sentence[:6]] += 1
             return
         try:
             msg = pynmea2.parse(sentence)

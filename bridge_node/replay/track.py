@@ -28,7 +28,8 @@ MIN_TRACK_LEG = 0.5  # m: shorter legs give no course
 class TrackLog:
     """What logs gave. Times in s (unix seconds when ``absolute``, else from an unknown
     start), angles in rad, speeds in m/s. Fixes are (t, latitude, longitude); the series
-    (t, value). ``read`` counts what was used by kind, ``bad`` what was wrong by kind."""
+    (t, value). ``read`` counts what was used by kind, ``ignored`` the well-formed records
+    not needed (sentence types), ``bad`` what was wrong by kind."""
 
     files: list[str]
     fixes: list[tuple[float, float, float]] = field(default_factory=list)
@@ -38,6 +39,7 @@ class TrackLog:
     absolute: bool = True
     vessel: str | None = None  # the AIS vessel replayed: MMSI and name
     read: Counter = field(default_factory=Counter)
+    ignored: Counter = field(default_factory=Counter)
     bad: Counter = field(default_factory=Counter)
 
     def add_motion(self, t: float, course: float | None, speed: float | None) -> None:
@@ -56,6 +58,7 @@ class TrackLog:
         self.absolute = self.absolute and other.absolute
         self.vessel = self.vessel or other.vessel
         self.read.update(other.read)
+        self.ignored.update(other.ignored)
         self.bad.update(other.bad)
 
 
