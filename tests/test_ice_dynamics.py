@@ -24,7 +24,6 @@ def runs():
     out = {}
     for setup in ("mesh", "hybrid", "sphere"):
         out[(setup, 3)] = run_breaking(0.5, setup, 3 * KN, tile_side=SIDE, strip_tiles=3, seed=1)
-    out[("hybrid", 8)] = run_breaking(0.5, "hybrid", 8 * KN, tile_side=SIDE, strip_tiles=3, seed=1)
     return out
 
 
@@ -46,18 +45,6 @@ def test_channel_opened_no_intact_cell_left_in_swept_path(runs):
         in_path = (np.abs(world[:, 0] - centre) < half_beam - 0.05) & (world[:, 1] > 0) & (world[:, 1] < 3 * SIDE)
         assert not in_path.any(), f"intact cell {i} inside the hull's swept path"
     assert np.any(st.cause == BreakCause.HULL)
-
-
-def test_collider_setups_give_papers_ordering(runs):
-    mesh, hybrid, sphere = (runs[(s, 3)].band_width for s in ("mesh", "hybrid", "sphere"))
-    assert mesh > 3 * hybrid  # mesh: cracking spreads far too wide
-    assert hybrid > sphere  # hybrid conducts more than sphere
-    assert sphere < 1.0  # sphere barely conducts
-    assert runs[("mesh", 3)].channel_width > 1.5 * runs[("sphere", 3)].channel_width
-
-
-def test_faster_ship_breaks_wider_band(runs):
-    assert runs[("hybrid", 8)].band_width > runs[("hybrid", 3)].band_width
 
 
 def test_thicker_ice_needs_faster_impacts_to_crack():

@@ -14,7 +14,7 @@ from pydantic import Field
 
 from sim_core.csr import gather_ranges, offsets
 from sim_core.fracture.tile_template import TileTemplate
-from sim_core.ice.breaking import WEDGE_COEFFICIENT, impact_constant
+from sim_core.ice.breaking import RIDE_UP_SHARE, WEDGE_COEFFICIENT, impact_constant, ride_up_load, static_capacity
 from sim_core.material import IceMaterial
 from sim_core.params import Params
 
@@ -28,6 +28,8 @@ class IceDynamicsSettings(Params):
     heave_added_mass: float = Field(0.5, ge=0.0, le=3.0, description="C_a: added mass / mass in heave")
     ice_friction: float = Field(0.3, ge=0.0, le=1.0, description="ice-ice friction coefficient")
     wedge_coefficient: float = Field(WEDGE_COEFFICIENT, gt=0.0, le=2.0, description="C_w in F_s = C_w sigma_f h^2")
+    ride_up_share: float = Field(RIDE_UP_SHARE, gt=0.0, le=1.0,
+                                 description="share of its weight a floe riding onto an edge rests on it")
     solver_iterations: int = Field(10, ge=1, le=100)
     collision_slop: float = Field(0.01, ge=0.0, le=0.5, description="allowed overlap, m")
     swap_objects_per_step: int = Field(
@@ -57,10 +59,13 @@ class IceModel:
     is_sphere: np.ndarray  # (G,) bool
     radius: np.ndarray  # (G,) sphere collider radius, m
     thickness: np.ndarray  # (G,) m
+    plan_area: np.ndarray  # (G,) plan-view area, m2
     z_equilibrium: np.ndarray  # (G,) floating height of the centroid above the water, m
     stiffness: np.ndarray  # (G, 3) hydrostatic heave N/m, roll and pitch N m/rad
     damping: np.ndarray  # (G, 3) heave N s/m, roll and pitch N m s/rad
     k_impact: np.ndarray  # (G,) impact breaking constant, N s * m/s
+    edge_capacity: np.ndarray  # (G,) quasi-static breaking load F_s of the cell as an edge, N
+    ride_load: np.ndarray  # (G,) vertical load of the cell as a floe riding onto an edge, N
     omega_max: float  # highest heave/roll/pitch natural frequency, rad/s
 
 
@@ -124,9 +129,11 @@ def compile_ice_model(templates: list[TileTemplate], material: IceMaterial | Non
         tris=np.ascontiguousarray(tris), tri_start=tri_start, outline=outline, outline_start=outline_start,
         seed_offset=np.vstack([t.seeds[:, :2] for t in templates]) - centroid[:, :2],
         mass=mass, inertia=inertia, is_sphere=np.concatenate([t.is_sphere for t in templates]),
-        radius=np.concatenate([t.sphere_radius for t in templates]), thickness=thickness,
+        radius=np.concatenate([t.sphere_radius for t in templates]), thickness=thickness, plan_area=plan_area,
         z_equilibrium=0.5 * thickness - draft, stiffness=stiffness, damping=damping,
         k_impact=impact_constant(thickness, material, settings.wedge_coefficient),
+        edge_capacity=static_capacity(thickness, material, settings.wedge_coefficient),
+        ride_load=ride_up_load(mass, material, settings.ride_up_share),
         omega_max=float(omega.max()) if n else 0.0,
     )
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from sim_core.ice import contact
 from sim_core.ice import vertical
-from sim_core.ice.breaking import breaks
+from sim_core.ice.breaking import pushed_hard
 from sim_core.ice.contact import Contacts
 from sim_core.ice.floes import BreakCause, FloeState, FloeStatus
 from sim_core.ice.model import IceModel, vertical_substeps
@@ -34,6 +34,8 @@ from sim_core.ice.vertical import vertical_step
 _SETTLED = 1e-7  # m, rad, m/s, rad/s: a floe this close to rest at its draft is left alone
 _PUSHED_DOWN_TILT = 0.25  # rad: roll of a floe the bow has turned under
 _CLEAR_AHEAD = 10.0  # m ahead of the stem: a submerged floe there is no longer held down
+_BESIDE = 5.0  # m beyond the beam lines: a submerged floe there is no longer pressed by the hull
+_NO_ROWS = np.zeros(0, dtype=np.int64)
 
 
 @dataclass
@@ -56,8 +58,11 @@ class IceStepReport:
     hull_moment: float  # N m
 
 
-def _contact_breaks(model: IceModel, st: FloeState, con: Contacts, velocity: np.ndarray) -> np.ndarray:
-    """Intact rows whose contact with a free floe exceeded their capacity this step."""
+def _contact_breaks(model: IceModel, st: FloeState, con: Contacts,
+                    velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Intact rows whose contact with a free floe broke them this step (the energy it
+    brought and the load its striker can put on the edge, ``breaking.breaks``), and the free
+    floes pushed hard against an edge they cannot break: jammed, they go under it."""
     valid = (con.a >= 0) & (con.b >= 0)
     a, b, imp, nrm = con.a[valid], con.b[valid], con.impulse[valid], con.normal[valid]
     sa, sb = st.status[a], st.status[b]
@@ -68,8 +73,11 @@ def _contact_breaks(model: IceModel, st: FloeState, con: Contacts, velocity: np.
     toward = np.concatenate([nrm[a_hits_b], -nrm[b_hits_a]])  # unit normal from striker to target
     impulse = np.linalg.norm(np.concatenate([imp[a_hits_b], imp[b_hits_a]]), axis=1)
     v_n = np.maximum((velocity[striker] * toward).sum(axis=1), 0.0)
-    hit = breaks(impulse, v_n, model.mass[st.gcell[striker]], model.k_impact[st.gcell[target]])
-    return np.unique(target[hit])
+    gs, gt = st.gcell[striker], st.gcell[target]
+    hard = pushed_hard(impulse, v_n, model.mass[gs], model.k_impact[gt])
+    loads = model.ride_load[gs] >= model.edge_capacity[gt]
+    broken = np.unique(target[hard & loads])
+    return broken, np.setdiff1d(striker[hard & ~loads], striker[hard & loads])
 
 
 def _hull_load(impulse: np.ndarray, point: np.ndarray, hull: HullMotion, dt: float) -> tuple[np.ndarray, float]:
@@ -91,16 +99,17 @@ def hull_frame(points: np.ndarray, hull: HullMotion) -> np.ndarray:
 
 
 @numba.njit(cache=True)
-def _surfacing(down, xy, hull_xy, c, s, outline, beam_half, stem, clear_ahead):
+def _surfacing(down, xy, hull_xy, c, s, outline, reach, stem, clear_ahead):
     """Of submerged rows, those the hull has passed: centre outside the hull's convex CCW
-    outline (body frame, m) and aft of midship, beyond the beam lines, or clear ahead."""
+    outline (body frame, m) and aft of midship, farther than reach (m) from the centre
+    line, or clear ahead of the stem (m)."""
     out = np.zeros(len(down), np.bool_)
     n = outline.shape[0]
     for k in range(len(down)):
         i = down[k]
         dx, dy = xy[i, 0] - hull_xy[0], xy[i, 1] - hull_xy[1]
         u, v = c * dx + s * dy, -s * dx + c * dy
-        if not (u < 0.0 or abs(v) >= beam_half or u > stem + clear_ahead):
+        if not (u < 0.0 or abs(v) >= reach or u > stem + clear_ahead):
             continue
         inside = True
         for e in range(n):
@@ -130,17 +139,20 @@ def _unsettled_free(status, submerged, gcell, z_equilibrium, heave, roll, pitch,
     return out[:n]
 
 
-def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck: np.ndarray) -> None:
-    """Struck floes with their centre inside the beam go under, held a thickness down and
-    tilted by the hull; a submerged floe surfaces once the hull no longer covers it (its
-    centre outside the waterline, and aft of midship, beyond the beam lines, or clear
-    ahead of the stem because the ship stopped or backed), and buoyancy brings it back
-    up and rights it."""
+def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck: np.ndarray,
+                       jammed: np.ndarray = _NO_ROWS) -> None:
+    """Struck floes with their centre inside the beam, and floes jammed against an edge
+    they cannot break, go under, held a thickness down and tilted; a submerged floe
+    surfaces once the hull no longer covers or presses it (its centre outside the
+    waterline, and aft of midship, more than _BESIDE beyond the beam lines, or clear ahead
+    of the stem because the ship stopped or backed), and buoyancy brings it back up and
+    rights it."""
     st, space = data.state, data.contacts
     beam_half = space.hull_half_beam
-    if len(struck):
-        struck = struck[(st.status[struck] == FloeStatus.FREE) & ~st.submerged[struck]]
+    if len(struck) or len(jammed):
         under = struck[np.abs(hull_frame(st.xy[struck], hull)[:, 1]) < beam_half]
+        under = np.union1d(under, jammed)
+        under = under[(st.status[under] == FloeStatus.FREE) & ~st.submerged[under]]
         st.submerged[under] = True
         space.set_submerged(st, under, True)
         g = st.gcell[under]
@@ -152,7 +164,7 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
     down = np.nonzero(st.submerged)[0]
     if len(down):
         up = down[_surfacing(down, st.xy, hull.xy, math.cos(hull.angle), math.sin(hull.angle), space.hull_outline,
-                             beam_half, float(space.hull_outline[:, 0].max()), _CLEAR_AHEAD)]
+                             beam_half + _BESIDE, float(space.hull_outline[:, 0].max()), _CLEAR_AHEAD)]
         st.submerged[up] = False
         space.set_submerged(st, up, False)
 
@@ -167,7 +179,7 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
         _update_submersion(model, data, hull, by_hull)
     space.step(dt)
     con = space.read_contacts(st)
-    by_contact = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
+    by_contact, jammed = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
     space.read_free(st)
     if len(by_contact):
         break_cells(data, by_contact, BreakCause.CONTACT)
@@ -180,7 +192,7 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
                       st.heave, st.roll, st.pitch, st.heave_rate, st.roll_rate, st.pitch_rate,
                       dt, vertical_substeps(model, dt))
     struck, impulse, point = con.with_hull()
-    _update_submersion(model, data, hull, struck[struck >= 0])
+    _update_submersion(model, data, hull, struck[struck >= 0], jammed)
     force, moment = _hull_load(impulse, point, hull, dt)
     return IceStepReport(by_hull, by_contact, force, moment)
 
