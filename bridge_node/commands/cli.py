@@ -12,8 +12,10 @@ import sys
 from types import ModuleType
 
 from bridge_node.commands import (
+    console,
     experiment_breaking,
     experiment_transit,
+    hil,
     links_monitor,
     prefracture,
     render_node,
@@ -39,6 +41,10 @@ COMMANDS: dict[str, tuple] = {
     "render-node": (render_node, "render projector channels from a running node's state stream"),
     "links": ("commission the console links", {
         "monitor": (links_monitor, "show orders and link health live, publish an open-water ship"),
+    }),
+    "console": (console, "a software bridge console: play scenario scripts or steer from the keyboard"),
+    "hil": ("hardware-in-the-loop tests", {
+        "run": (hil, "start the node, play scenarios through the software console, judge the outputs"),
     }),
 }
 
@@ -66,7 +72,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 # options naming where a command writes: checked before any work starts
 OUTPUT_DIRS = {"out": "--out", "record": "--record", "cache_dir": "--cache-dir"}
-OUTPUT_FILES = {"export": "--export", "video": "--video", "panorama": "--panorama", "summary": "--summary"}
+OUTPUT_FILES = {"export": "--export", "video": "--video", "panorama": "--panorama", "summary": "--summary",
+                "junit": "--junit"}
 
 
 def check_outputs(args: argparse.Namespace) -> None:

@@ -1,0 +1,95 @@
+"""``icebridge console``: a software bridge console. It speaks to the node as the reference
+console does, over the ends of a console config (CAN frames of the DBC or PGN 127245, NMEA
+0183 ROR/ETL/PRC, Modbus registers), and reads back the instrument outputs. With
+``--script`` it plays scenario files and judges their expectations (exit 1 on a failure);
+without, it is steered from the keyboard with the echoed rudder angle, RPM, heading, rate of
+turn and alarms shown live."""
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from pathlib import Path
+
+from rich.console import Console as Terminal
+from rich.live import Live
+
+from bridge_node.hil.console_links import AlarmReading, Order, Reading
+from bridge_node.hil.player import Console, play
+from bridge_node.hil.report import result_lines, write_junit
+from bridge_node.hil.scenario import load_scenario
+from bridge_node.hil.settings import load_console_config
+from bridge_node.links.base import RUDDER, TELEGRAPH
+from bridge_node.node.config import DEFAULT_CONFIG
+from bridge_node.node.errors import UserError
+from bridge_node.replay.console import KeyReader
+from sim_core.ship.particulars import TELEGRAPH_POSITIONS
+
+DEFAULT_CONSOLE = DEFAULT_CONFIG.parent / "console.toml"
+HELM_STEP_DEG, HELM_LIMIT_DEG = 5.0, 35.0
+KEYS_HELP = "keys: a/d helm 5 deg port/starboard | 0 midships | w/s telegraph up/down | q quit"
+UNITS = {"rudder_angle": ("rudder", "deg", math.degrees(1.0)), "shaft_speed": ("shaft", "rpm", 60.0),
+         "heading": ("heading", "deg", math.degrees(1.0)), "rate_of_turn": ("ROT", "deg/min", math.degrees(60.0))}
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--script", action="append", default=[], metavar="SCENARIO",
+                   help="play this scenario file (repeatable); without: steer from the keyboard")
+    p.add_argument("--junit", default=None, metavar="FILE", help="with --script: write JUnit XML here")
+    p.add_argument("--wait", type=float, default=30.0, metavar="S",
+                   help="wait this long for the node's outputs on every end (default: 30 s)")
+
+
+def _steer(console: Console, terminal: Terminal) -> None:
+    """Keyboard steering on the first order end until q (or Ctrl-C), with a live line."""
+    end = console.ends.get("primary") or next(iter(console.ends.values()))
+    keys = KeyReader()
+    if not keys.interactive:
+        raise UserError("standard input is not a terminal: give --script SCENARIO to play a scenario instead")
+    helm, telegraph = 0.0, TELEGRAPH_POSITIONS.index("stop")
+    shown: dict[str, str] = {}
+    alarms: dict[int, str] = {}
+    terminal.print(KEYS_HELP)
+    with keys, Live(console=terminal, refresh_per_second=8, transient=True) as live:
+        end.order(Order(RUDDER, 0.0), time.monotonic())
+        end.order(Order(TELEGRAPH, TELEGRAPH_POSITIONS[telegraph]), time.monotonic())
+        while True:
+            for key in keys.keys():  # noqa: SIM118 (KeyReader.keys: the keys pressed)
+                if key == "q":
+                    return
+                if key in "ad0":
+                    helm = 0.0 if key == "0" else max(-HELM_LIMIT_DEG, min(HELM_LIMIT_DEG, helm + (
+                        HELM_STEP_DEG if key == "d" else -HELM_STEP_DEG)))
+                    end.order(Order(RUDDER, math.radians(helm)), time.monotonic())
+                elif key in "ws":
+                    telegraph = max(0, min(len(TELEGRAPH_POSITIONS) - 1, telegraph + (1 if key == "w" else -1)))
+                    end.order(Order(TELEGRAPH, TELEGRAPH_POSITIONS[telegraph]), time.monotonic())
+            for r in console.tick(time.monotonic()):
+                if isinstance(r, Reading):
+                    label, unit, factor = UNITS[r.quantity]
+                    shown[r.quantity] = f"{label} {r.value * factor:+.1f} {unit}"
+                elif isinstance(r, AlarmReading):
+                    alarms.pop(r.number, None) if not r.active else alarms.__setitem__(r.number, r.text)
+            live.update(f"helm {helm:+.0f} deg | {TELEGRAPH_POSITIONS[telegraph]} | " + " | ".join(
+                shown[q] for q in UNITS if q in shown) + "".join(f" | ALARM {n:03d} {t}" for n, t in alarms.items()))
+            time.sleep(0.02)
+
+
+def run(args: argparse.Namespace) -> int:
+    if not 0.0 < args.wait <= 3600.0:
+        raise UserError(f"--wait {args.wait} s is outside the allowed range (0, 3600]")
+    config = load_console_config(args.config or DEFAULT_CONSOLE)
+    scripts = [(path, load_scenario(path)) for path in args.script]
+    terminal = Terminal()
+    with Console(config) as console:
+        console.wait_ready(args.wait)
+        if not scripts:
+            _steer(console, terminal)
+            return 0
+        results = []
+        for path, scenario in scripts:
+            results.append(play(console, scenario, path))
+            print("\n".join(result_lines(results[-1])), flush=True)
+    if args.junit:
+        write_junit(results, Path(args.junit))
+    return 1 if any(not r.passed for r in results) else 0

@@ -1,0 +1,491 @@
+"""The software console's ends, one per link kind, each the peer of one node link.
+
+A ``ConsoleLink`` holds the latest order of each channel (rudder, engine) and sends it again
+at ``rate_hz``, as a console repeats its state; ``poll`` reads back the instrument outputs as
+``Reading`` rows (SI) and ALR alarms as ``AlarmReading`` rows. Faults (``inject``) act on the
+outgoing traffic of one end, as a faulty console or cable would: the console is the one
+sending the faulty traffic, the node is left as it is. Like the node's links, an end is a
+context manager, and closing twice is safe.
+"""
+from __future__ import annotations
+
+import asyncio
+import heapq
+import math
+import random
+import threading
+import time
+from abc import ABC, abstractmethod
+from collections import Counter
+from dataclasses import dataclass
+
+import can
+import serial
+from pymodbus.server import ModbusTcpServer
+from pymodbus.simulator import DataType, SimData, SimDevice
+
+from bridge_node.hil.scenario import Fault
+from bridge_node.hil.settings import CanConsoleSettings, ModbusConsoleSettings, NmeaConsoleSettings
+from bridge_node.links.base import ETL_POSITIONS, LEVER, RUDDER, TELEGRAPH
+from bridge_node.links.can_link import N2K_DBC, dbc_path, load_dbc
+from bridge_node.links.modbus_link import raw_register, register_value
+from bridge_node.links.n2k_frames import identifier, parse_identifier
+from bridge_node.links.nmea0183 import ETL, PRC, ROR, checksum
+from bridge_node.node.errors import UserError
+
+ETL_CODES = {name: code for code, name in ETL_POSITIONS.items()}  # telegraph position -> ETL code
+OUT_OF_RANGE = {RUDDER: math.radians(120.0), LEVER: 150.0, TELEGRAPH: "99"}  # corrupt = "range" sends these
+CHANNEL = {RUDDER: "rudder", TELEGRAPH: "engine", LEVER: "engine"}
+DEVICE_ERRORS = (OSError, can.CanError, serial.SerialException)  # a port, bus or server that failed
+
+
+@dataclass(frozen=True)
+class Order:
+    """A console order: ``kind`` RUDDER (value rad, + starboard), TELEGRAPH (a position
+    name) or LEVER (percent)."""
+
+    kind: str
+    value: float | str
+
+
+@dataclass(frozen=True)
+class Reading:
+    """One instrument value read back: console monotonic time s, console end, quantity
+    (rudder_angle rad, shaft_speed rev/s, heading rad, rate_of_turn rad/s) and value."""
+
+    time: float
+    role: str
+    quantity: str
+    value: float
+
+
+@dataclass(frozen=True)
+class AlarmReading:
+    """One ALR sentence read back: time s, console end, alarm number, active, text."""
+
+    time: float
+    role: str
+    number: int
+    active: bool
+    text: str
+
+
+class ConsoleLink(ABC):
+    """One console end: orders out (held and repeated), instrument outputs in, faults."""
+
+    kind: str = ""  # link type, as in the node's settings
+    corruptions: tuple[str, ...] = ("range",)  # the ``corrupt`` kinds this end can send
+    framing: str | None = None  # what corrupt = "format" sends on this end (one of corruptions)
+    garbage_kind: str | None = None  # what a garbage burst is on this end; None: none
+
+    def __init__(self, settings) -> None:
+        self.settings = settings
+        self.role: str = settings.role
+        self.device = None
+        self.held: dict[str, Order] = {}  # channel -> latest order
+        self.sent = Counter()  # orders given (corrupted, duplicated, dropped, delayed), garbage, frames written
+        self._faults: list[tuple[Fault, random.Random]] = []
+        self._delayed: list[tuple[float, int, object]] = []
+        self._next_repeat = -math.inf
+        self._active = False
+
+    # --- life cycle ---
+
+    def open(self) -> None:
+        """Open the console's end of the link (a port, bus or server); UserError with the
+        operating system's or the library's own message if it cannot be opened."""
+        try:
+            self.device = self._open()
+        except (*DEVICE_ERRORS, ValueError, ImportError) as exc:
+            raise UserError(f"console end {self.role} ({self.kind}): cannot open it: {exc}") from None
+        self._active = True
+
+    def close(self) -> None:
+        """Release the end; safe to call twice."""
+        self._active = False
+        self._release()
+
+    def __enter__(self) -> ConsoleLink:
+        self.open()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _release(self) -> None:
+        """Close the device; one already lost (its port gone) is let go without a word."""
+        device, self.device = self.device, None
+        if device is not None:
+            try:
+                self._close(device)
+            except DEVICE_ERRORS:
+                pass
+
+    # --- orders and faults ---
+
+    def unsupported(self, fault: Fault) -> str | None:
+        """Why this end cannot inject ``fault``, or None."""
+        if fault.kind == "corrupt" and fault.corrupt not in self.corruptions + (("format",) if self.framing else ()):
+            return f"corrupt = {fault.corrupt!r} does not apply to a {self.kind} link (allowed: {self.corruptions})"
+        if fault.kind == "garbage" and self.garbage_kind is None:
+            return f"a garbage burst does not apply to a {self.kind} link"
+        if fault.kind == "bus_off":
+            return "bus_off needs the CAN adapter's pty pair, which icebridge hil run creates"
+        return None
+
+    def supports(self, kind: str) -> bool:
+        """Whether this end can give orders of ``kind``."""
+        return True
+
+    def order(self, order: Order, now: float) -> None:
+        """Hold ``order`` as its channel's latest and send it now (``now``: monotonic s)."""
+        self.held[CHANNEL[order.kind]] = order
+        self._send(order, now)
+
+    def inject(self, fault: Fault, rng: random.Random, now: float) -> None:
+        """Start ``fault`` (active until ``fault.end_s`` of the scenario clock the caller keeps)."""
+        self._faults.append((fault, rng))
+        if fault.kind == "garbage" and self.device is not None:
+            self._write_guarded(self._garbage(rng, fault.count), now)
+            self.sent["garbage"] += fault.count
+        if fault.kind == "disconnect":
+            self._release()
+
+    def clear(self, fault: Fault) -> None:
+        """End ``fault``; a disconnected end is opened again at the next ``tick``."""
+        self._faults = [(f, r) for f, r in self._faults if f is not fault]
+
+    def tick(self, now: float) -> list[Reading | AlarmReading]:
+        """Reopen after a disconnect, repeat the held orders when due, send delayed traffic,
+        and read what came in (``now``: monotonic s)."""
+        disconnected = any(f.kind == "disconnect" for f, _ in self._faults)
+        if self.device is None and self._active and not disconnected:
+            try:
+                self.device = self._open()
+            except DEVICE_ERRORS:
+                return []
+        if self.device is None:
+            return []
+        if now >= self._next_repeat:
+            self._next_repeat = now + 1.0 / self.settings.rate_hz
+            for order in list(self.held.values()):
+                self._send(order, now)
+        while self._delayed and self._delayed[0][0] <= now:
+            self._write_guarded([heapq.heappop(self._delayed)[2]], now)
+        try:
+            return self._read(time.monotonic())  # stamped when read
+        except DEVICE_ERRORS:
+            self._release()
+            return []
+
+    def _send(self, order: Order, now: float) -> None:
+        """One order through the active faults: dropped, corrupted, duplicated, delayed."""
+        corrupt, copies, delay = None, 1, 0.0
+        for fault, rng in self._faults:
+            if fault.kind not in ("drop", "corrupt", "duplicate", "delay") or rng.random() >= fault.probability:
+                continue
+            if fault.kind == "drop":
+                self.sent["dropped"] += 1
+                return
+            if fault.kind == "corrupt":
+                corrupt = fault.corrupt
+            elif fault.kind == "duplicate":
+                copies = 2
+            else:
+                delay = max(delay, fault.delay_s)
+        corrupt = self.framing if corrupt == "format" else corrupt
+        items = self._encode(order, corrupt) * copies
+        self.sent["orders"] += 1
+        if corrupt:
+            self.sent["corrupted"] += 1
+        if copies > 1:
+            self.sent["duplicated"] += 1
+        if delay:
+            self.sent["delayed"] += 1
+            for item in items:
+                heapq.heappush(self._delayed, (now + delay, id(item), item))
+        else:
+            self._write_guarded(items, now)
+
+    def _write_guarded(self, items: list, now: float) -> None:
+        if self.device is None:
+            return
+        try:
+            for item in items:
+                self._write(item)
+                self.sent["frames"] += 1
+        except DEVICE_ERRORS:
+            self.sent["write_failed"] += 1
+            self._release()
+
+    # --- for the link kinds ---
+
+    @abstractmethod
+    def _open(self):
+        """Open and return the port, bus or server."""
+
+    @abstractmethod
+    def _close(self, device) -> None:
+        """Release the port, bus or server."""
+
+    @abstractmethod
+    def _encode(self, order: Order, corrupt: str | None) -> list:
+        """The wire items (frames, sentences, register writes) of one order."""
+
+    @abstractmethod
+    def _write(self, item) -> None:
+        """Send one wire item on the open device."""
+
+    def _garbage(self, rng: random.Random, count: int) -> list:
+        """``count`` random wire items (default: none)."""
+        return []
+
+    @abstractmethod
+    def _read(self, now: float) -> list[Reading | AlarmReading]:
+        """What the node sent since the last read."""
+
+
+# PGN -> (N2K DBC message, signal, quantity, SI per DBC unit)
+N2K_READINGS = {127245: ("Rudder", "Position", "rudder_angle", 1.0),
+                127488: ("EngineRapid", "Speed", "shaft_speed", 1.0 / 60.0),
+                127250: ("VesselHeading", "Heading", "heading", 1.0),
+                127251: ("RateOfTurn", "Rate", "rate_of_turn", 1.0)}
+HELM_PGN, ENGINE_PGN, CONSOLE_PRIORITY = 0xFF50, 0xFF51, 6
+
+
+class CanConsole(ConsoleLink):
+    """The console on a python-can bus (slcan on a pty, socketcan vcan0, ...)."""
+
+    kind = "can"
+    corruptions = ("dlc", "range")
+    framing = "dlc"
+    garbage_kind = "frames with random 11-bit identifiers and data"
+
+    def __init__(self, settings: CanConsoleSettings) -> None:
+        super().__init__(settings)
+        self.dbc = load_dbc(dbc_path(settings.dbc))
+        self.n2k = load_dbc(N2K_DBC)
+        self._counter = 0
+
+    def _open(self) -> can.BusABC:
+        s = self.settings
+        extra = {"sleep_after_open": s.open_delay_s} if s.interface == "slcan" else {}
+        return can.Bus(interface=s.interface, channel=s.channel, bitrate=s.bitrate, **extra)
+
+    def _close(self, bus: can.BusABC) -> None:
+        bus.shutdown()
+
+    def _encode(self, order: Order, corrupt: str | None) -> list[can.Message]:
+        value = OUT_OF_RANGE[order.kind] if corrupt == "range" else order.value
+        s = self.settings
+        if order.kind == RUDDER and s.helm == "pgn127245":
+            raw = int(round(value / 1e-4)) & 0xFFFF
+            data = bytes([0, 0xF8 | (1 if value > 0 else 2), raw & 0xFF, raw >> 8, 0xFF, 0x7F, 0xFF, 0xFF])
+            can_id = identifier(2, 127245, s.source_address)
+        elif order.kind == RUDDER:
+            self._counter = (self._counter + 1) % 256
+            data = self.dbc.get_message_by_name("HelmOrder").encode(
+                {"RudderOrder": math.degrees(value), "Status": 1, "Counter": self._counter}, strict=False)
+            can_id = identifier(CONSOLE_PRIORITY, HELM_PGN, s.source_address)
+        else:
+            telegraph = order.kind == TELEGRAPH
+            code = (int(value) if corrupt == "range" else int(ETL_CODES[value])) if telegraph else 0
+            data = self.dbc.get_message_by_name("EngineOrder").encode(
+                {"Engine": 0, "Lever": 0.0 if telegraph else value, "TelegraphPosition": code,
+                 "Mode": 1 if telegraph else 0}, strict=False)
+            can_id = identifier(CONSOLE_PRIORITY, ENGINE_PGN, s.source_address)
+        if corrupt == "dlc":
+            data = data[:4]
+        return [can.Message(arbitration_id=can_id, data=data, is_extended_id=True)]
+
+    def _write(self, msg: can.Message) -> None:
+        self.device.send(msg, timeout=0.1)
+
+    def _garbage(self, rng: random.Random, count: int) -> list[can.Message]:
+        return [can.Message(arbitration_id=rng.randrange(0x800), is_extended_id=False,
+                            data=bytes(rng.randrange(256) for _ in range(rng.randrange(9)))) for _ in range(count)]
+
+    def _read(self, now: float) -> list[Reading]:
+        out = []
+        while (msg := self.device.recv(timeout=0.0)) is not None:
+            if not msg.is_extended_id or msg.is_error_frame:
+                continue
+            spec = N2K_READINGS.get(parse_identifier(msg.arbitration_id)[1])
+            if spec is None or len(msg.data) != 8:
+                continue
+            message, signal, quantity, factor = spec
+            value = self.n2k.get_message_by_name(message).decode(bytes(msg.data), decode_choices=False)[signal]
+            out.append(Reading(now, self.role, quantity, float(value) * factor))
+        return out
+
+
+# sentence type -> (field index, quantity, SI per unit)
+NMEA_READINGS = {"RSA": (0, "rudder_angle", math.radians(1.0)), "RPM": (2, "shaft_speed", 1.0 / 60.0),
+                 "HDT": (0, "heading", math.radians(1.0)), "ROT": (0, "rate_of_turn", math.radians(1.0) / 60.0)}
+MAX_LINE = 1024  # characters of a line without its end: beyond this it is noise
+
+
+class NmeaConsole(ConsoleLink):
+    """The console on a serial NMEA 0183 line (pyserial: a port or a pty)."""
+
+    kind = "nmea0183"
+    corruptions = ("checksum", "range")
+    framing = "checksum"
+    garbage_kind = "random bytes"
+
+    def __init__(self, settings: NmeaConsoleSettings) -> None:
+        super().__init__(settings)
+        self._pending = b""
+
+    def _open(self) -> serial.SerialBase:
+        return serial.serial_for_url(self.settings.port, baudrate=self.settings.baudrate, timeout=0, write_timeout=1.0)
+
+    def _close(self, port: serial.SerialBase) -> None:
+        port.close()
+
+    def _encode(self, order: Order, corrupt: str | None) -> list[bytes]:
+        value = OUT_OF_RANGE[order.kind] if corrupt == "range" else order.value
+        talker = self.settings.talker
+        if order.kind == RUDDER:
+            sentence = str(ROR(talker, "ROR", (f"{math.degrees(value):.1f}", "A", "", "V", "B")))
+        elif order.kind == TELEGRAPH:
+            code = value if corrupt == "range" else ETL_CODES[value]
+            sentence = str(ETL(talker, "ETL", ("", "O", code, "", "B", "0")))
+        else:
+            sentence = str(PRC(talker, "PRC", (f"{value:.1f}", "A", "", "V", "", "V", "B", "0")))
+        if corrupt == "checksum":
+            body, given = sentence.rsplit("*", 1)
+            sentence = f"{body}*{int(given, 16) ^ 0x55:02X}"
+        return [(sentence + "\r\n").encode("ascii")]
+
+    def _write(self, data: bytes) -> None:
+        self.device.write(data)
+
+    def _garbage(self, rng: random.Random, count: int) -> list[bytes]:
+        return [bytes(rng.randrange(256) for _ in range(count))]
+
+    def _read(self, now: float) -> list[Reading | AlarmReading]:
+        waiting = self.device.in_waiting
+        lines = (self._pending + (self.device.read(waiting) if waiting else b"")).split(b"\n")
+        self._pending = lines.pop()[-MAX_LINE:]
+        out = []
+        for raw in lines:
+            line = raw.decode("ascii", errors="replace").strip()
+            if not line.startswith("$") or "*" not in line:
+                continue
+            body, given = line[1:].rsplit("*", 1)
+            try:
+                if checksum(body) != int(given, 16):
+                    continue
+            except ValueError:
+                continue
+            fields = body.split(",")
+            kind = fields[0][2:]
+            try:
+                if kind == "ALR":
+                    out.append(AlarmReading(now, self.role, int(fields[2]), fields[3] == "A", fields[5]))
+                elif kind in NMEA_READINGS:
+                    index, quantity, factor = NMEA_READINGS[kind]
+                    out.append(Reading(now, self.role, quantity, float(fields[1 + index]) * factor))
+            except (ValueError, IndexError):
+                continue
+        return out
+
+
+READ_HOLDING, WRITE_MULTIPLE = 3, 16  # Modbus function codes
+REGISTERS = 100
+UNWRITTEN = 0x8000  # an indicator register the node has not written yet holds this
+# indicator -> (quantity, SI per engineering unit); "speed" has no quantity here
+INDICATORS = {"rudder_angle": ("rudder_angle", math.radians(1.0)), "shaft_rpm": ("shaft_speed", 1.0 / 60.0),
+              "heading": ("heading", math.radians(1.0))}
+
+
+class _RegisterServer:
+    """A pymodbus TCP server (device registers 0..99) in a thread with its own event loop."""
+
+    def __init__(self, host: str, port: int, device_id: int, values: list[int]) -> None:
+        self.device_id = device_id
+        self._server = None
+        self._loop = None
+        ready = threading.Event()
+        device = SimDevice(device_id, [SimData(0, count=REGISTERS, values=values, datatype=DataType.REGISTERS)])
+
+        async def serve() -> None:
+            self._server = ModbusTcpServer(device, address=(host, port))
+            self._loop = asyncio.get_running_loop()
+            self._loop.call_soon(ready.set)
+            await self._server.serve_forever()
+
+        self._thread = threading.Thread(target=asyncio.run, args=(serve(),), daemon=True, name="console-modbus")
+        self._thread.start()
+        if not ready.wait(5.0):
+            raise OSError(f"the Modbus server on {host}:{port} did not start")
+
+    def _call(self, coro):
+        return asyncio.run_coroutine_threadsafe(coro, self._loop).result(5.0)
+
+    def set(self, address: int, raw: int) -> None:
+        self._call(self._server.async_setValues(self.device_id, WRITE_MULTIPLE, address, [raw & 0xFFFF]))
+
+    def values(self) -> list[int]:
+        return list(self._call(self._server.async_getValues(self.device_id, READ_HOLDING, 0, REGISTERS)))
+
+    def stop(self) -> None:
+        self._call(self._server.shutdown())
+        self._thread.join(5.0)
+
+
+class ModbusConsole(ConsoleLink):
+    """The console's register server: the node polls its order registers and writes its
+    indicators; register values survive a disconnect, as a PLC's do."""
+
+    kind = "modbus"
+
+    def __init__(self, settings: ModbusConsoleSettings) -> None:
+        super().__init__(settings)
+        self._values = [0] * REGISTERS
+        for w in settings.writes:
+            self._values[w.address] = UNWRITTEN
+
+    def supports(self, kind: str) -> bool:
+        return any(r.order == kind for r in self.settings.registers)
+
+    def _open(self) -> _RegisterServer:
+        s = self.settings
+        return _RegisterServer(s.host, s.port, s.device_id, list(self._values))
+
+    def _close(self, server: _RegisterServer) -> None:
+        self._values = server.values()
+        server.stop()
+
+    def _encode(self, order: Order, corrupt: str | None) -> list[tuple[int, int]]:
+        value = OUT_OF_RANGE[order.kind] if corrupt == "range" else order.value
+        out = []
+        for r in self.settings.registers:
+            if r.order != order.kind:
+                continue
+            eng = math.degrees(value) if order.kind == RUDDER else (
+                int(value if corrupt == "range" else ETL_CODES[value]) if order.kind == TELEGRAPH else value)
+            out.append((r.address, raw_register(eng / r.scale, r.type)))
+        return out
+
+    def _write(self, item: tuple[int, int]) -> None:
+        self.device.set(*item)
+
+    def _read(self, now: float) -> list[Reading]:
+        values = self.device.values()
+        out = []
+        for w in self.settings.writes:
+            raw = values[w.address]
+            if raw != UNWRITTEN and w.value in INDICATORS:
+                quantity, factor = INDICATORS[w.value]
+                out.append(Reading(now, self.role, quantity, register_value(raw, w.type) * w.scale * factor))
+        return out
+
+
+CONSOLE_LINKS = {"can": CanConsole, "nmea0183": NmeaConsole, "modbus": ModbusConsole}
+
+
+def make_console_link(settings) -> ConsoleLink:
+    """The console end for one ``[[links]]`` table of a console config."""
+    return CONSOLE_LINKS[settings.type](settings)

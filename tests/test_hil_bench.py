@@ -1,0 +1,83 @@
+"""The HIL bench as users run it: the node as its own process, the software console in
+another, over slcan on a pty pair, NMEA 0183 on a pty pair and Modbus TCP on 127.0.0.1."""
+import json
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+
+import pytest
+from conftest import REPO
+
+pytest_plugins = ["bridge_node.testing"]  # the fixtures users get: hil_bench, hil_scenario
+SCENARIOS = REPO / "config" / "scenarios"
+
+
+@pytest.fixture(scope="module")
+def node_toml(tmp_path_factory):
+    """A small exercise (400 m field of 0.3 m ice) with a template library shared by the tests."""
+    folder = tmp_path_factory.mktemp("node")
+    path = folder / "node.toml"
+    path.write_text(f'[ship]\nname = "polar_cargo"\n[ice_field]\nwidth = 400.0\nheight = 400.0\nthickness = 0.3\n'
+                    f'[paths]\ncache_dir = "{folder / "tiles"}"\n')
+    return path
+
+
+def hil_run(*args, out) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "bridge_node", "hil", "run", *map(str, args), "--out", str(out)],
+                          cwd=REPO, capture_output=True, text=True, timeout=240)
+
+
+def test_link_loss_bad_input_and_bus_off_over_slcan(node_toml, tmp_path):
+    junit = tmp_path / "hil.xml"
+    r = hil_run(SCENARIOS / "link_loss.toml", SCENARIOS / "bad_input.toml", SCENARIOS / "can_bus_off.toml",
+                "--links", "can", "--node-config", node_toml, "--junit", junit, out=tmp_path / "out")
+    assert r.returncode == 0, r.stdout + r.stderr
+    suites = ET.parse(junit).getroot()
+    assert suites.get("failures") == "0" and int(suites.get("tests")) == 12
+    assert "ALR 111 raised after" in r.stdout  # the fail-safe, measured
+    run = next((tmp_path / "out").iterdir())
+    node = json.loads((run / "node.json").read_text().splitlines()[-1])
+    errors = node["links"][0]["errors"]
+    # the node's documented reactions: bad input counted by kind, the garbage burst whole,
+    # the lost bus counted and reopened
+    assert errors["out_of_range"] > 0 and errors["wrong_dlc"] > 0 and errors["unknown_frame"] == 200
+    assert errors["bus_lost"] == 1 and node["links"][0]["reconnects"] >= 1 and node["links"][0]["connected"]
+    # nothing lost from the session record: every frame the node took in is there, an order
+    # or counted as bad; and those are the console's frames but the ones written into the pty
+    # while the node's end was closed by the bus-off (about 3 s at 20 frames/s)
+    record = next((run / "sessions").iterdir()) / "can.log"
+    received = sum(1 for line in record.read_text().splitlines() if line.endswith(" R"))
+    assert received == node["links"][0]["inputs"] + sum(errors[k] for k in ("out_of_range", "wrong_dlc",
+                                                                            "unknown_frame"))
+    written = sum(int(line.split(" frames ")[1].split()[0]) for line in r.stdout.splitlines()
+                  if "console sent: primary" in line)
+    assert written - 100 <= received <= written
+
+
+def test_arbitration_hand_over_nmea_to_modbus(node_toml, hil_bench, hil_scenario):
+    from bridge_node.testing import assert_scenario  # after pytest_plugins registered (and rewrote) it
+    bench = hil_bench(links=["nmea0183", "modbus"], node_config=node_toml)
+    assert_scenario(bench.play(hil_scenario(SCENARIOS / "arbitration_handover.toml")))
+    summary = bench.stop()
+    primary, backup = summary["links"][0], summary["links"][1]
+    assert primary["errors"] == {} and primary["inputs"] > 50  # NMEA orders taken, none bad
+    assert backup["inputs"] > 50 and backup["connected"]  # Modbus polled throughout
+
+
+def test_slowed_steering_gear_fails_with_the_measured_rate(node_toml, tmp_path):
+    ships = tmp_path / "ships"
+    ships.mkdir()
+    ship = (REPO / "config" / "ships" / "polar_cargo.toml").read_text()
+    (ships / "slow_gear.toml").write_text(ship.replace("rate_deg_s = 2.5", "rate_deg_s = 1.2"))
+    slow = tmp_path / "slow.toml"
+    slow.write_text(node_toml.read_text().replace("polar_cargo", "slow_gear"))
+    junit = tmp_path / "hil.xml"
+    r = hil_run(SCENARIOS / "helm_response.toml", "--links", "nmea", "--node-config", slow, "--junit", junit,
+                out=tmp_path / "out")
+    assert r.returncode == 1, r.stdout + r.stderr
+    line = next(x for x in r.stdout.splitlines() if "steering gear rate" in x)
+    assert line.lstrip().startswith("FAIL")
+    rate = float(line.split(": ")[-1].split(" deg/s")[0])
+    assert rate == pytest.approx(1.2, abs=0.1)  # the slowed gear's rate, measured from RSA
+    failure = next(c for c in ET.parse(junit).getroot().iter("testcase") if "steering" in c.get("name"))
+    assert f"{rate:.2f} deg/s" in failure.find("failure").get("message")
