@@ -14,6 +14,8 @@ Link types register themselves by their settings' ``type`` with ``@register_link
 from __future__ import annotations
 
 import dataclasses
+import errno
+import logging
 import math
 import time
 from abc import ABC, abstractmethod
@@ -27,6 +29,7 @@ from sim_core.ship.outputs import ShipOutputs
 if TYPE_CHECKING:
     from bridge_node.links.settings import LinkSettings
 
+log = logging.getLogger("icebridge.links")
 RUDDER, TELEGRAPH, LEVER = "rudder", "telegraph", "lever"  # the kinds of order
 RUDDER_ORDER_LIMIT_DEG = 90.0  # beyond this a rudder order is nonsense, not an order to clamp
 ALARM_TEXT_MAX = 52  # characters: what an ALR sentence's text field holds within NMEA 0183's 82
@@ -94,10 +97,23 @@ class LinkHealth:
     outputs: int = 0
     reconnects: int = 0
     errors: Counter = field(default_factory=Counter)  # kind -> count
+    last_error: str = ""  # why the device last failed, in the OS's or the library's own words
 
     def as_dict(self) -> dict:
         return {"name": self.name, "connected": self.connected, "inputs": self.inputs, "outputs": self.outputs,
-                "reconnects": self.reconnects, "errors": dict(self.errors)}
+                "reconnects": self.reconnects, "errors": dict(self.errors), "last_error": self.last_error}
+
+
+def device_error_texts(exc: BaseException) -> tuple[str, list[str]]:
+    """Why a device failed: the whole message (for the log), and short forms for an alarm,
+    best first: the innermost OS error's own text (``strerror``), its errno name, the message."""
+    full = str(exc) or type(exc).__name__
+    short, inner = [], exc
+    while inner is not None:
+        if isinstance(inner, OSError) and inner.errno in errno.errorcode:
+            short = [inner.strerror or "", errno.errorcode[inner.errno]]
+        inner = inner.__cause__ or inner.__context__
+    return full, [s for s in short if s] + [full]
 
 
 @dataclass(frozen=True)
@@ -189,6 +205,7 @@ class Link(ABC):
         self._backoff = Backoff()
         self._active = False  # between open() and close()
         self._failed = False  # a real failure since the link was last up
+        self._down_reasons: list[str] = []  # short forms of why the device last failed
 
     def open(self) -> None:
         """Open the device. A peer that is not there yet is not an error: the link reports
@@ -230,7 +247,8 @@ class Link(ABC):
                     self._count_error("other_engine")
                 else:
                     inputs.append(order)
-        except self.lost_errors:
+        except self.lost_errors as exc:
+            self._note_failure(exc, "lost")
             self._lost(now)
         self._health.inputs += len(inputs)
         return inputs
@@ -253,6 +271,16 @@ class Link(ABC):
     def connected(self) -> bool:
         """Whether the device is open (or, for a link with ``up_when_open`` False, the peer answers)."""
         return self._health.connected
+
+    def down_text(self) -> str:
+        """The link-down alarm's text: with why the device failed, in the OS's or python-can's
+        own words, where that fits an ALR sentence whole (the whole message is in the log)."""
+        plain = f"link {self.name} down"
+        for reason in self._down_reasons:
+            text = f"{plain}: {reason}"
+            if len(text) <= ALARM_TEXT_MAX and not any(c in text for c in ",*$!"):
+                return text
+        return plain
 
     @property
     def failed(self) -> bool:
@@ -294,14 +322,25 @@ class Link(ABC):
             for listener in self.listeners:
                 listener.on_traffic(t)
 
+    def _note_failure(self, exc: BaseException, what: str) -> None:
+        """Keep why the device failed (``what``: "open" or "lost"); logged once per new reason,
+        not at every retry."""
+        full, self._down_reasons = device_error_texts(exc)
+        text = f"cannot open the device: {full}" if what == "open" else f"device lost: {full}"
+        if text != self._health.last_error:
+            log.warning("link %s: %s", self.name, text)
+        self._health.last_error = text
+
     def _connect(self, now: float) -> None:
         try:
             self.device = self._open_device()
-        except self.open_errors:
+        except self.open_errors as exc:
             self.device = None
+            self._note_failure(exc, "open")
             self._down(now, "open_failed")
             return
         self._health.connected = self.up_when_open
+        self._down_reasons = []
         self._backoff.succeeded()
 
     def _lost(self, now: float, kind: str | None = None) -> None:

@@ -101,7 +101,13 @@ class CanLink(Link):
 
     def _open_device(self) -> can.BusABC:
         s = self.settings
-        bus = can.Bus(interface=s.interface, channel=s.channel, bitrate=s.bitrate)
+        try:
+            bus = can.Bus(interface=s.interface, channel=s.channel, bitrate=s.bitrate)
+        except self.open_errors:
+            raise
+        except Exception as exc:  # a driver python-can cannot load fails in its own ways (NameError: kvaser)
+            raise can.CanInitializationError(f"python-can cannot start interface {s.interface!r}: "
+                                             f"{type(exc).__name__}: {exc}") from exc
         self.network.restart()  # a new bus: claim the address again
         return bus
 

@@ -100,7 +100,7 @@ class LinkHub:
         for i, link in enumerate(self.links):  # raised only after a real failure, not while a link starts
             number, down = LINK_DOWN_ALARM + i, link.failed
             if down != (number in self.active_alarms):
-                self.raise_alarm(Alarm(number, f"link {link.name} {'down' if down else 'up'}", down), now)
+                self.raise_alarm(Alarm(number, link.down_text() if down else f"link {link.name} up", down), now)
         return decision
 
     def raise_alarm(self, alarm: Alarm, now: float) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal
 
+import can
 from pydantic import Field, field_validator, model_validator
 
 from bridge_node.links.ais import AisSettings
@@ -110,6 +111,13 @@ class CanLinkSettings(_LinkBase):
     @classmethod
     def _known_outputs(cls, v: dict) -> dict:
         return _known_keys(v, N2K_OUTPUTS, "output")
+
+    @field_validator("interface")
+    @classmethod
+    def _known_interface(cls, v: str) -> str:
+        if v not in can.VALID_INTERFACES:
+            raise ValueError(f"python-can has no interface {v!r}; known: {', '.join(sorted(can.VALID_INTERFACES))}")
+        return v
 
     @model_validator(mode="after")
     def _off_the_host(self) -> "CanLinkSettings":
