@@ -104,7 +104,7 @@ def main() -> None:
         modbus.start()
         cfg = node_config([
             {"type": "can", "name": "can", "channel": "bench", "allowed_sources": [0x42]},
-            {"type": "nmea0183", "name": "nmea", "port": node_end, "baudrate": 115200, "udp_port": 10119,
+            {"type": "nmea0183", "name": "nmea", "port": node_end, "baudrate": 115200, "udp_output": True, "udp_port": 10119,
              "rates": {"RSA": 20.0}},
             {"type": "modbus", "name": "modbus", "port": modbus.port, "poll_hz": 50,
              "registers": [{"order": "rudder", "address": 0, "scale": 0.1}],

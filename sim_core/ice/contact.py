@@ -43,7 +43,7 @@ import pymunk
 import pymunk.batch as pb
 from pymunk._chipmunk import ffi, lib
 
-from sim_core.ice.floes import FloeState, FloeStatus, TilePlacement
+from sim_core.ice.floes import FloeState, TilePlacement
 from sim_core.ice.model import IceModel, placed_centroids, placed_outlines
 
 HULL_ROW = -1
