@@ -98,8 +98,8 @@ class ReplayStats:
 
     def write_csv(self, path: Path, origin: tuple[float, float]) -> Path:
         """The replayed track, one row per step (at its end): logged time (s), latitude and
-        longitude (deg, on the field placed at ``origin``, rad), north and east (m),
-        heading (deg), speed over ground (kn), ice under the bow."""
+        longitude (deg), north and east (m) from the field's corner at ``origin`` (lat, lon
+        rad), heading (deg), speed over ground (kn), ice under the bow."""
         path.parent.mkdir(parents=True, exist_ok=True)
         with open(path, "w", newline="", encoding="ascii") as f:
             out = csv.writer(f)
