@@ -54,14 +54,32 @@ def test_link_loss_bad_input_and_bus_off_over_slcan(node_toml, tmp_path):
     assert written - 100 <= received <= written
 
 
-def test_arbitration_hand_over_nmea_to_modbus(node_toml, hil_bench, hil_scenario):
+def test_arbitration_hand_over_nmea_to_modbus_then_attach(node_toml, hil_bench, hil_scenario, tmp_path):
+    """The hand-over through the pytest fixtures; then ``hil run --attach``: another console
+    takes over the running node through the ends of the console config the bench wrote."""
     from bridge_node.testing import assert_scenario  # after pytest_plugins registered (and rewrote) it
     bench = hil_bench(links=["nmea0183", "modbus"], node_config=node_toml)
     assert_scenario(bench.play(hil_scenario(SCENARIOS / "arbitration_handover.toml")))
+    bench.bench.console.__exit__(None, None, None)  # the bench's console lets go of its ends
+    r = hil_run(helm_scenario(tmp_path, 3.0), "--attach", bench.bench.folder / "console.toml", out=tmp_path / "out")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "PASS  helm" in r.stdout and "node: no summary (attached" in r.stdout
     summary = bench.stop()
     primary, backup = summary["links"][0], summary["links"][1]
     assert primary["errors"] == {} and primary["inputs"] > 50  # NMEA orders taken, none bad
-    assert backup["inputs"] > 50 and backup["connected"]  # Modbus polled throughout
+    assert backup["inputs"] > 50  # Modbus polled
+
+
+def helm_scenario(folder, deg: float, rate: bool = False):
+    """A short scenario file: helm ``deg`` at 0.5 s, the rudder there within 6 s on the panel
+    (or, with ``rate``, the steering gear's rate from 1 deg to ``deg - 1`` at >= 2.32 deg/s)."""
+    expect = ('quantity = "rudder_rate"\nfrom_deg = 1.0\nto_deg = {}\nmin = 2.32\n'.format(deg - 1.0) if rate
+              else f'quantity = "rudder_angle"\nmin = {deg - 0.5}\nmax = {deg + 0.5}\n')
+    path = folder / "helm.toml"
+    path.write_text(f'name = "helm {deg:g}"\n[[actions]]\nat_s = 0.0\nhelm_deg = 0.0\n[[actions]]\nat_s = 0.5\n'
+                    f'helm_deg = {deg}\n[[expect]]\nname = "steering gear rate"\nafter_s = 0.5\nwithin_s = 6.0\n'
+                    f'link = "panel"\n' + expect)
+    return path
 
 
 def test_slowed_steering_gear_fails_with_the_measured_rate(node_toml, tmp_path):
@@ -72,7 +90,7 @@ def test_slowed_steering_gear_fails_with_the_measured_rate(node_toml, tmp_path):
     slow = tmp_path / "slow.toml"
     slow.write_text(node_toml.read_text().replace("polar_cargo", "slow_gear"))
     junit = tmp_path / "hil.xml"
-    r = hil_run(SCENARIOS / "helm_response.toml", "--links", "nmea", "--node-config", slow, "--junit", junit,
+    r = hil_run(helm_scenario(tmp_path, 10.0, rate=True), "--links", "nmea", "--node-config", slow, "--junit", junit,
                 out=tmp_path / "out")
     assert r.returncode == 1, r.stdout + r.stderr
     line = next(x for x in r.stdout.splitlines() if "steering gear rate" in x)

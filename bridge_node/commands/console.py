@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(f"--wait {args.wait} s is outside the allowed range (0, 3600]")
     config = load_console_config(args.config or DEFAULT_CONSOLE)
     scripts = [(path, load_scenario(path)) for path in args.script]
-    terminal = Terminal()
+    terminal = Terminal(highlight=False)
     with Console(config) as console:
         console.wait_ready(args.wait)
         if not scripts:

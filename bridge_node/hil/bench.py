@@ -221,8 +221,8 @@ class Bench:
         pair = self.pairs[role]
         pair.cut() if begin else pair.restore()
 
-    def play(self, scenario: Scenario, path: str, on_reading=None) -> ScenarioResult:
-        """Play one scenario through the bench's console."""
-        bus_off: BusOff | None = self.bus_off if any(k == "can" for k in self.kinds) else None
-        return play(self.console, scenario, path, bus_off, on_reading)
+    def play(self, scenario: Scenario, path: str) -> ScenarioResult:
+        """Play one scenario through the bench's console (CAN ends can have a bus-off)."""
+        bus_off: BusOff | None = self.bus_off if "can" in self.kinds else None
+        return play(self.console, scenario, path, bus_off)
 

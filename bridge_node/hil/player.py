@@ -130,8 +130,7 @@ def _order(action) -> Order:
     return Order(LEVER, action.lever_pct)
 
 
-def play(console: Console, scenario: Scenario, path: str, bus_off: BusOff | None = None,
-         on_reading: Callable[[Reading | AlarmReading], None] | None = None) -> ScenarioResult:
+def play(console: Console, scenario: Scenario, path: str, bus_off: BusOff | None = None) -> ScenarioResult:
     """Play ``scenario`` in real time through ``console``; stops as soon as every
     expectation is decided and every action and fault is over."""
     check_plan(scenario, path, console, bus_off)
@@ -175,10 +174,7 @@ def play(console: Console, scenario: Scenario, path: str, bus_off: BusOff | None
             if i in started and i not in ended and f.end_s <= t:
                 ended.add(i)
                 _fault(console, f, rng, now, False, bus_off)
-        for r in console.tick(now):
-            readings.append(r)
-            if on_reading:
-                on_reading(r)
+        readings += console.tick(now)
         if t >= next_judge:
             next_judge = t + 0.25
             outcomes = judge(scenario.expect, readings, start, t)

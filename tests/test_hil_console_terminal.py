@@ -1,0 +1,62 @@
+"""``icebridge console`` steered from the keyboard in a real terminal (a pty), against a
+peer on a pty pair that plays the node: it sends RSA and reads the console's orders."""
+import os
+import pty
+import select
+import subprocess
+import sys
+import time
+
+import pynmea2
+import serial
+from conftest import REPO
+
+from bridge_node.hil.bench import PtyPair
+
+RSA = (str(pynmea2.RSA("II", "RSA", ("-3.5", "A", "", "V"))) + "\r\n").encode()
+
+
+def exchange(node: serial.Serial, terminal: int, seconds: float) -> tuple[bytes, bytes]:
+    """Play the node for ``seconds``: send RSA at 20 Hz; what came on the line and the screen."""
+    heard = screen = b""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        node.write(RSA)
+        heard += node.read(4096)
+        while select.select([terminal], [], [], 0)[0]:
+            try:
+                screen += os.read(terminal, 65536)
+            except OSError:  # the console has exited
+                return heard, screen
+        time.sleep(0.05)
+    return heard, screen
+
+
+def test_keys_steer_and_the_echo_shows(tmp_path):
+    with PtyPair(tmp_path, "nmea") as pair:
+        cfg = tmp_path / "console.toml"
+        cfg.write_text(f'[[links]]\nrole = "primary"\ntype = "nmea0183"\nport = "{pair.console_end}"\n')
+        node = serial.Serial(str(pair.node_end), 38400, timeout=0)
+        terminal, slave = pty.openpty()
+        proc = subprocess.Popen([sys.executable, "-m", "bridge_node", "console", "--config", str(cfg)], cwd=REPO,
+                                stdin=slave, stdout=slave, stderr=slave, env=os.environ | {"COLUMNS": "200"})
+        os.close(slave)
+        try:
+            heard, screen = exchange(node, terminal, 4.0)  # started, and steering midships, stop
+            assert b"$RCROR,0.0,A,,V,B" in heard, screen.decode(errors="replace")
+            for key in b"ddw":
+                os.write(terminal, bytes([key]))
+                got = exchange(node, terminal, 0.3)
+                heard, screen = heard + got[0], screen + got[1]
+            os.write(terminal, b"q")
+            proc.wait(10)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait(5)
+            node.close()
+            os.close(terminal)
+    assert proc.returncode == 0, screen.decode(errors="replace")
+    assert b"$RCROR,10.0,A,,V,B" in heard  # two presses of d: 10 deg starboard
+    assert b"$RCETL,,O,01,,B,0" in heard  # w from stop: dead slow ahead
+    assert b"rudder -3.5 deg" in screen  # the echoed rudder angle
