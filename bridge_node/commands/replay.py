@@ -181,6 +181,7 @@ def _summary(prep: _Prepared, stats: ReplayStats, playback: Playback) -> dict:
     return {
         "input": prep.info,
         "logged_start": logged_text(first, s.absolute), "logged_end": logged_text(first + stats.sim_s, s.absolute),
+        "shown_from": logged_text(s.logged_time(min(prep.seek_to, s.steps - 1)), s.absolute),
         "duration_s": round(stats.sim_s, 2), "steps": stats.steps, "step_s": s.dt,
         "distance_m": round(stats.distance, 1), "distance_nm": round(stats.distance / 1852.0, 3),
         "cells_broken": {"by_hull": stats.broken_by_hull, "by_contact": stats.broken_by_contact},
