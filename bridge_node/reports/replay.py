@@ -17,6 +17,8 @@ from sim_core.world import WorldData, WorldModel
 
 MAX_DRAWN_CELLS = 60_000  # beyond this only the broken cells are drawn, on squares for the placed tiles
 MARGIN = 60.0  # m around the track in the plan view
+ASPECT = 3.0  # the plan view's longest side over its shortest, at most
+MIN_HEADING_SPAN = 10.0  # deg: the heading axis spans at least this
 
 
 def _plan(ax, model: WorldModel, data: WorldData, xy: np.ndarray, track_ne: np.ndarray | None) -> None:
@@ -24,6 +26,9 @@ def _plan(ax, model: WorldModel, data: WorldData, xy: np.ndarray, track_ne: np.n
     by what broke them, the replayed track and the logged fixes."""
     scene, st = model.scene, data.ice.state
     lo, hi = xy.min(axis=0) - MARGIN, xy.max(axis=0) + MARGIN
+    span = hi - lo  # at most ASPECT times as tall as wide, or as wide as tall: a straight track stays readable
+    grow = np.maximum(span.max() / ASPECT - span, 0.0)
+    lo, hi = lo - 0.5 * grow, hi + 0.5 * grow
     ax.add_patch(Rectangle((0.0, 0.0), scene.nx * scene.side, scene.ny * scene.side, facecolor="#e8eef3",
                            edgecolor="#7a8793", lw=0.8, zorder=0, label="ice field (level ice)"))
     near = np.nonzero(np.all((st.xy[:st.n] >= lo) & (st.xy[:st.n] <= hi), axis=1))[0]
@@ -80,6 +85,9 @@ def plot_replay(model: WorldModel, data: WorldData, stats: ReplayStats, track: T
     bx.set_ylim(0.0, 1.15 * max(1.0, bx.get_ylim()[1]))
     bx.set_ylabel("speed over ground, kn")
     cx.set_ylabel("heading, deg")
+    low, high = cx.get_ylim()
+    pad = max(0.0, MIN_HEADING_SPAN - (high - low)) / 2.0
+    cx.set_ylim(low - pad, high + pad)
     cx.set_xlabel("logged time from the start, s (shaded: gaps held)")
     for a in (bx, cx):
         a.grid(alpha=0.3)
