@@ -2,6 +2,7 @@
 shows, where its horizon sits, blending between neighbours, and floe poses in the pixels."""
 import dataclasses
 import math
+from datetime import datetime
 
 import numpy as np
 import pytest
@@ -46,11 +47,12 @@ def ctx():
     return create_context()
 
 
-def render(ctx, model, data, channels, visibility=8000.0, blended=True, view=None):
-    """Images of the channels; unblended: the same channels with their blend bands off."""
+def render(ctx, model, data, channels, visibility=8000.0, blended=True, view=None, **look):
+    """Images of the channels; unblended: the same channels with their blend bands off;
+    look: more render settings."""
     if not blended:
         channels = [c.model_copy(update={"blend_left_deg": 0.0, "blend_right_deg": 0.0}) for c in channels]
-    settings = RenderSettings(channels=channels, visibility_m=visibility)
+    settings = RenderSettings(channels=channels, visibility_m=visibility, **look)
     cs = ChannelSet(SceneRenderer(ctx, model, settings), channels)
     cs.render(view or view_of(model, data))
     return [t.image() for t in cs.targets]
@@ -71,7 +73,7 @@ def is_ice(px):
 def test_open_water_view_shows_sky_and_water(ctx, exercise):
     model, data = exercise
     south = view_of(model, data, north=-3000.0)  # 3 km south of the field, looking south: open water
-    img, = render(ctx, model, data, [channel(yaw_deg=180.0)], view=south)
+    img, = render(ctx, model, data, [channel(yaw_deg=180.0, eye=[-80.0, 0.0, 20.0])], view=south)
     assert is_sky(img[: H // 3]).mean() > 0.95
     assert is_water(img[-H // 4:]).mean() > 0.95
 
@@ -91,9 +93,11 @@ def test_ice_field_ahead_and_the_other_side(ctx, exercise):
 def test_horizon_sits_where_pitch_and_fov_put_it(ctx, exercise, pitch):
     model, data = exercise
     c = channel(yaw_deg=180.0, pitch_deg=pitch, eye=[-80.0, 0.0, 20.0])
-    img, = render(ctx, model, data, [c], visibility=100_000.0)
+    midnight_sun = datetime.fromisoformat("2026-06-21T22:40:00+00:00")  # low in the north, behind the channel
+    img, = render(ctx, model, data, [c], visibility=100_000.0, start_utc=midnight_sun)
     column = img[:, W // 2].astype(float).mean(axis=1)
-    first_dark = int(np.argmax(column < 0.5 * (column[0] + column[-1])))
+    # the sky brightens down to the horizon; the sea below it is darker, though it mirrors the sky
+    first_dark = int(np.argmax(column < np.maximum.accumulate(column) - 12.0))
     # horizon (elevation ~0: the sea edge at 20 km lies 0.06 deg below it) in NDC: -tan(pitch)/tan(vfov/2)
     y_ndc = -math.tan(math.radians(pitch)) / math.tan(c.vfov() / 2)
     expected = (1 - y_ndc) / 2 * H

@@ -51,19 +51,27 @@ def column_factors(channel: ChannelSettings) -> np.ndarray:
 
 
 class ChannelTarget:
-    """The framebuffer of one channel."""
+    """The framebuffer of one channel: drawn multisampled (``samples`` > 1) and resolved
+    into the colour texture that windows show and frames are read from."""
 
-    def __init__(self, ctx: moderngl.Context, channel: ChannelSettings) -> None:
+    def __init__(self, ctx: moderngl.Context, channel: ChannelSettings, samples: int) -> None:
         size = (channel.width, channel.height)
         self.channel = channel
         self.colour = ctx.texture(size, 3)  # a texture, so that a channel window can show it
-        self.fbo = ctx.framebuffer([self.colour], ctx.depth_renderbuffer(size))
+        if samples > 1:
+            self.fbo = ctx.framebuffer([self.colour])
+            self.draw_fbo = ctx.framebuffer([ctx.renderbuffer(size, 3, samples=samples)],
+                                            ctx.depth_renderbuffer(size, samples=samples))
+        else:
+            self.fbo = self.draw_fbo = ctx.framebuffer([self.colour], ctx.depth_renderbuffer(size))
         self.blend = ctx.texture((channel.width, 1), 1, column_factors(channel).tobytes(), dtype="f4")
         self.blend.filter = moderngl.NEAREST, moderngl.NEAREST
 
     def render(self, renderer: SceneRenderer, view: WorldView) -> None:
-        self.fbo.use()
+        self.draw_fbo.use()
         renderer.draw(view, self.channel, self.blend)
+        if self.draw_fbo is not self.fbo:
+            renderer.ctx.copy_framebuffer(self.fbo, self.draw_fbo)  # resolve the samples
 
     def image(self) -> np.ndarray:
         """The last frame as (height, width, 3) uint8, top row first."""
@@ -76,7 +84,7 @@ class ChannelSet:
 
     def __init__(self, renderer: SceneRenderer, channels: list[ChannelSettings], hidden_window=None) -> None:
         self.renderer = renderer
-        self.targets = [ChannelTarget(renderer.ctx, c) for c in channels]
+        self.targets = [ChannelTarget(renderer.ctx, c, renderer.settings.msaa_samples) for c in channels]
         self.windows = [ChannelWindow(renderer.ctx, hidden_window, t.channel, t.colour)
                         for t in self.targets if t.channel.output == "window"]
 

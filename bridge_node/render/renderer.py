@@ -13,21 +13,33 @@ level-of-detail distance. Level ice (unbreakable tiles and the intact cells
 of breakable ones) is drawn per pixel by the environment pass from the cell raster, so it
 costs no triangles: on a software rasteriser the vertex work of thousands of intact cells
 would dominate the frame. Per frame only the poses of tiles placed or simulated since the
-last frame are uploaded; frozen tiles cost nothing.
+last frame are uploaded; frozen tiles cost nothing. Also static: the relief noise texture
+(mipmapped) and each tile's level-ice thickness; per frame, the sun and sky of the
+exercise's time and the ship's place.
 """
 from __future__ import annotations
 
 import math
+from datetime import timedelta
 
 import moderngl
 import numpy as np
 
 from bridge_node.render import shaders
-from bridge_node.render.camera import Camera, channel_camera, set_matrix, ship_matrix, visible_boxes
+from bridge_node.render.camera import (
+    Camera,
+    channel_camera,
+    set_matrix,
+    ship_matrix,
+    visible_boxes,
+)
 from bridge_node.render.meshes import cell_rasters, cell_vertices, ship_vertices
 from bridge_node.render.settings import ChannelSettings, RenderSettings
+from bridge_node.render.sky import Sky, sky_for
+from bridge_node.render.textures import relief_noise
 from bridge_node.stream.world_view import WorldView
 from sim_core.csr import gather_ranges
+from sim_core.frames.geodesy import local_to_geodetic
 from sim_core.world import WorldModel
 
 GL_CLIP_DISTANCE0 = 0x3000
@@ -35,11 +47,9 @@ FLOE_DRIFT_MARGIN = 30.0  # m: broken floes may drift this far out of their tile
 POSE_WIDTH = 2048  # texels per line of the pose textures
 MAX_TILES = 4096 * 4096  # tile table of 8 bytes per tile: 134 MB of texture at most
 RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m tiles)
-SKY_HORIZON, SKY_ZENITH = (0.78, 0.84, 0.90), (0.38, 0.55, 0.78)
-FOG = (0.70, 0.74, 0.78)
-WATER = (0.10, 0.17, 0.22)
-ICE_INTACT, ICE_BROKEN, ICE_EDGE = (0.93, 0.95, 0.97), (0.60, 0.68, 0.75), (0.52, 0.68, 0.78)
+WATER = (0.04, 0.09, 0.11)  # the sea's body colour (albedo of the light it sends back up)
 DECK, HULL = (0.35, 0.38, 0.36), (0.55, 0.12, 0.10)
+NOISE_UNIT, THICKNESS_UNIT = 8, 9  # texture units of the relief noise and the tile thicknesses
 
 
 class _FloeBuffer:
@@ -106,14 +116,25 @@ class SceneRenderer:
         h = model.ice.thickness.mean() if len(model.ice.thickness) else 0.0
         mat = model.ice.material
         self.slab_z = float(h * (1.0 - mat.density / mat.water_density))
-        az, el = math.radians(settings.sun_azimuth_deg), math.radians(settings.sun_elevation_deg)
-        self.sun = (math.sin(az) * math.cos(el), math.cos(az) * math.cos(el), math.sin(el))
+        thickness = scene.class_thickness[scene.tile_class].astype("f4")
+        self.tile_thickness = ctx.texture((scene.nx, scene.ny), 1, thickness.tobytes(), dtype="f4")
+        self.tile_thickness.filter = moderngl.NEAREST, moderngl.NEAREST
+        self.template_thickness = [t.thickness for t in model.ice.templates]
+        noise = relief_noise()
+        self.noise = ctx.texture(noise.shape[:2], 4, noise.tobytes())
+        self.noise.build_mipmaps()
+        # the nearest mip level: half the texel reads of trilinear on llvmpipe, no visible seams in noise
+        self.noise.filter = moderngl.LINEAR_MIPMAP_NEAREST, moderngl.LINEAR
+        self.sky: Sky | None = None
 
     # -- per frame uploads ----------------------------------------------------------------
     def update(self, view: WorldView) -> None:
         """Upload what changed in the view since the last call: new placements, the
-        triangles of newly broken floes, and the poses of the rows that changed."""
+        triangles of newly broken floes, and the poses of the rows that changed; and take
+        the sky of the view's time and place."""
         changes = view.take_changes()
+        lat, lon = local_to_geodetic(view.ship.north, view.ship.east, *self.model.origin)
+        self.sky = sky_for(self.settings.start_utc + timedelta(seconds=view.time), lat, lon)
         full = self._ensure_pose_capacity(view.rows)
         self._upload_placements(view, list(view.placements) if full else changes.placements)
         self._append_broken(view, changes.broken)
@@ -204,10 +225,15 @@ class SceneRenderer:
         cam = channel_camera(channel, north, east, psi, s.far_m)
         vp = cam.view_proj
         half = math.radians(channel.hfov_deg) / 2
-        common = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "fog_colour": FOG}
-        ctx.clear(*FOG, depth=1.0)
+        sky = self.sky
+        common = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "sun": sky.sun, "direct": sky.direct,
+                  "ambient": sky.ambient, "zenith_colour": sky.zenith, "horizon_colour": sky.horizon,
+                  "noise": NOISE_UNIT, "water_colour": WATER}
+        ctx.clear(*sky.horizon, depth=1.0)
         self.tile_info.use(0)
         self.cell_raster.use(3)
+        self.noise.use(NOISE_UNIT)
+        self.tile_thickness.use(THICKNESS_UNIT)
         if self.pose_b is not None:
             self.pose_a.use(4)
             self.pose_b.use(5)
@@ -215,14 +241,13 @@ class SceneRenderer:
         # near to far: ship, floes, then the environment behind them, so that the depth test
         # spares the full-screen pass every pixel already covered
         ctx.enable(moderngl.DEPTH_TEST)
-        self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), sun=self.sun,
-                  top_colour=DECK, side_colour=HULL, ambient=0.55, **common)
+        self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), deck_colour=DECK,
+                  hull_colour=HULL, **common)
         self.ship_vao.render()
         if self.tile_floes:
             ctx.enable_direct(GL_CLIP_DISTANCE0)
             ctx.enable(moderngl.CULL_FACE)  # not for the ship: its matrix mirrors (starboard-handed frame)
-            self._set(self.floe, view_proj=vp, pose_a=4, pose_b=5, pose_width=POSE_WIDTH, sun=self.sun,
-                      top_colour=ICE_BROKEN, side_colour=ICE_EDGE, ambient=0.7, **common)
+            self._set(self.floe, view_proj=vp, pose_a=4, pose_b=5, pose_width=POSE_WIDTH, **common)
             self._draw_floes(view, cam)
             ctx.disable(moderngl.CULL_FACE)
             ctx.disable_direct(GL_CLIP_DISTANCE0)
@@ -231,10 +256,8 @@ class SceneRenderer:
         rays = -cam.view[2, :3] + corners[:, :1] * tx * cam.view[0, :3] + corners[:, 1:] * ty * cam.view[1, :3]
         self.env_buf.write(np.hstack([corners, rays]).astype("f4").tobytes())
         scene = self.model.scene
-        ice = tuple(c * (0.7 + 0.3 * max(self.sun[2], 0.0)) for c in ICE_INTACT)
-        self._set(self.env, horizon_colour=SKY_HORIZON, zenith_colour=SKY_ZENITH, water_colour=WATER,
-                  ice_colour=ice, slab_z=self.slab_z, far=s.far_m, tile_info=0, cell_raster=3,
-                  raster_size=self.raster_size, status=7, pose_width=POSE_WIDTH,
+        self._set(self.env, slab_z=self.slab_z, far=s.far_m, tile_info=0, tile_thickness=THICKNESS_UNIT,
+                  cell_raster=3, raster_size=self.raster_size, status=7, pose_width=POSE_WIDTH,
                   field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
         self.env_vao.render()
         self._blend_bands(channel, blend)
@@ -277,6 +300,7 @@ class SceneRenderer:
         for k, show, full in zip(keys, seen, near):
             if show:
                 tops, sides = self.tile_floes[k]
+                self.floe["thickness"].value = self.template_thickness[view.placements[k].template]
                 tops.render()
                 if full:
                     sides.render()

@@ -10,9 +10,10 @@ a window on a given monitor (glfw; full-screen or at the monitor's corner), or `
 from __future__ import annotations
 
 import math
+from datetime import datetime
 from typing import Annotated, Literal
 
-from pydantic import Field, model_validator
+from pydantic import AwareDatetime, Field, model_validator
 
 from sim_core.params import Params, repeated
 
@@ -61,8 +62,11 @@ class RenderSettings(Params):
     channels: list[ChannelSettings] = Field(default_factory=_front_channels, min_length=1)
     visibility_m: float = Field(8000.0, ge=50.0, le=100_000.0, description="meteorological visibility")
     far_m: float = Field(20_000.0, ge=500.0, le=200_000.0, description="far clip distance")
-    sun_elevation_deg: float = Field(25.0, ge=-10.0, le=90.0)
-    sun_azimuth_deg: float = Field(150.0, ge=0.0, lt=360.0)
+    start_utc: AwareDatetime = Field(datetime.fromisoformat("2026-04-10T10:40:00+00:00"),
+                                     description="date and time (with its UTC offset) the exercise starts at: "
+                                                 "with the position, it sets the sun and the sky")
+    msaa_samples: Literal[1, 4] = Field(
+        4, description="multisample anti-aliasing samples per pixel (Mesa llvmpipe offers 4 at most)")
     freeboard_m: float = Field(9.0, ge=0.5, le=40.0, description="own ship's deck height above the waterline")
     lod_distance_m: float = Field(300.0, ge=0.0, le=1.0e6, description="floe side faces drawn within this distance")
     processes: Literal["local", "none"] = Field(

@@ -1,17 +1,99 @@
 """GLSL 3.30 programs of the scene: the environment pass (sky, sea, level ice: the
 unbreakable slab and the intact cells of breakable tiles), broken floes, and the own ship.
 World frame: x east, y north, z up, metres. The channel's edge blending is a last pass over
-the blend bands only, multiplying what is there by each column's factor."""
+the blend bands only, multiplying what is there by each column's factor.
+
+Looks: level ice and floe tops are snow (or, thin, grey nilas) with relief and albedo from
+octaves of procedural noise; floe sides show the blue-green of sea ice, turquoise under
+the water and darkened at the waterline; the sea reflects the sky by Fresnel through slight
+waves; everything is lit by the sun and the sky of the moment and fogged by the visibility.
+"""
+import math
+
+from bridge_node.render.textures import NOISE_RANGE
+
+
+def _octaves() -> str:
+    """GLSL constants of the relief fetches: world (m) to noise texture coordinates (rotation
+    over period), and each fetch's slope amplitude times period (m) and relative albedo
+    variation. The periods (23, 290 and 2100 m) and angles share no ratio, so the sum never
+    repeats; each fetch spans five octaves (features of 1/8 to 1/256 of its period)."""
+    rows = []
+    for k, (period, slope, albedo) in enumerate(((23.0, 0.16, 0.03), (290.0, 0.08, 0.04), (2100.0, 0.03, 0.05))):
+        angle = 1.13 * k
+        c, s = math.cos(angle) / period, math.sin(angle) / period
+        rows.append((f"mat2({c:.6g}, {-s:.6g}, {s:.6g}, {c:.6g})", f"vec2({slope * period:.6g}, {albedo})"))
+    return (f"const int OCTAVES = {len(rows)};\n"
+            f"const mat2 OCTAVE[OCTAVES] = mat2[]({', '.join(r[0] for r in rows)});\n"
+            f"const vec2 OCTAVE_AMP[OCTAVES] = vec2[]({', '.join(r[1] for r in rows)});\n"
+            f"const vec3 NOISE_RANGE = vec3{NOISE_RANGE};\n"
+            "vec3 noise_at(vec2 uv) { return (texture(noise, uv).xyz - 0.5) * NOISE_RANGE; }\n")
+
 
 _COMMON = """
 uniform vec3 eye;
 uniform float visibility;
-uniform vec3 fog_colour;
+uniform vec3 sun;                // unit, towards the sun
+uniform vec3 direct;             // the sun's light
+uniform vec3 ambient;            // the sky's light
+uniform vec3 zenith_colour;
+uniform vec3 horizon_colour;     // also the fog's colour
+uniform sampler2D noise;         // height, d/du, d/dv: tileable noise over five octaves
+""" + _octaves() + """
 vec3 fogged(vec3 colour, vec3 world) {
     // meteorological visibility: contrast falls to 5 % (exp(-3)) at that distance
     float f = exp(-3.0 * distance(world, eye) / visibility);
-    return mix(fog_colour, colour, f);
+    return mix(horizon_colour, colour, f);
 }
+vec3 sky(vec3 dir) {
+    float c = max(dot(dir, sun), 0.0);
+    vec3 glow = direct * (0.25 * pow(c, 8.0) + 4.0 * smoothstep(0.99996, 0.99999, c));
+    return mix(horizon_colour, zenith_colour, sqrt(max(dir.z, 0.0))) + glow;
+}
+vec3 lit(vec3 albedo, vec3 n) {
+    // soft (wrapped) diffuse light: faces turned a little away from the sun still get some
+    float d = max((dot(n, sun) + 0.25) / 1.25, 0.0);
+    return albedo * (direct * d + ambient);
+}
+// The noise under p (m), one fetch per octave; called in uniform control flow, as the
+// fetches' mip levels come from screen derivatives (finer features fade to their mean).
+void noise_under(vec2 p, out vec3 h[OCTAVES]) {
+    for (int k = 0; k < OCTAVES; k++) h[k] = noise_at(OCTAVE[k] * p);
+}
+// Snow relief from the noise: the normal, and the albedo factor.
+vec3 relief(vec3 h[OCTAVES], float depth, out float albedo) {
+    vec2 slope = vec2(0.0);
+    albedo = 1.0;
+    for (int k = 0; k < OCTAVES; k++) {
+        slope += OCTAVE_AMP[k].x * depth * (h[k].yz * OCTAVE[k]);   // chain rule: d/dp = (d/duv) M
+        albedo += OCTAVE_AMP[k].y * h[k].x;
+    }
+    return normalize(vec3(-slope, 1.0));
+}
+// Sea ice by thickness (m): dark nilas, grey and grey-white young ice, snow-covered white
+vec3 ice_albedo(float h) {
+    vec3 c = mix(vec3(0.26, 0.29, 0.31), vec3(0.50, 0.54, 0.57), smoothstep(0.03, 0.12, h));
+    c = mix(c, vec3(0.72, 0.75, 0.78), smoothstep(0.12, 0.25, h));
+    return mix(c, vec3(0.93, 0.95, 0.97), smoothstep(0.25, 0.45, h));
+}
+// snow relief depth by thickness: slight on nilas, full on snow-covered ice
+float snow_depth(float h) { return mix(0.15, 1.0, smoothstep(0.1, 0.4, h)); }
+vec3 ice_surface(vec3 noise[OCTAVES], float h) {
+    float albedo;
+    vec3 n = relief(noise, snow_depth(h), albedo);
+    return lit(ice_albedo(h) * albedo, n);
+}
+uniform vec3 water_colour;
+// the sea seen along r through a surface of normal n: its body (what is under it) and the
+// sky it mirrors, weighed by Schlick's Fresnel (2 % at normal incidence), which the waves'
+// roughness (shadowing and masking) keeps below 70 % at grazing angles (Lagarde 2011)
+vec3 through_surface(vec3 r, vec3 n, vec3 body) {
+    vec3 mirror = reflect(r, n);
+    mirror.z = abs(mirror.z);
+    float fresnel = 0.02 + 0.68 * pow(1.0 - max(dot(-r, n), 0.0), 5.0);
+    return mix(body, sky(mirror), fresnel);
+}
+vec3 water_body() { return water_colour * (direct * max(sun.z, 0.0) + ambient); }
 vec4 opaque(vec3 colour) { return vec4(colour, 1.0); }
 """
 
@@ -28,13 +110,10 @@ void main() { ray = in_ray; gl_Position = vec4(in_ndc, 0.9999, 1.0); }
 # the cell's status (from the pose texture) says intact ice or water between broken floes.
 # Level ice thus costs no triangles, and far ice does not z-fight with the water.
 ENV_FS = "#version 330\n" + _COMMON + """
-uniform vec3 horizon_colour;
-uniform vec3 zenith_colour;
-uniform vec3 water_colour;
-uniform vec3 ice_colour;
 uniform float slab_z;
-uniform float far;
+uniform float far;               // m: level ice is looked up this far
 uniform isampler2D tile_info;    // per tile: first floe row (-1: unbreakable), template | quarter turns << 16
+uniform sampler2D tile_thickness;  // per tile: level-ice thickness, m
 uniform usampler2D cell_raster;  // templates stacked in y: 1 + cell index, 0 in a crack
 uniform int raster_size;
 uniform usampler2D status;       // per floe row: 0 intact, 1 free, 2 frozen
@@ -43,8 +122,7 @@ uniform vec2 field_size;         // m
 uniform float tile_side;
 in vec3 ray;
 out vec4 colour;
-bool level_ice(vec2 p) {
-    ivec2 tile = ivec2(floor(p / tile_side));
+bool level_ice(vec2 p, ivec2 tile) {
     ivec2 info = texelFetch(tile_info, tile, 0).rg;
     if (info.x < 0) return true;                                        // the unbreakable slab
     vec2 local = p - vec2(tile) * tile_side - 0.5 * tile_side;          // about the tile centre
@@ -57,18 +135,33 @@ bool level_ice(vec2 p) {
     int row = info.x + int(cell) - 1;
     return texelFetch(status, ivec2(row % pose_width, row / pose_width), 0).r == 0u;
 }
+const float WAVE_SLOPE = 0.04;
+vec3 sea(vec3 r, vec3 noise[OCTAVES]) {
+    // the finest relief octave as slight waves
+    vec2 slope = WAVE_SLOPE / length(OCTAVE[0][0]) * (noise[0].yz * OCTAVE[0]);
+    return through_surface(r, normalize(vec3(-slope, 1.0)), water_body());
+}
 void main() {
     vec3 r = normalize(ray);
-    if (r.z >= 0.0) {
-        colour = opaque(mix(horizon_colour, zenith_colour, sqrt(r.z)));
-        return;
-    }
-    float t_sea = -eye.z / r.z;
-    if (t_sea > far) { colour = opaque(fog_colour); return; }
-    vec3 hit = eye + r * ((slab_z - eye.z) / r.z);
-    bool on_field = hit.x >= 0.0 && hit.y >= 0.0 && hit.x < field_size.x && hit.y < field_size.y;
-    if (on_field && level_ice(hit.xy)) colour = opaque(fogged(ice_colour, hit));
-    else colour = opaque(fogged(water_colour, eye + r * t_sea));
+    // the horizon is anti-aliased: the share of the pixel below it shows the ground seen
+    // through the middle of that share
+    float fw = max(fwidth(r.z), 1e-6);
+    float below = clamp(0.5 - r.z / fw, 0.0, 1.0);
+    vec3 above = sky(r);
+    if (below <= 0.0) { colour = opaque(above); return; }
+    vec3 g = normalize(vec3(r.xy, min(r.z, 0.5 * (r.z - 0.5 * fw))));
+    float t = (slab_z - eye.z) / g.z;
+    vec2 p = eye.xy + g.xy * t;
+    vec3 noise[OCTAVES];
+    noise_under(p, noise);
+    ivec2 tile = ivec2(floor(p / tile_side));
+    bool on_field = t < far && p.x >= 0.0 && p.y >= 0.0 && p.x < field_size.x && p.y < field_size.y;
+    vec3 ground;
+    if (on_field && level_ice(p, tile))
+        ground = fogged(ice_surface(noise, texelFetch(tile_thickness, tile, 0).r), vec3(p, slab_z));
+    else  // the sea, out to the horizon
+        ground = fogged(sea(g, noise), eye - g * eye.z / g.z);
+    colour = opaque(mix(above, ground, below));
 }
 """
 
@@ -83,6 +176,8 @@ in vec3 in_normal;
 in int in_row;                   // the floe's row in the state arrays
 out vec3 world;
 out vec3 normal;
+out vec2 local;                  // relief coordinates that move with the floe, m
+flat out int top;
 void main() {
     ivec2 at = ivec2(in_row % pose_width, in_row / pose_width);
     vec4 a = texelFetch(pose_a, at, 0);
@@ -94,26 +189,42 @@ void main() {
     mat3 r = rz * ry * rx;
     world = r * in_pos + vec3(a.x, a.y, a.z);
     normal = r * in_normal;
-    gl_ClipDistance[0] = world.z;                       // opaque water hides what is under it
+    local = in_pos.xy + 31.7 * vec2(in_row % 61, in_row % 59);  // each floe its own patch of snow
+    top = in_normal.z > 0.5 ? 1 : 0;
+    gl_ClipDistance[0] = world.z + 1.5;  // ice deeper than 1.5 m is lost in the sea
     gl_Position = view_proj * vec4(world, 1.0);
 }
 """
-# Flat faces, lit by the sun: horizontal faces in one colour, vertical ones in another.
-_SHADED = "#version 330\n" + _COMMON + """
-uniform vec3 sun;
-uniform vec3 top_colour;
-uniform vec3 side_colour;
-uniform float ambient;
+# Floe tops are the level ice they broke from; sides show the blue-green of sea ice,
+# darkened at the waterline and turquoise, fading into the sea, below it.
+FLOE_FS = "#version 330\n" + _COMMON + """
+uniform float thickness;         // m: the tile's level ice
 in vec3 world;
 in vec3 normal;
+in vec2 local;
+flat in int top;
 out vec4 colour;
 void main() {
+    vec3 noise[OCTAVES];
+    noise_under(local, noise);
     vec3 n = normalize(normal);
-    vec3 base = abs(n.z) > 0.5 ? top_colour : side_colour;
-    colour = opaque(fogged(base * (ambient + (1.0 - ambient) * max(dot(n, sun), 0.0)), world));
+    vec3 c;
+    if (top == 1) {
+        float albedo;
+        vec3 bump = relief(noise, snow_depth(thickness), albedo);
+        c = lit(ice_albedo(thickness) * albedo, normalize(n + vec3(bump.xy, 0.0)));
+    } else {
+        c = lit(mix(vec3(0.42, 0.50, 0.53), vec3(0.30, 0.62, 0.64), smoothstep(0.1, 0.5, thickness)), n);
+    }
+    vec3 r = normalize(world - eye);
+    if (world.z < 0.0)
+        c = through_surface(r, vec3(0.0, 0.0, 1.0),
+                            mix(c * vec3(0.45, 0.85, 0.85), water_body(), 1.0 - exp(world.z / 0.4)));
+    else
+        c *= mix(0.45, 1.0, smoothstep(0.0, 0.06, world.z));  // wet, dark waterline
+    colour = opaque(fogged(c, world));
 }
 """
-FLOE_FS = _SHADED
 
 SHIP_VS = """
 #version 330
@@ -129,7 +240,17 @@ void main() {
     gl_Position = view_proj * vec4(world, 1.0);
 }
 """
-SHIP_FS = _SHADED
+SHIP_FS = "#version 330\n" + _COMMON + """
+uniform vec3 deck_colour;
+uniform vec3 hull_colour;
+in vec3 world;
+in vec3 normal;
+out vec4 colour;
+void main() {
+    vec3 n = normalize(normal);
+    colour = opaque(fogged(lit(abs(n.z) > 0.5 ? deck_colour : hull_colour, n), world));
+}
+"""
 
 BAND_VS = """
 #version 330

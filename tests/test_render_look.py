@@ -1,0 +1,242 @@
+"""The look of the channels (EGL offscreen, Mesa llvmpipe): image statistics that a flat
+render fails (ice texture near and far without repetition, floe sides, water darker than ice
+and mirroring the sky near the horizon, fog by the visibility, anti-aliased edges), the sun
+of the exercise's date, time and place, and reference images per look compared by SSIM.
+
+The references are ``docs/images/look_*.png``; after a deliberate change of the look,
+rewrite them with ``ICEBRIDGE_UPDATE_LOOKS=1 pytest tests/test_render_look.py`` and look
+at them before committing."""
+import dataclasses
+import math
+import os
+from datetime import datetime
+
+import numpy as np
+import pytest
+from conftest import REPO, exercise_config, run_cli
+from PIL import Image
+from scipy.ndimage import gaussian_filter
+
+from bridge_node.node.world_setup import build_world, start_world
+from bridge_node.render.channels import ChannelSet, create_context
+from bridge_node.render.renderer import SceneRenderer
+from bridge_node.render.settings import ChannelSettings, RenderSettings
+from bridge_node.render.sky import sky_for, sun_position
+from bridge_node.stream.world_view import WorldView
+from sim_core.world import snapshot, step
+
+W, H = 384, 216
+THIN, THICK = 0.05, 0.6  # m: the field's west and east halves
+SIDE = 1600.0  # m, the field's width and height
+DAY = datetime.fromisoformat("2026-04-10T10:40:00+00:00")  # 74 N 20 E: the sun 24 deg up in the south
+TWILIGHT = datetime.fromisoformat("2026-04-10T19:30:00+00:00")  # the sun 3 deg below the horizon
+REFERENCES = REPO / "docs" / "images"
+SSIM_MIN = 0.95
+
+
+@pytest.fixture(scope="module")
+def world(tmp_path_factory):
+    """A 1.6 km field of 50 m tiles: nilas-like 0.05 m ice in the west half, 0.6 m in the
+    east, where the ship has steamed 70 s north into it."""
+    folder = tmp_path_factory.mktemp("look")
+    grid = folder / "thickness.csv"
+    n = int(SIDE / 50.0)
+    np.savetxt(grid, np.where(np.arange(n) < n // 2, THIN, THICK)[None].repeat(n, axis=0), delimiter=",")
+    cfg = exercise_config(folder / "tiles", SIDE, SIDE, 50.0, start_north=-60.0)
+    cfg = cfg.model_copy(update={"ice_field": cfg.ice_field.model_copy(update={
+        "thickness_profile": "grid", "thickness_grid": str(grid), "class_step": 0.05})})
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    for _ in range(700):
+        step(model, data, 0.1)
+    return model, data
+
+
+@pytest.fixture(scope="module")
+def ctx():
+    return create_context()
+
+
+def render(ctx, world, channel: ChannelSettings, ship: dict | None = None, **look) -> np.ndarray:
+    """The channel's image of the world, the ship optionally moved (north, east, heading)."""
+    model, data = world
+    view = WorldView()
+    view.apply(snapshot(model, data))
+    view.ship = dataclasses.replace(view.ship, **(ship or {}))
+    cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=[channel], **look)), [channel])
+    cs.render(view)
+    return cs.images()[0]
+
+
+def channel(**kw) -> ChannelSettings:
+    return ChannelSettings(name="look", width=W, height=H, **kw)
+
+
+ASTERN = channel(yaw_deg=180.0, pitch_deg=-20.0, eye=[-80.0, 0.0, 20.0])  # down the broken channel
+AHEAD = channel(pitch_deg=-8.0, eye=[10.0, 0.0, 25.0])  # level ice to the horizon
+ON_THIN, ON_THICK = {"east": 0.25 * SIDE, "north": 800.0}, {"east": 0.75 * SIDE, "north": 800.0}
+OPEN_WATER = {"north": -3000.0}  # south of the field, looking south
+LOOKS = {
+    "day": (ASTERN, None, {"start_utc": DAY}),
+    "twilight": (ASTERN, None, {"start_utc": TWILIGHT}),
+    "fog": (ASTERN, None, {"start_utc": DAY, "visibility_m": 300.0}),
+    "thin_ice": (AHEAD, ON_THIN, {"start_utc": DAY}),
+    "thick_ice": (AHEAD, ON_THICK, {"start_utc": DAY}),
+}
+
+
+def luminance(img: np.ndarray) -> np.ndarray:
+    return img.astype(float) @ np.array([0.2126, 0.7152, 0.0722])
+
+
+def row_at(c: ChannelSettings, depression: float) -> int:
+    """Pixel row, at the image's centre column, of a ray `depression` rad below the horizon."""
+    y_ndc = math.tan(-depression - math.radians(c.pitch_deg)) / math.tan(c.vfov() / 2)
+    return round((1 - y_ndc) / 2 * c.height - 0.5)
+
+
+def row_for_distance(c: ChannelSettings, distance: float) -> int:
+    """Pixel row showing the sea level `distance` m ahead of the eye."""
+    return row_at(c, math.atan2(c.eye[2], distance))
+
+
+def ssim(a: np.ndarray, b: np.ndarray) -> float:
+    """Mean structural similarity of two images' luminance (Wang et al. 2004: Gaussian
+    window of sigma 1.5 px, K1 = 0.01, K2 = 0.03, L = 255). scikit-image is not among the
+    project's dependencies, and these ten lines are its ``structural_similarity`` with
+    ``gaussian_weights=True``."""
+    x, y = luminance(a), luminance(b)
+    c1, c2 = (0.01 * 255) ** 2, (0.03 * 255) ** 2
+    f = lambda z: gaussian_filter(z, 1.5, truncate=3.5)
+    mx, my = f(x), f(y)
+    vx, vy, cxy = f(x * x) - mx * mx, f(y * y) - my * my, f(x * y) - mx * my
+    return float(np.mean((2 * mx * my + c1) * (2 * cxy + c2) / ((mx * mx + my * my + c1) * (vx + vy + c2))))
+
+
+def local_std(img: np.ndarray, row: int, window: int = 16) -> float:
+    """Median, along the row (3 rows deep), of the luminance deviation in windows `window` px wide."""
+    strip = luminance(img[row - 1: row + 2])
+    cols = strip.shape[1] // window * window
+    blocks = strip[:, :cols].reshape(3, -1, window).transpose(1, 0, 2).reshape(-1, 3 * window)
+    return float(np.median(blocks.std(axis=1)))
+
+
+def test_level_ice_has_texture_near_and_far(ctx, world):
+    img = render(ctx, world, AHEAD, ON_THICK, start_utc=DAY)
+    near, far = local_std(img, row_for_distance(AHEAD, 80.0)), local_std(img, row_for_distance(AHEAD, 1000.0))
+    assert near > 2.0 and far > 0.7, (near, far)
+
+
+def test_level_ice_does_not_repeat(ctx, world):
+    """Seen from 300 m straight down, the ice's brightness along east has no autocorrelation
+    peak at the tile period (50 m), twice it, or the noise fetches' periods."""
+    down = channel(pitch_deg=-60.0, eye=[0.0, 0.0, 300.0])
+    img = render(ctx, world, down, {**ON_THICK, "heading": 0.0}, start_utc=DAY)
+    strip = luminance(img[H // 2 - 4: H // 2 + 4]).mean(axis=0)
+    strip -= strip.mean()
+    metres_per_px = 300.0 / math.sin(math.radians(60.0)) * 2 * math.tan(math.radians(down.hfov_deg) / 2) / W
+    corr = np.correlate(strip, strip, "full")[W - 1:] / (strip @ strip)
+    assert strip.std() > 2.0
+    for period in (23.0, 50.0, 100.0):
+        lag = period / metres_per_px
+        assert corr[int(lag) - 1: int(lag) + 3].max() < 0.5, (period, corr[int(lag) - 1: int(lag) + 3])
+
+
+def test_floe_sides_show_near_the_ship(ctx, world):
+    def sides(img):
+        px = img[H // 2:].astype(int)
+        r, g, b = px[..., 0], px[..., 1], px[..., 2]
+        return float(((g - r > 12) & (b - r > 12) & (px.mean(axis=-1) < 170)).mean())
+    channel_view = sides(render(ctx, world, ASTERN, start_utc=DAY))
+    level_ice = sides(render(ctx, world, AHEAD, ON_THICK, start_utc=DAY))
+    assert channel_view > 0.01 and level_ice < 0.002, (channel_view, level_ice)
+
+
+def test_water_is_darker_than_ice_and_mirrors_the_sky_near_the_horizon(ctx, world):
+    stern = channel(yaw_deg=180.0, eye=[-80.0, 0.0, 20.0])
+    water = luminance(render(ctx, world, stern, OPEN_WATER, start_utc=DAY))[:, W // 4: 3 * W // 4].mean(axis=1)
+    bow = channel(eye=[10.0, 0.0, 20.0])
+    ice = luminance(render(ctx, world, bow, ON_THICK, start_utc=DAY))[:, : W // 4].mean(axis=1)
+    steep, grazing = math.radians(15.0), math.radians(1.0)
+    assert water[row_at(stern, steep)] < ice[row_at(bow, steep)] - 100
+    assert water[row_at(stern, grazing)] > water[row_at(stern, steep)] + 40  # Fresnel: more sky
+
+
+def test_fog_lowers_contrast_with_distance_as_the_visibility_says(ctx, world):
+    clear = render(ctx, world, AHEAD, ON_THICK, start_utc=DAY, visibility_m=100_000.0)
+    fog = render(ctx, world, AHEAD, ON_THICK, start_utc=DAY, visibility_m=1500.0)
+    cols = slice(W // 2 - 24, W // 2 + 24)
+    for distance in (100.0, 300.0, 700.0):
+        row = row_for_distance(AHEAD, distance)
+        slant = math.hypot(distance, AHEAD.eye[2])
+        c_clear = luminance(clear[row - 1: row + 2, cols]).std()
+        c_fog = luminance(fog[row - 1: row + 2, cols]).std()
+        expected = math.exp(-3 * slant / 1500.0) / math.exp(-3 * slant / 100_000.0)
+        assert abs(c_fog / c_clear - expected) < 0.08, (distance, c_fog / c_clear, expected)
+
+
+def test_horizon_and_floe_edges_are_anti_aliased(ctx, world):
+    # a pitch that puts the horizon through the middle of row 60: that row is a blend
+    c = channel(yaw_deg=180.0, eye=[-80.0, 0.0, 20.0])
+    y_ndc = 1 - 2 * 60.5 / H
+    c = c.model_copy(update={"pitch_deg": -math.degrees(math.atan(y_ndc * math.tan(c.vfov() / 2)))})
+    column = luminance(render(ctx, world, c, OPEN_WATER, start_utc=DAY, visibility_m=100_000.0))[:, W // 2]
+    sky, row, sea = column[58], column[60], column[62]
+    assert sea < row < sky and min(sky - row, row - sea) > 0.25 * (sky - sea), (sky, row, sea)
+    # floe edges: multisampling changes only pixels on edges, and smooths them
+    one, four = (render(ctx, world, ASTERN, start_utc=DAY, msaa_samples=s).astype(float) for s in (1, 4))
+    changed = np.abs(one - four).sum(axis=-1) > 30
+    assert 0.002 < changed.mean() < 0.2, changed.mean()
+
+    def roughness(img):
+        lum = luminance(img)
+        return (np.abs(np.diff(lum, axis=0))[:, :-1] + np.abs(np.diff(lum, axis=1))[:-1])[changed[:-1, :-1]].mean()
+    assert roughness(four) < 0.85 * roughness(one)
+
+
+def test_sun_follows_date_time_and_place():
+    def sun(iso, lat, lon):
+        az, el = sun_position(datetime.fromisoformat(iso), math.radians(lat), math.radians(lon))
+        return math.degrees(az), math.degrees(el)
+    az, el = sun("2024-03-20T12:00:00+00:00", 51.48, 0.0)  # Greenwich, equinox noon: 90 - 51.5 deg up
+    assert abs(el - 38.6) < 0.3 and abs(az - 180.0) < 3.0
+    assert sun("2024-06-21T22:40:00+00:00", 74.0, 20.0)[1] > 5.0  # midnight sun: polar day
+    assert sun("2024-12-21T10:40:00+00:00", 74.0, 20.0)[1] < -6.0  # noon of the polar night
+    skies = [sky_for(datetime.fromisoformat(t), math.radians(74.0), math.radians(20.0)) for t in
+             ("2026-04-10T10:40:00+00:00", "2026-04-10T19:30:00+00:00", "2026-12-21T22:00:00+00:00")]
+    lights = [sum(s.direct) + sum(s.ambient) for s in skies]
+    assert lights[0] > 2 * lights[1] > 4 * lights[2]  # day, twilight, night
+    assert skies[1].direct == (0.0, 0.0, 0.0)  # the sun below the horizon lights nothing directly
+
+
+def test_thin_ice_is_darker_than_thick_ice(ctx, world):
+    below = slice(row_for_distance(AHEAD, 400.0), row_for_distance(AHEAD, 60.0))
+    thin, thick = (luminance(render(ctx, world, AHEAD, at, start_utc=DAY))[below, : W // 4].mean()
+                   for at in (ON_THIN, ON_THICK))
+    assert thin < thick - 80, (thin, thick)
+
+
+@pytest.mark.parametrize("look", list(LOOKS))
+def test_look_matches_its_reference(ctx, world, look):
+    c, ship, settings = LOOKS[look]
+    img = render(ctx, world, c, ship, **settings)
+    path = REFERENCES / f"look_{look}.png"
+    if os.environ.get("ICEBRIDGE_UPDATE_LOOKS"):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        Image.fromarray(img).save(path, optimize=True)
+    reference = np.asarray(Image.open(path).convert("RGB"))
+    assert ssim(img, reference) >= SSIM_MIN
+    # the threshold tells the looks apart: every other look's reference fails it
+    for other in set(LOOKS) - {look}:
+        assert ssim(img, np.asarray(Image.open(REFERENCES / f"look_{other}.png").convert("RGB"))) < SSIM_MIN, other
+
+
+def test_bad_look_settings_are_clear_config_errors(tmp_path):
+    cfg = tmp_path / "bad.toml"
+    base = '[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n[render]\n'
+    cases = {"start_utc = 2026-04-10T10:40:00\n": "render.start_utc", "msaa_samples = 3\n": "render.msaa_samples = 3"}
+    for text, message in cases.items():
+        cfg.write_text(base + text)
+        r = run_cli("render-snapshot", "--config", str(cfg), "--time", "0")
+        assert r.returncode == 2 and message in r.stderr and str(cfg) in r.stderr, r.stderr
+        assert "Traceback" not in r.stderr
