@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import heapq
+import itertools
 import math
 import random
 import threading
@@ -85,7 +86,8 @@ class ConsoleLink(ABC):
         self.held: dict[str, Order] = {}  # channel -> latest order
         self.sent = Counter()  # orders given (corrupted, duplicated, dropped, delayed), garbage, frames written
         self._faults: list[tuple[Fault, random.Random]] = []
-        self._delayed: list[tuple[float, int, object]] = []
+        self._delayed: list[tuple[float, int, object]] = []  # (due s, sequence, wire item)
+        self._sequence = itertools.count()
         self._next_repeat = -math.inf
         self._active = False
 
@@ -142,11 +144,11 @@ class ConsoleLink(ABC):
         self.held[CHANNEL[order.kind]] = order
         self._send(order, now)
 
-    def inject(self, fault: Fault, rng: random.Random, now: float) -> None:
-        """Start ``fault`` (active until ``fault.end_s`` of the scenario clock the caller keeps)."""
+    def inject(self, fault: Fault, rng: random.Random) -> None:
+        """Start ``fault``; it lasts until ``clear`` (the caller keeps the scenario's clock)."""
         self._faults.append((fault, rng))
         if fault.kind == "garbage" and self.device is not None:
-            self._write_guarded(self._garbage(rng, fault.count), now)
+            self._write_guarded(self._garbage(rng, fault.count))
             self.sent["garbage"] += fault.count
         if fault.kind == "disconnect":
             self._release()
@@ -171,7 +173,7 @@ class ConsoleLink(ABC):
             for order in list(self.held.values()):
                 self._send(order, now)
         while self._delayed and self._delayed[0][0] <= now:
-            self._write_guarded([heapq.heappop(self._delayed)[2]], now)
+            self._write_guarded([heapq.heappop(self._delayed)[2]])
         try:
             return self._read(time.monotonic())  # stamped when read
         except DEVICE_ERRORS:
@@ -203,11 +205,12 @@ class ConsoleLink(ABC):
         if delay:
             self.sent["delayed"] += 1
             for item in items:
-                heapq.heappush(self._delayed, (now + delay, id(item), item))
+                heapq.heappush(self._delayed, (now + delay, next(self._sequence), item))
         else:
-            self._write_guarded(items, now)
+            self._write_guarded(items)
 
-    def _write_guarded(self, items: list, now: float) -> None:
+    def _write_guarded(self, items: list) -> None:
+        """Write wire items; a device that fails is released (and reopened at the next tick)."""
         if self.device is None:
             return
         try:

@@ -170,10 +170,10 @@ def play(console: Console, scenario: Scenario, path: str, bus_off: BusOff | None
         for i, (f, rng) in enumerate(faults):
             if i not in started and f.at_s <= t:
                 started.add(i)
-                _fault(console, f, rng, now, True, bus_off)
+                _fault(console, f, rng, True, bus_off)
             if i in started and i not in ended and f.end_s <= t:
                 ended.add(i)
-                _fault(console, f, rng, now, False, bus_off)
+                _fault(console, f, rng, False, bus_off)
         readings += console.tick(now)
         if t >= next_judge:
             next_judge = t + 0.25
@@ -183,19 +183,19 @@ def play(console: Console, scenario: Scenario, path: str, bus_off: BusOff | None
         time.sleep(TICK_S)
     for i, (f, rng) in enumerate(faults):  # faults never outlive their scenario
         if i in started and i not in ended:
-            _fault(console, f, rng, time.monotonic(), False, bus_off)
+            _fault(console, f, rng, False, bus_off)
     outcomes = [o if not o.pending else _unmet(o.expectation, readings, start) for o in outcomes]
     return ScenarioResult(scenario.name, path, outcomes, round(t, 2),
                           {role: dict(end.sent - sent_before[role]) for role, end in console.ends.items()})
 
 
-def _fault(console: Console, fault: Fault, rng: random.Random, now: float, begin: bool,
-           bus_off: BusOff | None) -> None:
+def _fault(console: Console, fault: Fault, rng: random.Random, begin: bool, bus_off: BusOff | None) -> None:
+    """Begin or end one fault on its console end (a bus-off through the bench)."""
     end = console.ends[fault.link]
     if fault.kind == "bus_off":
         bus_off(fault.link, begin)
     elif begin:
-        end.inject(fault, rng, now)
+        end.inject(fault, rng)
     else:
         end.clear(fault)
 
