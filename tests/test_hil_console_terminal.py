@@ -44,9 +44,11 @@ def test_keys_steer_and_the_echo_shows(tmp_path):
         try:
             heard, screen = exchange(node, terminal, 4.0)  # started, and steering midships, stop
             assert b"$RCROR,0.0,A,,V,B" in heard, screen.decode(errors="replace")
-            for key in b"ddw":
+            phases = {}
+            for key in b"ddwxxuug":
                 os.write(terminal, bytes([key]))
-                got = exchange(node, terminal, 0.3)
+                got = exchange(node, terminal, 0.5)
+                phases[len(phases)] = got[0]
                 heard, screen = heard + got[0], screen + got[1]
             os.write(terminal, b"q")
             proc.wait(10)
@@ -60,3 +62,8 @@ def test_keys_steer_and_the_echo_shows(tmp_path):
     assert b"$RCROR,10.0,A,,V,B" in heard  # two presses of d: 10 deg starboard
     assert b"$RCETL,,O,01,,B,0" in heard  # w from stop: dead slow ahead
     assert b"rudder -3.5 deg" in screen  # the echoed rudder angle
+    # faults from the keys: x corrupts the orders (out of range), u unplugs the console (nothing
+    # comes, then it is back), g sends a burst of garbage
+    assert b"$RCROR,120.0,A,,V,B" in phases[3] and b"$RCROR,120.0" not in phases[4][-200:]
+    assert phases[5].count(b"ROR") <= 1 and phases[6].count(b"$RCROR,10.0,A,,V,B") >= 3  # 10 Hz for 0.5 s
+    assert sum(b >= 0x80 for b in phases[7]) > 10 and b"UNPLUGGED" in screen

@@ -2,22 +2,23 @@
 console does, over the ends of a console config (CAN frames of the DBC or PGN 127245, NMEA
 0183 ROR/ETL/PRC, Modbus registers), and reads back the instrument outputs. With
 ``--script`` it plays scenario files and judges their expectations (exit 1 on a failure);
-without, it is steered from the keyboard with the echoed rudder angle, RPM, heading, rate of
-turn and alarms shown live."""
+without, it is steered from the keyboard, faults included, with the echoed rudder angle, RPM,
+heading, rate of turn and alarms shown live."""
 from __future__ import annotations
 
 import argparse
 import math
+import random
 import time
 from pathlib import Path
 
 from rich.console import Console as Terminal
 from rich.live import Live
 
-from bridge_node.hil.console_links import AlarmReading, Order, Reading
+from bridge_node.hil.console_links import AlarmReading, ConsoleLink, Order, Reading
 from bridge_node.hil.player import Console, play
 from bridge_node.hil.report import result_lines, write_junit
-from bridge_node.hil.scenario import load_scenario
+from bridge_node.hil.scenario import Fault, load_scenario
 from bridge_node.hil.settings import load_console_config
 from bridge_node.links.base import RUDDER, TELEGRAPH
 from bridge_node.node.config import DEFAULT_CONFIG
@@ -27,7 +28,10 @@ from sim_core.ship.particulars import TELEGRAPH_POSITIONS
 
 DEFAULT_CONSOLE = DEFAULT_CONFIG.parent / "console.toml"
 HELM_STEP_DEG, HELM_LIMIT_DEG = 5.0, 35.0
-KEYS_HELP = "keys: a/d helm 5 deg port/starboard | 0 midships | w/s telegraph up/down | q quit"
+KEYS_HELP = ("keys: a/d helm 5 deg port/starboard | 0 midships | w/s telegraph up/down | faults: u unplug/replug, "
+             "x corrupt orders on/off, g garbage burst | q quit")
+FAULT_KEYS = {"u": ("disconnect", "UNPLUGGED"), "x": ("corrupt", "CORRUPTING"), "g": ("garbage", "")}
+GARBAGE_COUNT = 50  # frames or bytes of one burst
 UNITS = {"rudder_angle": ("rudder", "deg", math.degrees(1.0)), "shaft_speed": ("shaft", "rpm", 60.0),
          "heading": ("heading", "deg", math.degrees(1.0)), "rate_of_turn": ("ROT", "deg/min", math.degrees(60.0))}
 
@@ -40,9 +44,38 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="wait this long for the node's outputs on every end (default: 30 s)")
 
 
+class _FaultKeys:
+    """Faults toggled from the keyboard on one console end (seeded: a session is repeatable)."""
+
+    def __init__(self, end: ConsoleLink) -> None:
+        self.end = end
+        self.rng = random.Random(0)
+        self.active: dict[str, Fault] = {}
+        self.note = ""  # why the last key did nothing
+
+    def press(self, key: str) -> None:
+        kind, _ = FAULT_KEYS[key]
+        if key in self.active:
+            self.end.clear(self.active.pop(key))
+            return
+        fault = Fault(at_s=0.0, link=self.end.role, kind=kind, duration_s=600.0, count=GARBAGE_COUNT)
+        self.note = self.end.unsupported(fault) or ""
+        if self.note:
+            return
+        self.end.inject(fault, self.rng)
+        if kind == "garbage":  # a burst, not a state
+            self.end.clear(fault)
+        else:
+            self.active[key] = fault
+
+    def status(self) -> str:
+        return "".join(f" | {FAULT_KEYS[k][1]}" for k in self.active) + (f" | {self.note}" if self.note else "")
+
+
 def _steer(console: Console, terminal: Terminal) -> None:
-    """Keyboard steering on the first order end until q (or Ctrl-C), with a live line."""
+    """Keyboard steering and faults on the first order end until q (or Ctrl-C), with a live line."""
     end = console.ends.get("primary") or next(iter(console.ends.values()))
+    faults = _FaultKeys(end)
     keys = KeyReader()
     if not keys.interactive:
         raise UserError("standard input is not a terminal: give --script SCENARIO to play a scenario instead")
@@ -64,6 +97,8 @@ def _steer(console: Console, terminal: Terminal) -> None:
                 elif key in "ws":
                     telegraph = max(0, min(len(TELEGRAPH_POSITIONS) - 1, telegraph + (1 if key == "w" else -1)))
                     end.order(Order(TELEGRAPH, TELEGRAPH_POSITIONS[telegraph]), time.monotonic())
+                elif key in FAULT_KEYS:
+                    faults.press(key)
             for r in console.tick(time.monotonic()):
                 if isinstance(r, Reading):
                     label, unit, factor = UNITS[r.quantity]
@@ -71,7 +106,8 @@ def _steer(console: Console, terminal: Terminal) -> None:
                 elif isinstance(r, AlarmReading):
                     alarms.pop(r.number, None) if not r.active else alarms.__setitem__(r.number, r.text)
             live.update(f"helm {helm:+.0f} deg | {TELEGRAPH_POSITIONS[telegraph]} | " + " | ".join(
-                shown[q] for q in UNITS if q in shown) + "".join(f" | ALARM {n:03d} {t}" for n, t in alarms.items()))
+                shown[q] for q in UNITS if q in shown) + "".join(f" | ALARM {n:03d} {t}" for n, t in alarms.items())
+                + faults.status())
             time.sleep(0.02)
 
 
