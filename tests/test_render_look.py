@@ -15,12 +15,16 @@ import numpy as np
 import pytest
 from conftest import REPO, exercise_config, run_cli
 from PIL import Image
-from scipy.ndimage import gaussian_filter
+from scipy.ndimage import binary_dilation, gaussian_filter
 
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, create_context
 from bridge_node.render.renderer import SceneRenderer
-from bridge_node.render.settings import ChannelSettings, RenderSettings
+from bridge_node.render.settings import (
+    ChannelSettings,
+    RenderSettings,
+    SearchlightSettings,
+)
 from bridge_node.render.sky import sky_for, sun_position
 from bridge_node.stream.world_view import WorldView
 from sim_core.world import snapshot, step
@@ -30,6 +34,8 @@ THIN, THICK = 0.05, 0.6  # m: the field's west and east halves
 SIDE = 1600.0  # m, the field's width and height
 DAY = datetime.fromisoformat("2026-04-10T10:40:00+00:00")  # 74 N 20 E: the sun 24 deg up in the south
 TWILIGHT = datetime.fromisoformat("2026-04-10T19:30:00+00:00")  # the sun 3 deg below the horizon
+NIGHT = datetime.fromisoformat("2026-12-21T22:00:00+00:00")  # polar night, the sun 35 deg below
+SEARCHLIGHT = SearchlightSettings(position=[20.0, 0.0, 30.0], depression_deg=10.0)  # ahead, 170 m out
 REFERENCES = REPO / "docs" / "images"
 SSIM_MIN = 0.95
 
@@ -82,6 +88,7 @@ LOOKS = {
     "fog": (ASTERN, None, {"start_utc": DAY, "visibility_m": 300.0}),
     "thin_ice": (AHEAD, ON_THIN, {"start_utc": DAY}),
     "thick_ice": (AHEAD, ON_THICK, {"start_utc": DAY}),
+    "night_searchlight": (AHEAD, ON_THICK, {"start_utc": NIGHT, "searchlights": [SEARCHLIGHT]}),
 }
 
 
@@ -194,6 +201,18 @@ def test_horizon_and_floe_edges_are_anti_aliased(ctx, world):
     assert roughness(four) < 0.85 * roughness(one)
 
 
+def test_at_night_only_the_searchlight_lights_the_ice(ctx, world):
+    dark = luminance(render(ctx, world, AHEAD, ON_THICK, start_utc=NIGHT))
+    lit = luminance(render(ctx, world, AHEAD, ON_THICK, start_utc=NIGHT, searchlights=[SEARCHLIGHT]))
+    assert dark.max() < 25
+    bright = lit > 60
+    assert 0.003 < bright.mean() < 0.15, bright.mean()  # dark but for the beam's spot
+    rows, cols = np.nonzero(bright)
+    spot = 170.0 + SEARCHLIGHT.position[0] - AHEAD.eye[0]  # m ahead of the eye
+    assert abs(rows.mean() - row_for_distance(AHEAD, spot)) < 8 and abs(cols.mean() - W / 2) < 8
+    assert not (lit > 35)[~binary_dilation(bright, iterations=8)].any()  # nothing but the spot and its rim
+
+
 def test_sun_follows_date_time_and_place():
     def sun(iso, lat, lon):
         az, el = sun_position(datetime.fromisoformat(iso), math.radians(lat), math.radians(lon))
@@ -234,7 +253,8 @@ def test_look_matches_its_reference(ctx, world, look):
 def test_bad_look_settings_are_clear_config_errors(tmp_path):
     cfg = tmp_path / "bad.toml"
     base = '[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n[render]\n'
-    cases = {"start_utc = 2026-04-10T10:40:00\n": "render.start_utc", "msaa_samples = 3\n": "render.msaa_samples = 3"}
+    cases = {"start_utc = 2026-04-10T10:40:00\n": "render.start_utc", "msaa_samples = 3\n": "render.msaa_samples = 3",
+             "[[render.searchlights]]\ndepression_deg = 90.0\n": "render.searchlights.0.depression_deg = 90.0"}
     for text, message in cases.items():
         cfg.write_text(base + text)
         r = run_cli("render-snapshot", "--config", str(cfg), "--time", "0")

@@ -34,7 +34,11 @@ from bridge_node.render.camera import (
     visible_boxes,
 )
 from bridge_node.render.meshes import cell_rasters, cell_vertices, ship_vertices
-from bridge_node.render.settings import ChannelSettings, RenderSettings
+from bridge_node.render.settings import (
+    MAX_SEARCHLIGHTS,
+    ChannelSettings,
+    RenderSettings,
+)
 from bridge_node.render.sky import Sky, sky_for
 from bridge_node.render.textures import relief_noise
 from bridge_node.stream.world_view import WorldView
@@ -50,6 +54,7 @@ RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m 
 WATER = (0.04, 0.09, 0.11)  # the sea's body colour (albedo of the light it sends back up)
 DECK, HULL = (0.35, 0.38, 0.36), (0.55, 0.12, 0.10)
 NOISE_UNIT, THICKNESS_UNIT = 8, 9  # texture units of the relief noise and the tile thicknesses
+EYE_WHITE_LUX = 40.0  # lux a surface needs to look white to eyes adapted to the night
 
 
 class _FloeBuffer:
@@ -228,7 +233,7 @@ class SceneRenderer:
         sky = self.sky
         common = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "sun": sky.sun, "direct": sky.direct,
                   "ambient": sky.ambient, "zenith_colour": sky.zenith, "horizon_colour": sky.horizon,
-                  "noise": NOISE_UNIT, "water_colour": WATER}
+                  "noise": NOISE_UNIT, "water_colour": WATER, **self._searchlights(north, east, psi)}
         ctx.clear(*sky.horizon, depth=1.0)
         self.tile_info.use(0)
         self.cell_raster.use(3)
@@ -262,6 +267,22 @@ class SceneRenderer:
         self.env_vao.render()
         self._blend_bands(channel, blend)
         return cam
+
+    def _searchlights(self, north: float, east: float, psi: float) -> dict:
+        """The searchlights' uniforms for the ship's pose: world positions, beam axes, the
+        cosines of half their beams, and their intensities over the illuminance the eye
+        sees as white (the daylight's, or EYE_WHITE_LUX at night)."""
+        n = MAX_SEARCHLIGHTS  # the shaders' arrays are filled whole
+        pos, axis, cos, power = [(0.0, 0.0, 0.0)] * n, [(0.0, 0.0, 1.0)] * n, [1.0] * n, [0.0] * n
+        to_world = ship_matrix(north, east, psi)
+        for k, light in enumerate(self.settings.searchlights):
+            az, el = psi + math.radians(light.bearing_deg), -math.radians(light.depression_deg)
+            pos[k] = tuple((to_world @ np.array([*light.position, 1.0]))[:3])
+            axis[k] = (math.sin(az) * math.cos(el), math.cos(az) * math.cos(el), math.sin(el))
+            cos[k] = math.cos(math.radians(light.beam_deg) / 2)
+            power[k] = light.intensity_cd / max(self.sky.illuminance, EYE_WHITE_LUX)
+        return {"lights": len(self.settings.searchlights), "light_pos": pos, "light_axis": axis,
+                "light_cos": cos, "light_power": power}
 
     def _blend_bands(self, channel: ChannelSettings, blend: moderngl.Texture) -> None:
         """Multiply the columns of the blend bands by their factors (a pass over the bands

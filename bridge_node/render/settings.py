@@ -56,6 +56,20 @@ def _front_channels() -> list[ChannelSettings]:
             ChannelSettings(name="astern", yaw_deg=180.0, eye=[-60.0, 0.0, 25.0])]
 
 
+MAX_SEARCHLIGHTS = 4
+
+
+class SearchlightSettings(Params):
+    """One of the own ship's searchlights: where it stands, where it points, its beam."""
+
+    position: list[float] = Field(default_factory=lambda: [20.0, 0.0, 30.0], min_length=3, max_length=3,
+                                  description="ship frame, m")
+    bearing_deg: float = Field(0.0, ge=-180.0, le=180.0, description="from the bow, + starboard")
+    depression_deg: float = Field(8.0, ge=0.0, le=60.0, description="below the horizontal")
+    beam_deg: float = Field(8.0, gt=0.5, le=60.0, description="full width of the beam's cone")
+    intensity_cd: float = Field(2.0e6, gt=0.0, le=1.0e9, description="luminous intensity on the axis, cd")
+
+
 class RenderSettings(Params):
     """The projection system and the environment's look."""
 
@@ -65,6 +79,8 @@ class RenderSettings(Params):
     start_utc: AwareDatetime = Field(datetime.fromisoformat("2026-04-10T10:40:00+00:00"),
                                      description="date and time (with its UTC offset) the exercise starts at: "
                                                  "with the position, it sets the sun and the sky")
+    searchlights: list[SearchlightSettings] = Field(
+        default_factory=list, max_length=MAX_SEARCHLIGHTS, description="the own ship's searchlights, always on")
     msaa_samples: Literal[1, 4] = Field(
         4, description="multisample anti-aliasing samples per pixel (Mesa llvmpipe offers 4 at most)")
     freeboard_m: float = Field(9.0, ge=0.5, le=40.0, description="own ship's deck height above the waterline")

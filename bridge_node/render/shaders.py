@@ -6,10 +6,12 @@ the blend bands only, multiplying what is there by each column's factor.
 Looks: level ice and floe tops are snow (or, thin, grey nilas) with relief and albedo from
 octaves of procedural noise; floe sides show the blue-green of sea ice, turquoise under
 the water and darkened at the waterline; the sea reflects the sky by Fresnel through slight
-waves; everything is lit by the sun and the sky of the moment and fogged by the visibility.
+waves; everything is lit by the sun and the sky of the moment and the own ship's
+searchlights, and fogged by the visibility.
 """
 import math
 
+from bridge_node.render.settings import MAX_SEARCHLIGHTS
 from bridge_node.render.textures import NOISE_RANGE
 
 
@@ -50,10 +52,29 @@ vec3 sky(vec3 dir) {
     vec3 glow = direct * (0.25 * pow(c, 8.0) + 4.0 * smoothstep(0.99996, 0.99999, c));
     return mix(horizon_colour, zenith_colour, sqrt(max(dir.z, 0.0))) + glow;
 }
-vec3 lit(vec3 albedo, vec3 n) {
+const int MAX_LIGHTS = """ + str(MAX_SEARCHLIGHTS) + """;
+uniform int lights;                     // the own ship's searchlights
+uniform vec3 light_pos[MAX_LIGHTS];     // world, m
+uniform vec3 light_axis[MAX_LIGHTS];    // unit
+uniform float light_cos[MAX_LIGHTS];    // cosine of half the beam
+uniform float light_power[MAX_LIGHTS];  // intensity over the illuminance the eye sees as white, m2
+// the searchlights' light on a surface at `world` facing n (a xenon lamp's white), soft at
+// the beam's edge and falling with the square of the distance
+vec3 searchlit(vec3 world, vec3 n) {
+    float e = 0.0;
+    for (int k = 0; k < lights; k++) {
+        vec3 d = world - light_pos[k];
+        float dist2 = max(dot(d, d), 1.0);
+        vec3 l = d * inversesqrt(dist2);
+        float cone = smoothstep(light_cos[k], 0.5 * (light_cos[k] + 1.0), dot(l, light_axis[k]));
+        e += light_power[k] * cone * max(dot(n, -l), 0.0) / dist2;
+    }
+    return vec3(1.0, 0.97, 0.92) * e;
+}
+vec3 lit(vec3 albedo, vec3 n, vec3 world) {
     // soft (wrapped) diffuse light: faces turned a little away from the sun still get some
     float d = max((dot(n, sun) + 0.25) / 1.25, 0.0);
-    return albedo * (direct * d + ambient);
+    return albedo * (direct * d + ambient + searchlit(world, n));
 }
 // The noise under p (m), one fetch per octave; called in uniform control flow, as the
 // fetches' mip levels come from screen derivatives (finer features fade to their mean).
@@ -78,10 +99,10 @@ vec3 ice_albedo(float h) {
 }
 // snow relief depth by thickness: slight on nilas, full on snow-covered ice
 float snow_depth(float h) { return mix(0.15, 1.0, smoothstep(0.1, 0.4, h)); }
-vec3 ice_surface(vec3 noise[OCTAVES], float h) {
+vec3 ice_surface(vec3 noise[OCTAVES], float h, vec3 world) {
     float albedo;
     vec3 n = relief(noise, snow_depth(h), albedo);
-    return lit(ice_albedo(h) * albedo, n);
+    return lit(ice_albedo(h) * albedo, n, world);
 }
 uniform vec3 water_colour;
 // the sea seen along r through a surface of normal n: its body (what is under it) and the
@@ -93,7 +114,9 @@ vec3 through_surface(vec3 r, vec3 n, vec3 body) {
     float fresnel = 0.02 + 0.68 * pow(1.0 - max(dot(-r, n), 0.0), 5.0);
     return mix(body, sky(mirror), fresnel);
 }
-vec3 water_body() { return water_colour * (direct * max(sun.z, 0.0) + ambient); }
+vec3 water_body(vec3 world) {
+    return water_colour * (direct * max(sun.z, 0.0) + ambient + searchlit(world, vec3(0.0, 0.0, 1.0)));
+}
 vec4 opaque(vec3 colour) { return vec4(colour, 1.0); }
 """
 
@@ -136,10 +159,10 @@ bool level_ice(vec2 p, ivec2 tile) {
     return texelFetch(status, ivec2(row % pose_width, row / pose_width), 0).r == 0u;
 }
 const float WAVE_SLOPE = 0.04;
-vec3 sea(vec3 r, vec3 noise[OCTAVES]) {
+vec3 sea(vec3 r, vec3 noise[OCTAVES], vec3 world) {
     // the finest relief octave as slight waves
     vec2 slope = WAVE_SLOPE / length(OCTAVE[0][0]) * (noise[0].yz * OCTAVE[0]);
-    return through_surface(r, normalize(vec3(-slope, 1.0)), water_body());
+    return through_surface(r, normalize(vec3(-slope, 1.0)), water_body(world));
 }
 void main() {
     vec3 r = normalize(ray);
@@ -157,10 +180,12 @@ void main() {
     ivec2 tile = ivec2(floor(p / tile_side));
     bool on_field = t < far && p.x >= 0.0 && p.y >= 0.0 && p.x < field_size.x && p.y < field_size.y;
     vec3 ground;
-    if (on_field && level_ice(p, tile))
-        ground = fogged(ice_surface(noise, texelFetch(tile_thickness, tile, 0).r), vec3(p, slab_z));
-    else  // the sea, out to the horizon
-        ground = fogged(sea(g, noise), eye - g * eye.z / g.z);
+    if (on_field && level_ice(p, tile)) {
+        ground = fogged(ice_surface(noise, texelFetch(tile_thickness, tile, 0).r, vec3(p, slab_z)), vec3(p, slab_z));
+    } else {  // the sea, out to the horizon
+        vec3 at = eye - g * eye.z / g.z;
+        ground = fogged(sea(g, noise, at), at);
+    }
     colour = opaque(mix(above, ground, below));
 }
 """
@@ -212,14 +237,14 @@ void main() {
     if (top == 1) {
         float albedo;
         vec3 bump = relief(noise, snow_depth(thickness), albedo);
-        c = lit(ice_albedo(thickness) * albedo, normalize(n + vec3(bump.xy, 0.0)));
+        c = lit(ice_albedo(thickness) * albedo, normalize(n + vec3(bump.xy, 0.0)), world);
     } else {
-        c = lit(mix(vec3(0.42, 0.50, 0.53), vec3(0.30, 0.62, 0.64), smoothstep(0.1, 0.5, thickness)), n);
+        c = lit(mix(vec3(0.42, 0.50, 0.53), vec3(0.30, 0.62, 0.64), smoothstep(0.1, 0.5, thickness)), n, world);
     }
     vec3 r = normalize(world - eye);
     if (world.z < 0.0)
         c = through_surface(r, vec3(0.0, 0.0, 1.0),
-                            mix(c * vec3(0.45, 0.85, 0.85), water_body(), 1.0 - exp(world.z / 0.4)));
+                            mix(c * vec3(0.45, 0.85, 0.85), water_body(world), 1.0 - exp(world.z / 0.4)));
     else
         c *= mix(0.45, 1.0, smoothstep(0.0, 0.06, world.z));  // wet, dark waterline
     colour = opaque(fogged(c, world));
@@ -248,7 +273,7 @@ in vec3 normal;
 out vec4 colour;
 void main() {
     vec3 n = normalize(normal);
-    colour = opaque(fogged(lit(abs(n.z) > 0.5 ? deck_colour : hull_colour, n), world));
+    colour = opaque(fogged(lit(abs(n.z) > 0.5 ? deck_colour : hull_colour, n, world), world));
 }
 """
 

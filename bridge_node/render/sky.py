@@ -1,7 +1,8 @@
 """The sun and the sky of the exercise: the sun's direction from the date, time and place
 (NOAA's solar position equations, after Meeus: better than 0.1 deg for 1900-2100), and the
 light it gives: sky colours at the zenith and the horizon, the direct light's colour and
-the sky's ambient light, from polar day through twilight to polar night."""
+the sky's ambient light, from polar day through twilight to polar night, and the daylight's
+illuminance, against which the eye judges a searchlight."""
 from __future__ import annotations
 
 import math
@@ -50,6 +51,7 @@ _HORIZON = np.array([[0.02, 0.025, 0.04], [0.05, 0.06, 0.10], [0.30, 0.24, 0.30]
                      [0.85, 0.72, 0.60], [0.82, 0.84, 0.86], [0.78, 0.84, 0.90], [0.76, 0.83, 0.92]])
 _DIRECT = np.array([[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0.55, 0.40, 0.25],
                     [0.80, 0.68, 0.52], [0.90, 0.87, 0.82], [0.95, 0.93, 0.90]])
+_ILLUMINANCE = np.array([0.002, 0.01, 3.0, 100.0, 1000.0, 1.0e4, 4.0e4, 8.0e4])  # lux, on the ground
 _AMBIENT = np.array([[0.02, 0.025, 0.04], [0.04, 0.05, 0.09], [0.17, 0.18, 0.28], [0.36, 0.34, 0.40],
                      [0.40, 0.40, 0.46], [0.36, 0.38, 0.44], [0.36, 0.39, 0.45], [0.38, 0.41, 0.48]])
 
@@ -57,13 +59,15 @@ _AMBIENT = np.array([[0.02, 0.025, 0.04], [0.04, 0.05, 0.09], [0.17, 0.18, 0.28]
 @dataclass(frozen=True)
 class Sky:
     """The light of one moment: sun direction (world x east, y north, z up, unit), colours
-    of the zenith and horizon, the sun's direct light and the sky's ambient light."""
+    of the zenith and horizon, the sun's direct light and the sky's ambient light (display
+    values), and the daylight's illuminance."""
 
     sun: tuple[float, float, float]
     zenith: tuple[float, float, float]
     horizon: tuple[float, float, float]
     direct: tuple[float, float, float]
     ambient: tuple[float, float, float]
+    illuminance: float  # lux: the daylight on the ground
 
 
 def sky_for(utc: datetime, lat: float, lon: float) -> Sky:
@@ -77,4 +81,5 @@ def sky_for(utc: datetime, lat: float, lon: float) -> Sky:
     # the light comes from the sun's visible disc: never from below the horizon
     lit = max(elevation, 0.02)
     sun = (math.sin(azimuth) * math.cos(lit), math.cos(azimuth) * math.cos(lit), math.sin(lit))
-    return Sky(sun, at(_ZENITH), at(_HORIZON), at(_DIRECT), at(_AMBIENT))
+    illuminance = float(np.exp(np.interp(deg, _ELEVATIONS, np.log(_ILLUMINANCE))))
+    return Sky(sun, at(_ZENITH), at(_HORIZON), at(_DIRECT), at(_AMBIENT), illuminance)
