@@ -81,6 +81,7 @@ class WorldData:
     ice: IceData
     scene: SceneData
     time: float = 0.0  # s
+    epoch: float = 0.0  # UTC of time 0, unix s: the exercise clock the outputs carry (the node sets it)
     seq: int = 0  # steps taken
     last_hull_break: float = -math.inf  # s
     live_rows: np.ndarray = field(default_factory=lambda: _NO_ROWS)  # rows of the breakable tiles
@@ -325,7 +326,7 @@ def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> 
     """Events with the ship's outputs, the given rows' poses and statuses, and counts."""
     st = data.ice.state
     pose = np.column_stack([st.xy[rows], st.heave[rows], st.yaw[rows], st.roll[rows], st.pitch[rows]])
-    return WorldEvents(seq=data.seq, time=data.time, ship=ship_outputs(data.ship, data.time, *model.origin),
+    return WorldEvents(seq=data.seq, time=data.time, ship=ship_outputs(data.ship, data.time, *model.origin, data.epoch + data.time),
                        floe_rows=rows, floe_pose=pose, floe_status=st.status[rows].copy(),
                        floes_free=st.count(FloeStatus.FREE), floes_frozen=st.count(FloeStatus.FROZEN), **fields)
 

@@ -3,6 +3,7 @@ log), AIS (two vessels, one picked by MMSI), CSV and GPX logs of one synthetic v
 the ship along the logged positions and break the ice; bad data is reported, never fatal;
 user mistakes are one-line errors."""
 import csv
+import time
 import json
 import math
 
@@ -199,3 +200,31 @@ def test_csv_columns_by_mapping(capsys, tmp_path, exercise):
     assert errors.max() < 1.0
     speed = np.array([float(r["sog_kn"]) for r in csv.DictReader((tmp_path / "out" / "replay_track.csv").open())])
     assert np.all(np.abs(speed - 6.0) < 0.05) and math.isfinite(speed.sum())
+
+
+def test_replayed_sentences_carry_the_logged_time(capsys, tmp_path, exercise):
+    """A chart plotter watching a replay sees the voyage's own UTC in RMC, not today's."""
+    import re
+    import socket
+
+    port = int(re.search(r"udp_port = (\d+)", exercise.read_text()).group(1))
+    fixes = voyage()
+    (tmp_path / "voyage.nmea").write_text("\n".join(nmea_lines(fixes)) + "\n")
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as listener:
+        listener.bind(("127.0.0.1", port))
+        listener.settimeout(0.5)
+        code, _, err = replay(capsys, exercise, tmp_path / "out", tmp_path / "voyage.nmea", "--max")
+        assert code == 0, err
+        received = []
+        try:
+            while True:
+                received += listener.recv(65536).decode("ascii").split("\r\n")
+        except TimeoutError:
+            pass
+    rmc = [s.split(",") for s in received if s[3:6] == "RMC"]
+    assert rmc
+    logged = {time.strftime("%d%m%y", time.gmtime(f.t)) for f in fixes}
+    assert {r[9] for r in rmc} <= logged  # the log's date (2023-11-14), not the wall clock's
+    first = time.strftime("%H%M%S", time.gmtime(fixes[0].t))
+    last = time.strftime("%H%M%S", time.gmtime(fixes[-1].t + 1))
+    assert all(first <= r[1][:6] <= last for r in rmc)

@@ -71,7 +71,7 @@ def _monitor(hub: LinkHub, ship: ShipModel, data: ShipData, origin: tuple[float,
             hub.raise_alarm(alarm, now)
         step(ship, data, TICK_S)
         sim_time += TICK_S
-        hub.publish(ship_outputs(data, sim_time, *origin), now)
+        hub.publish(ship_outputs(data, sim_time, *origin, time.time()), now)
         if live is not None:
             live.update(_view(hub, data, now))
         next_tick += TICK_S

@@ -15,6 +15,7 @@ import dataclasses
 import datetime as dt
 import json
 import math
+import time
 from contextlib import nullcontext
 from pathlib import Path
 
@@ -138,6 +139,7 @@ def _track_replay(cfg: NodeConfig, args: argparse.Namespace, log: TrackLog, orig
     source = TrackSource(path, t0, t1, r.step_s)
     pose = path.pose(t0, r.step_s)
     data = new_world_data(model, pose.north, pose.east, pose.heading, pose.surge)
+    data.epoch = t0 if log.absolute else time.time()  # the outputs carry the logged UTC where the log has it
     info = {"kind": "track", "files": log.files, "vessel": log.vessel, "heading_from": track.heading_source,
             "records_read": dict(log.read), "records_ignored": dict(log.ignored), "bad_data": dict(log.bad),
             "gaps_held": [{"from": logged_text(g.start, log.absolute), "to": logged_text(g.end, log.absolute),
@@ -171,7 +173,9 @@ def _session_replay(cfg: NodeConfig, args: argparse.Namespace, session: Recorded
     info = {"kind": "session", "files": [str(session.folder / f) for f in session.files],
             "ticks": len(session.ticks), "exact": session.exact, "inputs_read": dict(session.reads),
             "bad_data": dict(session.bad)}
-    return _Prepared(model, start_world(model, cfg), source, seek, info)
+    data = start_world(model, cfg)
+    data.epoch = session.ticks[0].unix  # the outputs carry the recorded run's UTC
+    return _Prepared(model, data, source, seek, info)
 
 
 def _summary(prep: _Prepared, stats: ReplayStats, playback: Playback) -> dict:

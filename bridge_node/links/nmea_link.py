@@ -50,6 +50,7 @@ class NmeaLink(Link):
         self._budget = settings.baudrate / 10.0  # characters per second, 8N1
         self._tokens = self._budget
         self._last_refill = time.monotonic()
+        self._clock_offset = 0.0  # exercise UTC minus the wall clock, s
 
     def open(self) -> None:
         if self.settings.sends_udp() and self._udp is None:
@@ -121,8 +122,14 @@ class NmeaLink(Link):
             self._report("tx", s)
             self._health.outputs += 1
 
+    def _utc(self) -> dt.datetime:
+        """The exercise clock (the outputs' UTC, which a replay takes from its log)."""
+        return dt.datetime.fromtimestamp(time.time() + self._clock_offset, dt.timezone.utc)
+
     def publish(self, state: ShipOutputs, now: float) -> None:
-        utc = dt.datetime.now(dt.timezone.utc)
+        if state.utc > 0.0:
+            self._clock_offset = state.utc - time.time()
+        utc = self._utc()
         sentences = render_outputs(self._schedule.due(now), state, utc, self._talkers)
         if self._ais is not None:
             sentences += self._ais.own_ship(state, now, utc)
@@ -131,8 +138,8 @@ class NmeaLink(Link):
 
     def publish_vessels(self, vessels: list[Vessel], now: float) -> None:
         if self._ais is not None and vessels:
-            self._send(self._ais.others(vessels, now, dt.datetime.now(dt.timezone.utc)), now)
+            self._send(self._ais.others(vessels, now, self._utc()), now)
 
     def publish_alarm(self, alarm: Alarm, now: float) -> None:
         talker = self._talkers.get("ALR", "II")
-        self._send([render_alarm(alarm, dt.datetime.now(dt.timezone.utc), talker)], now)
+        self._send([render_alarm(alarm, self._utc(), talker)], now)

@@ -6,6 +6,7 @@ shown by the caller's ``rich`` progress bar when one is given).
 from __future__ import annotations
 
 import math
+import time
 from pathlib import Path
 
 import numpy as np
@@ -86,7 +87,9 @@ def start_position(model: WorldModel, cfg: NodeConfig) -> tuple[float, float]:
 
 def start_world(model: WorldModel, cfg: NodeConfig) -> WorldData:
     """World data at the configured start (``start_position``), heading, speed and
-    telegraph order."""
+    telegraph order, its exercise clock starting at the wall clock's UTC now."""
     ex = cfg.exercise
-    return new_world_data(model, *start_position(model, cfg), math.radians(ex.start_heading_deg),
+    data = new_world_data(model, *start_position(model, cfg), math.radians(ex.start_heading_deg),
                           ex.start_speed_kn * KNOT, ex.start_telegraph)
+    data.epoch = time.time()
+    return data

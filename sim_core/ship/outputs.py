@@ -27,14 +27,15 @@ class ShipOutputs:
     rudder_angle: float  # rad, + to starboard
     shaft_rps: float  # rev/s, - astern
     ice_resistance: float  # N
+    utc: float = 0.0  # the exercise clock: UTC of this state, unix s
 
     def as_dict(self) -> dict:
         return asdict(self)
 
 
-def ship_outputs(data: ShipData, time: float, lat0: float, lon0: float) -> ShipOutputs:
-    """Outputs of the ship at its current state at simulated time (s); origin (lat0, lon0)
-    in radians."""
+def ship_outputs(data: ShipData, time: float, lat0: float, lon0: float, utc: float = 0.0) -> ShipOutputs:
+    """Outputs of the ship at its current state at simulated time (s) and exercise UTC
+    (unix s); origin (lat0, lon0) in radians."""
     north, east, psi = float(data.eta[0]), float(data.eta[1]), float(data.eta[5])
     u, v, r = float(data.nu[0]), float(data.nu[1]), float(data.nu[5])
     ve, vn = ship_vector_to_world((u, v), psi)
@@ -44,5 +45,5 @@ def ship_outputs(data: ShipData, time: float, lat0: float, lon0: float) -> ShipO
         time=time, north=north, east=east, latitude=lat, longitude=lon,
         heading=psi % two_pi, course_over_ground=math.atan2(ve, vn) % two_pi,
         speed_over_ground=math.hypot(vn, ve), speed_longitudinal=u, speed_transverse=v,
-        rate_of_turn=r, rudder_angle=data.rudder, shaft_rps=data.rps, ice_resistance=data.ice_resistance,
+        rate_of_turn=r, rudder_angle=data.rudder, shaft_rps=data.rps, ice_resistance=data.ice_resistance, utc=utc,
     )
