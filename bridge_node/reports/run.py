@@ -32,11 +32,12 @@ def plot_run(stats: LoopStats, path: Path) -> Path:
     bx.legend(fontsize=8)
     bx.grid(alpha=0.3)
     mem = np.array([r for r in stats.memory if r[2] is not None]).reshape(-1, 3)
+    by_frozen = len(mem) > 0 and np.ptp(mem[:, 1]) > 0  # before any floe froze, against time
     if len(mem):
-        cx.plot(mem[:, 1], mem[:, 2], ".-", ms=2, lw=0.5, color="C2")
+        cx.plot(mem[:, 1 if by_frozen else 0], mem[:, 2], ".-", ms=2, lw=0.5, color="C2")
     slope = stats.memory_summary()["mib_per_1000_frozen"]
     cx.set_title("resident memory" + (f": {slope} MiB per 1000 frozen floes" if slope is not None else ""))
-    cx.set_xlabel("frozen floes")
+    cx.set_xlabel("frozen floes" if by_frozen else "simulated time, s (no floe frozen yet)")
     cx.set_ylabel("resident memory, MiB")
     cx.grid(alpha=0.3)
     fig.tight_layout()
