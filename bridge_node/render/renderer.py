@@ -35,7 +35,6 @@ from bridge_node.render.camera import (
 )
 from bridge_node.render.meshes import cell_rasters, cell_vertices, ship_vertices
 from bridge_node.render.settings import (
-    MAX_SEARCHLIGHTS,
     ChannelSettings,
     RenderSettings,
 )
@@ -93,9 +92,12 @@ class SceneRenderer:
     def __init__(self, ctx: moderngl.Context, model: WorldModel, settings: RenderSettings) -> None:
         self.ctx, self.model, self.settings = ctx, model, settings
         scene = model.scene
-        self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=shaders.ENV_FS)
-        self.floe = ctx.program(vertex_shader=shaders.FLOE_VS, fragment_shader=shaders.FLOE_FS)
-        self.ship = ctx.program(vertex_shader=shaders.SHIP_VS, fragment_shader=shaders.SHIP_FS)
+        lights = len(settings.searchlights)
+        self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=shaders.with_lights(shaders.ENV_FS, lights))
+        self.floe = ctx.program(vertex_shader=shaders.FLOE_VS,
+                                fragment_shader=shaders.with_lights(shaders.FLOE_FS, lights))
+        self.ship = ctx.program(vertex_shader=shaders.SHIP_VS,
+                                fragment_shader=shaders.with_lights(shaders.SHIP_FS, lights))
         self.band = ctx.program(vertex_shader=shaders.BAND_VS, fragment_shader=shaders.BAND_FS)
         self.band_buf = ctx.buffer(reserve=2 * 6 * 2 * 4)
         self.band_vao = ctx.vertex_array(self.band, [(self.band_buf, "2f", "in_ndc")])
@@ -272,17 +274,16 @@ class SceneRenderer:
         """The searchlights' uniforms for the ship's pose: world positions, beam axes, the
         cosines of half their beams, and their intensities over the illuminance the eye
         sees as white (the daylight's, or EYE_WHITE_LUX at night)."""
-        n = MAX_SEARCHLIGHTS  # the shaders' arrays are filled whole
-        pos, axis, cos, power = [(0.0, 0.0, 0.0)] * n, [(0.0, 0.0, 1.0)] * n, [1.0] * n, [0.0] * n
+        n = max(len(self.settings.searchlights), 1)  # the shaders' arrays (see shaders.with_lights), filled whole
+        pos, axis, cos, power = np.zeros((n, 3)), np.zeros((n, 3)), np.ones(n), np.zeros(n)
         to_world = ship_matrix(north, east, psi)
         for k, light in enumerate(self.settings.searchlights):
             az, el = psi + math.radians(light.bearing_deg), -math.radians(light.depression_deg)
-            pos[k] = tuple((to_world @ np.array([*light.position, 1.0]))[:3])
-            axis[k] = (math.sin(az) * math.cos(el), math.cos(az) * math.cos(el), math.sin(el))
+            pos[k] = (to_world @ np.array([*light.position, 1.0]))[:3]
+            axis[k] = math.sin(az) * math.cos(el), math.cos(az) * math.cos(el), math.sin(el)
             cos[k] = math.cos(math.radians(light.beam_deg) / 2)
             power[k] = light.intensity_cd / max(self.sky.illuminance, EYE_WHITE_LUX)
-        return {"lights": len(self.settings.searchlights), "light_pos": pos, "light_axis": axis,
-                "light_cos": cos, "light_power": power}
+        return {"light_pos": pos, "light_axis": axis, "light_cos": cos, "light_power": power}
 
     def _blend_bands(self, channel: ChannelSettings, blend: moderngl.Texture) -> None:
         """Multiply the columns of the blend bands by their factors (a pass over the bands
@@ -333,5 +334,7 @@ class SceneRenderer:
                 continue
             if isinstance(value, np.ndarray) and value.shape == (4, 4):
                 set_matrix(prog[name], value)
+            elif isinstance(value, np.ndarray):  # a uniform array, written whole
+                prog[name].write(value.astype("f4").tobytes())
             else:
                 prog[name].value = value

@@ -11,7 +11,6 @@ searchlights, and fogged by the visibility.
 """
 import math
 
-from bridge_node.render.settings import MAX_SEARCHLIGHTS
 from bridge_node.render.textures import NOISE_RANGE
 
 
@@ -52,17 +51,15 @@ vec3 sky(vec3 dir) {
     vec3 glow = direct * (0.25 * pow(c, 8.0) + 4.0 * smoothstep(0.99996, 0.99999, c));
     return mix(horizon_colour, zenith_colour, sqrt(max(dir.z, 0.0))) + glow;
 }
-const int MAX_LIGHTS = """ + str(MAX_SEARCHLIGHTS) + """;
-uniform int lights;                     // the own ship's searchlights
-uniform vec3 light_pos[MAX_LIGHTS];     // world, m
-uniform vec3 light_axis[MAX_LIGHTS];    // unit
-uniform float light_cos[MAX_LIGHTS];    // cosine of half the beam
-uniform float light_power[MAX_LIGHTS];  // intensity over the illuminance the eye sees as white, m2
+uniform vec3 light_pos[LIGHT_SLOTS];     // world, m
+uniform vec3 light_axis[LIGHT_SLOTS];    // unit
+uniform float light_cos[LIGHT_SLOTS];    // cosine of half the beam
+uniform float light_power[LIGHT_SLOTS];  // intensity over the illuminance the eye sees as white, m2
 // the searchlights' light on a surface at `world` facing n (a xenon lamp's white), soft at
 // the beam's edge and falling with the square of the distance
 vec3 searchlit(vec3 world, vec3 n) {
     float e = 0.0;
-    for (int k = 0; k < lights; k++) {
+    for (int k = 0; k < LIGHTS; k++) {  // LIGHTS: see with_lights
         vec3 d = world - light_pos[k];
         float dist2 = max(dot(d, d), 1.0);
         vec3 l = d * inversesqrt(dist2);
@@ -119,6 +116,14 @@ vec3 water_body(vec3 world) {
 }
 vec4 opaque(vec3 colour) { return vec4(colour, 1.0); }
 """
+
+def with_lights(source: str, searchlights: int) -> str:
+    """A fragment shader's source with its number of searchlights fixed when it compiles:
+    on llvmpipe a loop to a uniform bound costs as much as the ice's relief, even when the
+    bound is 0, while a loop to a constant 0 costs nothing."""
+    slots = max(searchlights, 1)  # GLSL has no empty arrays
+    return source.replace("#version 330\n", f"#version 330\n#define LIGHTS {searchlights}\n#define LIGHT_SLOTS {slots}\n", 1)
+
 
 ENV_VS = """
 #version 330
