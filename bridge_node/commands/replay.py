@@ -34,6 +34,7 @@ from bridge_node.replay.inputs import LOOKED_FOR, VesselChoice, load_inputs
 from bridge_node.replay.session import RecordedSession, SessionSource
 from bridge_node.replay.track import Track, TrackLog, TrackPath, TrackSource, clean, origin_under
 from bridge_node.reports.replay import plot_replay
+from bridge_node.reports.summary import print_summary
 from sim_core.frames.units import KNOT
 from sim_core.world import WorldData, WorldModel, new_world_data, snapshot
 
@@ -267,9 +268,4 @@ def run(args: argparse.Namespace) -> int:
                                           f"replay of {title}", out / "replay.png"))
     except (OSError, ValueError) as exc:
         summary["plot_error"] = str(exc)
-    if args.json:
-        print(json.dumps(summary))
-        return 0
-    for key, value in summary.items():
-        console.print(f"{key}: {value}")
-    return 0
+    return print_summary(summary, args.json, console)

@@ -11,7 +11,6 @@ ship's track and the tick times as plots. Ctrl-C (or SIGTERM) ends the run clean
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import time
 from pathlib import Path
@@ -26,6 +25,7 @@ from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.render_processes import RenderProcesses, open_stream, wait_for_renderers
 from bridge_node.node.world_setup import build_world, start_world, warm_up
 from bridge_node.reports.run import plot_run
+from bridge_node.reports.summary import print_summary
 from bridge_node.stream.publisher import StatePublisher
 from sim_core.frames.units import KNOT
 from sim_core.world import WorldEvents, snapshot
@@ -124,9 +124,4 @@ def run(args: argparse.Namespace) -> int:
         summary["plot"] = str(plot_run(stats, out / "run.png"))
     except (OSError, ValueError) as exc:
         summary["plot_error"] = str(exc)
-    if args.json:
-        print(json.dumps(summary))
-        return 0
-    for key, value in summary.items():
-        console.print(f"{key}: {value}")
-    return 0
+    return print_summary(summary, args.json, console)

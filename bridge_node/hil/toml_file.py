@@ -3,12 +3,11 @@ the key, the bad value and what is allowed (``ConfigError``, printed without a t
 from __future__ import annotations
 
 import re
-import tomllib
 from pathlib import Path
 
 from pydantic import ValidationError
 
-from bridge_node.node.config import ConfigError, _describe
+from bridge_node.node.config import ConfigError, _describe, read_toml
 from sim_core.params import Params
 
 _HEADER = re.compile(r"^\s*\[\[?\s*([A-Za-z0-9_.\-]+)\s*\]\]?")
@@ -49,15 +48,7 @@ def load_toml_model(path: str | Path, schema: type[Params], what: str) -> Params
     """Read ``path`` and validate it against ``schema``; ConfigError naming the file, the
     line and the key of every error (``what``: the kind of file, for the messages)."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-        data = tomllib.loads(text)
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: {what} not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"{path}: cannot read the {what}: {exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    text, data = read_toml(path, what)
     try:
         return schema.model_validate(data)
     except ValidationError as exc:

@@ -174,15 +174,22 @@ def load_ship(name: str, config_path: str | Path | None = None, key: str = "ship
     raise ConfigError(f"{where}: unknown ship {name!r}; ships available: {', '.join(known) or 'none'}")
 
 
-def _load_validated(path: Path, schema: type[Params]) -> Params:
+def read_toml(path: Path, what: str) -> tuple[str, dict]:
+    """The text of a TOML file and its tables; ConfigError naming the file (``what``: the
+    kind of file, for the messages) if it is missing, unreadable or not TOML."""
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        return text, tomllib.loads(text)
     except FileNotFoundError:
-        raise ConfigError(f"{path}: config file not found") from None
+        raise ConfigError(f"{path}: {what} not found") from None
     except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"{path}: cannot read config file: {exc}") from None
+        raise ConfigError(f"{path}: cannot read the {what}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+
+
+def _load_validated(path: Path, schema: type[Params]) -> Params:
+    _, data = read_toml(path, "config file")
     try:
         return schema.model_validate(data)
     except ValidationError as exc:
