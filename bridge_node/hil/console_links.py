@@ -174,6 +174,8 @@ class ConsoleLink(ABC):
                 self._send(order, now)
         while self._delayed and self._delayed[0][0] <= now:
             self._write_guarded([heapq.heappop(self._delayed)[2]])
+        if self.device is None:  # a write above failed and released the device
+            return []
         try:
             return self._read(time.monotonic())  # stamped when read
         except DEVICE_ERRORS:
