@@ -20,6 +20,12 @@ from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.world import PlacedTiles, WorldEvents
 
+# The other vessels (AIS, DIS, scripted), one row each: MMSI; x east and y north in world m
+# (the frame of ``ship.east``/``ship.north``); true heading in rad, clockwise from north (as
+# ``ship.heading``); speed over ground m/s; length and beam m (0: unknown).
+TRAFFIC_DTYPE = np.dtype([("id", np.int64), ("x", np.float64), ("y", np.float64), ("heading", np.float64),
+                          ("speed", np.float64), ("length", np.float64), ("beam", np.float64)])
+
 
 @dataclass(frozen=True)
 class Placement:
@@ -46,7 +52,8 @@ class ViewChanges:
 
 class WorldView:
     """The last published state. ``pose`` is (rows, 6): x, y, heave, yaw, roll, pitch in
-    world m and rad; ``status`` the FloeStatus of each row."""
+    world m and rad; ``status`` the FloeStatus of each row; ``traffic`` the other vessels
+    as last published (``TRAFFIC_DTYPE`` rows, shape (0,) when there are none)."""
 
     def __init__(self) -> None:
         self.seq = -1
@@ -58,6 +65,7 @@ class WorldView:
         self.status = np.zeros(0, dtype=np.uint8)
         self.cause = np.zeros(0, dtype=np.uint8)
         self.ice_load = np.zeros(3)
+        self.traffic = np.zeros(0, dtype=TRAFFIC_DTYPE)
         self._blend: tuple | None = None  # (rows, pose before, pose after, ship before, ship after)
         self._new: list[int] = []
         self._span = [np.iinfo(np.int64).max, 0]
