@@ -5,7 +5,9 @@ orders (timestamped ``ControlInput`` rows), given the ship state to publish to b
 instruments (it sends what is due at its own rates), told about alarms, and closed; it is a
 context manager, and closing twice is safe. ``Link.poll`` is written once, here: it reopens
 a lost device after a back-off and counts errors, and calls the protocol's small hook
-``_poll_device``. A link never raises for bad input from the wire: it counts the error and
+``_poll_device``. Devices are opened on a worker thread (``_Opener``), never on the loop's:
+python-can's slcan sleeps 2 s after opening its port, a USB adapter can take as long, and
+the physics tick must not wait for either. A link never raises for bad input from the wire: it counts the error and
 drops the input. Raw traffic (frames, sentences, register accesses) goes to the link's
 listeners, like python-can's ``Listener``; the session record is one.
 
@@ -17,6 +19,7 @@ import dataclasses
 import errno
 import logging
 import math
+import threading
 import time
 from abc import ABC, abstractmethod
 from collections import Counter
@@ -33,6 +36,9 @@ log = logging.getLogger("icebridge.links")
 RUDDER, TELEGRAPH, LEVER = "rudder", "telegraph", "lever"  # the kinds of order
 RUDDER_ORDER_LIMIT_DEG = 90.0  # beyond this a rudder order is nonsense, not an order to clamp
 ALARM_TEXT_MAX = 52  # characters: what an ALR sentence's text field holds within NMEA 0183's 82
+OPEN_WAIT_S = 5.0  # ``Link.open`` waits this long for the device; a slower one is taken up by a later poll
+OPEN_GRACE_S = 0.01  # ``Link.poll`` waits this long for a reopen, so a fast device (a port, a socket)
+# is in use at once; a slow one (slcan) is taken up by a later poll, and the tick goes on
 # ETL position codes (IEC 61162-1; also the console's CAN and Modbus codes) -> telegraph positions
 ETL_POSITIONS = {
     "00": "stop", "01": "dead_slow_ahead", "02": "slow_ahead", "03": "half_ahead", "04": "full_ahead",
@@ -96,12 +102,13 @@ class LinkHealth:
     inputs: int = 0
     outputs: int = 0
     reconnects: int = 0
+    opening: bool = False  # the device is being opened on the worker thread
     errors: Counter = field(default_factory=Counter)  # kind -> count
     last_error: str = ""  # why the device last failed, in the OS's or the library's own words
 
     def as_dict(self) -> dict:
         return {"name": self.name, "connected": self.connected, "inputs": self.inputs, "outputs": self.outputs,
-                "reconnects": self.reconnects, "errors": dict(self.errors), "last_error": self.last_error}
+                "reconnects": self.reconnects, "opening": self.opening, "errors": dict(self.errors), "last_error": self.last_error}
 
 
 def device_error_texts(exc: BaseException) -> tuple[str, list[str]]:
@@ -163,6 +170,53 @@ class Backoff:
         self.next_try = -math.inf
 
 
+class _Opener:
+    """Opens one device on a worker thread. The loop takes the result (``take``) when
+    ``done``; a device that opens after its link was closed (``abandon``) is closed here."""
+
+    def __init__(self, open_device: Callable[[], object], close_device: Callable[[object], None],
+                 name: str) -> None:
+        self._close_device = close_device
+        self._lock = threading.Lock()
+        self._done = threading.Event()
+        self._abandoned = False
+        self._result: tuple[object, BaseException | None] = (None, None)
+        threading.Thread(target=self._run, args=(open_device,), name=f"open-{name}", daemon=True).start()
+
+    def _run(self, open_device: Callable[[], object]) -> None:
+        device, error = None, None
+        try:
+            device = open_device()
+        except BaseException as exc:  # handed to the loop's thread, which decides what it means
+            error = exc
+        with self._lock:
+            if not self._abandoned:
+                self._result = (device, error)
+                self._done.set()
+                return
+        if device is not None:
+            try:
+                self._close_device(device)
+            except Exception:  # noqa: BLE001 (nobody is left to tell; the link is closed)
+                pass
+
+    def wait(self, timeout: float) -> bool:
+        """Whether the open has finished, waiting up to ``timeout`` s."""
+        return self._done.wait(timeout) if timeout > 0.0 else self._done.is_set()
+
+    def take(self) -> tuple[object, BaseException | None]:
+        """The opened device, or None and why not (call once ``done``)."""
+        return self._result
+
+    def abandon(self) -> None:
+        """The link was closed: close the device, now if it is open, else when it opens."""
+        with self._lock:
+            self._abandoned = True
+            device, self._result = self._result[0], (None, None)
+        if device is not None:
+            self._close_device(device)
+
+
 class RateSchedule:
     """When each periodic output is next due; rates in Hz."""
 
@@ -204,20 +258,29 @@ class Link(ABC):
         self._health = LinkHealth(self.name)
         self._backoff = Backoff()
         self._active = False  # between open() and close()
+        self._opener: _Opener | None = None  # the device being opened
         self._failed = False  # a real failure since the link was last up
         self._down_reasons: list[str] = []  # short forms of why the device last failed
 
     def open(self) -> None:
-        """Open the device. A peer that is not there yet is not an error: the link reports
-        itself disconnected and keeps trying. Opening an open link does nothing."""
+        """Open the device (on the opener's thread), waiting up to ``OPEN_WAIT_S`` for it; a
+        slower device is taken up by a later poll. A peer that is not there yet is not an
+        error: the link reports itself disconnected and keeps trying. Opening an open link
+        does nothing."""
         if self._active:
             return
         self._active = True
-        self._connect(time.monotonic())
+        self._start_open()
+        if self._opener.wait(OPEN_WAIT_S):
+            self._take_device(time.monotonic())
 
     def close(self) -> None:
-        """Release the device; safe to call twice."""
+        """Release the device (one still opening is closed when it opens); safe to call twice."""
         self._active = False
+        opener, self._opener = self._opener, None
+        if opener is not None:
+            opener.abandon()
+            self._health.opening = False
         device, self.device = self.device, None
         if device is not None:
             self._close_device(device)
@@ -236,9 +299,11 @@ class Link(ABC):
         if not self._active:
             return []
         if self.device is None:
-            if self._backoff.ready(now):
+            if self._opener is None and self._backoff.ready(now):
                 self._health.reconnects += 1
-                self._connect(now)
+                self._start_open()
+            if self._opener is not None and self._opener.wait(OPEN_GRACE_S):
+                self._take_device(now)
             return []
         inputs = []
         try:
@@ -302,7 +367,9 @@ class Link(ABC):
 
     @abstractmethod
     def _open_device(self):
-        """Open and return the port, bus or worker; raises one of ``open_errors``."""
+        """Open and return the port, bus or worker; raises one of ``open_errors``. Runs on
+        the opener's thread while ``self.device`` is None: it may touch only what the loop
+        leaves alone until the device is in use."""
 
     @abstractmethod
     def _close_device(self, device) -> None:
@@ -331,14 +398,23 @@ class Link(ABC):
             log.warning("link %s: %s", self.name, text)
         self._health.last_error = text
 
-    def _connect(self, now: float) -> None:
-        try:
-            self.device = self._open_device()
-        except self.open_errors as exc:
-            self.device = None
-            self._note_failure(exc, "open")
+    def _start_open(self) -> None:
+        self._opener = _Opener(self._open_device, self._close_device, self.name)
+        self._health.opening = True
+
+    def _take_device(self, now: float) -> None:
+        """Take the finished opener's device into use, or count why it did not open (an
+        exception other than ``open_errors`` is a bug, and raised here)."""
+        device, error = self._opener.take()
+        self._opener = None
+        self._health.opening = False
+        if error is not None:
+            if not isinstance(error, self.open_errors):
+                raise error
+            self._note_failure(error, "open")
             self._down(now, "open_failed")
             return
+        self.device = device
         self._health.connected = self.up_when_open
         self._down_reasons = []
         self._backoff.succeeded()
