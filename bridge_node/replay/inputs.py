@@ -62,7 +62,8 @@ def _kind(path: Path, lines: list[str], mapping: dict[str, str]) -> str:
     raise UserError(f"{path}: no usable track: not a log this command reads (looked for {LOOKED_FOR})")
 
 
-def _read_text(path: Path) -> str:
+def read_text(path: Path) -> str:
+    """A log file's text (undecodable bytes replaced); UserError naming it if unreadable."""
     try:
         return path.read_bytes().decode("utf-8", errors="replace")
     except OSError as exc:
@@ -93,7 +94,7 @@ def load_inputs(paths: list[str], mmsi: int | None, mapping: dict[str, str],
             continue
         if not path.exists():
             raise UserError(f"{name}: no such file")
-        text = _read_text(path)
+        text = read_text(path)
         lines = text.splitlines()
         kind = _kind(path, lines, mapping)
         if kind == "session":

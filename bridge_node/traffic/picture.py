@@ -1,0 +1,51 @@
+"""The traffic picture: every other vessel the node knows of at one moment, one per MMSI.
+
+The hub gathers it each tick from what its links hear (DIS) and from the picture's own
+sources (replayed AIS logs, scripted vessels); the NMEA links send it as ``!AIVDM`` and the
+state stream carries it as ``TRAFFIC_DTYPE`` rows (``table``) for the render processes.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Protocol
+
+import numpy as np
+
+from bridge_node.links.base import Vessel
+from bridge_node.stream.world_view import TRAFFIC_DTYPE
+from sim_core.frames.geodesy import geodetic_to_local
+
+
+class VesselSource(Protocol):
+    """Something that knows of other vessels (a DIS link, an AIS log, the script)."""
+
+    def vessels(self, now: float) -> list[Vessel]:
+        """The vessels as of ``now`` (monotonic s)."""
+
+
+class TrafficPicture:
+    """The other vessels from the links and from ``sources``; where two give the same MMSI,
+    the links' (live simulators) win, then the sources in their order."""
+
+    def __init__(self, sources: Sequence[VesselSource] = ()) -> None:
+        self.sources = list(sources)
+        self.current: list[Vessel] = []  # as last gathered
+
+    def gather(self, heard: list[Vessel], now: float) -> list[Vessel]:
+        """The picture at ``now`` (monotonic s): ``heard`` (the links' vessels) and the
+        sources' vessels, one per MMSI."""
+        seen, self.current = set(), []
+        for v in [*heard, *(v for source in self.sources for v in source.vessels(now))]:
+            if v.mmsi not in seen:
+                seen.add(v.mmsi)
+                self.current.append(v)
+        return self.current
+
+    def table(self, origin: tuple[float, float]) -> np.ndarray:
+        """The last gathered vessels as ``TRAFFIC_DTYPE`` rows, placed in the world frame of
+        the field whose corner is at ``origin`` (latitude, longitude rad)."""
+        rows = []
+        for v in self.current:
+            north, east = geodetic_to_local(v.latitude, v.longitude, *origin)
+            rows.append((v.mmsi, east, north, v.heading, v.speed_over_ground, v.length, v.beam))
+        return np.array(rows, dtype=TRAFFIC_DTYPE).reshape(-1)

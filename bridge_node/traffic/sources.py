@@ -1,0 +1,144 @@
+"""Where the traffic picture's own vessels come from: the config's scripted vessels
+(``ScriptedTraffic``) and AIS logs replayed (``AisLogTraffic``). Both start moving at their
+first ``vessels`` call (the run's first tick) and keep to the node's monotonic clock, as
+the DIS link's dead reckoning does; SI inside (m, m/s, rad).
+"""
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from bridge_node.links.base import Vessel
+from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, NodeConfig, resolve_path
+from bridge_node.node.errors import UserError
+from bridge_node.replay.inputs import read_text
+from bridge_node.replay.sentences import SentenceLog
+from bridge_node.replay.settings import ReplaySettings
+from bridge_node.replay.track import TrackPath, clean
+from bridge_node.traffic.picture import TrafficPicture, VesselSource
+from bridge_node.traffic.settings import ScriptedVessel
+from sim_core.frames.geodesy import local_to_geodetic
+from sim_core.frames.units import KNOT
+
+
+class _Clock:
+    """Seconds since the first call of ``since_start`` (monotonic ``now``, s)."""
+
+    _start: float | None = None
+
+    def since_start(self, now: float) -> float:
+        if self._start is None:
+            self._start = now
+        return now - self._start
+
+
+class ScriptedMotion:
+    """Kinematics of one scripted vessel: along its waypoints at constant speed (legs joined
+    by instant turns), or straight on from its start; ``at(t)`` gives north, east (m),
+    course (rad) and speed (m/s) t s after the start."""
+
+    def __init__(self, s: ScriptedVessel) -> None:
+        self.speed = s.speed_kn * KNOT
+        points = s.waypoints + s.waypoints[:1] if s.loop else s.waypoints or [[s.north, s.east]]
+        self.points = np.array(points, dtype=float)
+        legs = np.diff(self.points, axis=0)
+        self.legs, self.courses = legs, np.arctan2(legs[:, 1], legs[:, 0]) % (2 * math.pi)
+        self.reach = np.concatenate([[0.0], np.cumsum(np.hypot(legs[:, 0], legs[:, 1]))])  # m to each point
+        self.loop, self.course = s.loop, math.radians(s.course_deg or 0.0)
+
+    def at(self, t: float) -> tuple[float, float, float, float]:
+        run = self.speed * t
+        if not len(self.legs):  # straight on
+            return (self.points[0, 0] + run * math.cos(self.course), self.points[0, 1] + run * math.sin(self.course),
+                    self.course, self.speed)
+        total = self.reach[-1]
+        if self.loop and total > 0.0:
+            run %= total
+        if run >= total:  # arrived: stopped at the last waypoint
+            return self.points[-1, 0], self.points[-1, 1], float(self.courses[-1]), 0.0
+        i = int(np.searchsorted(self.reach, run, side="right")) - 1
+        north, east = self.points[i] + self.legs[i] * ((run - self.reach[i]) / (self.reach[i + 1] - self.reach[i]))
+        return float(north), float(east), float(self.courses[i]), self.speed
+
+
+class ScriptedTraffic(_Clock):
+    """The vessels scripted in the config, on the field whose corner is at ``origin``
+    (latitude, longitude rad)."""
+
+    def __init__(self, vessels: Sequence[ScriptedVessel], origin: tuple[float, float]) -> None:
+        self.script = [(s, ScriptedMotion(s)) for s in vessels]
+        self.origin = origin
+
+    def vessels(self, now: float) -> list[Vessel]:
+        t, out = self.since_start(now), []
+        for s, motion in self.script:
+            north, east, course, speed = motion.at(t)
+            lat, lon = local_to_geodetic(north, east, *self.origin)
+            out.append(Vessel(f"script:{s.mmsi}", s.mmsi, s.name, now, lat, lon, course, course, speed, 0.0,
+                              s.length, s.beam))
+        return out
+
+
+class AisLogTraffic(_Clock):
+    """The other vessels (``!AIVDM``) of an AIS log, replayed: the log's first position
+    report plays at the first call; each vessel is there from its first position report to
+    its last, moving between them as ``TrackPath`` places a replayed ship (linear, held
+    through gaps longer than ``replay.max_gap_s``, impossible jumps skipped), with the name
+    and dimensions the log gave. A log without times counts each vessel's reports on from
+    0 s by their UTC second."""
+
+    def __init__(self, log: SentenceLog, origin: tuple[float, float], replay: ReplaySettings) -> None:
+        self.origin, self.max_gap = origin, replay.max_gap_s
+        self.paths = []
+        for v in log.vessels.values():
+            track = clean(v.track(log.own.files, Counter()), replay.max_gap_s, replay.max_speed_kn * KNOT) \
+                if v.reports and not v.own else None
+            if track is not None:
+                self.paths.append((v, TrackPath(track, origin, replay.max_gap_s)))
+        self.t0 = min((path.track.start for _, path in self.paths), default=0.0)
+
+    def vessels(self, now: float) -> list[Vessel]:
+        t, out = self.t0 + self.since_start(now), []
+        for v, path in self.paths:
+            if not path.track.start <= t <= path.track.end:
+                continue
+            (north, vn), (east, ve) = path.north.at(t, self.max_gap), path.east.at(t, self.max_gap)
+            heading, rate = path.track.heading.at(t, self.max_gap)
+            lat, lon = local_to_geodetic(north, east, *self.origin)
+            out.append(Vessel(f"ais:{v.mmsi}", v.mmsi, v.name, now, lat, lon, heading % (2 * math.pi),
+                              math.atan2(ve, vn) % (2 * math.pi), math.hypot(vn, ve), rate, v.length, v.beam))
+        return out
+
+
+def read_ais_log(path: Path, where: str, origin: tuple[float, float], replay: ReplaySettings) -> AisLogTraffic:
+    """An AIS log as traffic; ConfigError naming ``where`` (file, key and value) if it
+    cannot be read or has no other vessel's position reports."""
+    if not path.is_file():
+        raise ConfigError(f"{where}: no such file ({path})")
+    try:
+        text = read_text(path)
+    except UserError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+    log = SentenceLog()
+    log.read(str(path), text.splitlines())
+    traffic = AisLogTraffic(log, origin, replay)
+    if not traffic.paths:
+        raise ConfigError(f"{where}: no position reports of other vessels (AIS types 1, 2, 3, 18, 19 as !AIVDM) "
+                          "in it")
+    return traffic
+
+
+def traffic_picture(cfg: NodeConfig, config_path: str | Path | None) -> TrafficPicture:
+    """The picture with the config's sources: its AIS logs (in their order), then its
+    scripted vessels. ConfigError for a log that cannot be used."""
+    origin = math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg)
+    where = f"{config_path or DEFAULT_CONFIG}: traffic.ais_logs"
+    sources: list[VesselSource] = [read_ais_log(resolve_path(config_path, name), f"{where}.{i} = {name!r}", origin,
+                                                cfg.replay) for i, name in enumerate(cfg.traffic.ais_logs)]
+    if cfg.traffic.vessels:
+        sources.append(ScriptedTraffic(cfg.traffic.vessels, origin))
+    return TrafficPicture(sources)
