@@ -21,7 +21,7 @@ from bridge_node.render.renderer import SceneRenderer
 from bridge_node.stream.codec import decode, encode
 from bridge_node.stream.publisher import StatePublisher
 from bridge_node.stream.subscriber import StateSubscriber
-from bridge_node.stream.world_view import WorldView
+from bridge_node.stream.world_view import TRAFFIC_DTYPE, WorldView
 from sim_core.world import Controls, snapshot, step
 
 CHANNELS = ('[[render.channels]]\nname = "bow"\nwidth = 160\nheight = 90\npitch_deg = -10.0\nblend_right_deg = 5.0\n'
@@ -50,8 +50,11 @@ def test_messages_round_trip(exercise):
     data = start_world(model, cfg)
     for _ in range(300):
         events = step(model, data, 0.1, Controls(rudder=1.0))  # clamped: a rejection travels too
-    back, input_time = decode(encode(events, 12.5))
+    traffic = np.array([(230000001, 120.5, -40.25, 1.5, 5.1, 110.0, 24.0)], dtype=TRAFFIC_DTYPE)
+    back, input_time, back_traffic = decode(encode(events, 12.5, traffic))
     assert input_time == 12.5 and back.seq == events.seq and back.ship == events.ship
+    np.testing.assert_array_equal(back_traffic, traffic)
+    assert decode(encode(events))[2].shape == (0,)
     assert back.rejected == events.rejected and len(back.placed.tile) == len(events.placed.tile)
     np.testing.assert_array_equal(back.floe_rows, events.floe_rows)
     np.testing.assert_allclose(back.floe_pose, events.floe_pose, atol=2e-4)

@@ -1,10 +1,11 @@
 """``WorldEvents`` as ZeroMQ multipart frames: a small JSON header for the scalars, then
 each array as its raw bytes (no pickle, no JSON for bulk data).
 
-Frames: ``[TOPIC, header, array, array, ...]``. The header names each array's dtype and
-shape in frame order. Floe poses travel as float32 (what the renderer uses; 0.1 mm at 1 km)
-and row numbers as int32. ``input_time`` is the monotonic time (s) of the newest console
-order that went into the step, or None.
+Frames: ``[TOPIC, header, array, array, ..., traffic]``. The header names each array's
+dtype and shape in frame order. Floe poses travel as float32 (what the renderer uses; 0.1 mm
+at 1 km) and row numbers as int32. ``input_time`` is the monotonic time (s) of the newest
+console order that went into the step, or None. The last frame is the whole traffic picture
+at the step (``TRAFFIC_DTYPE`` rows; a few vessels, so every message carries all of them).
 """
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ import json
 
 import numpy as np
 
+from bridge_node.stream.world_view import TRAFFIC_DTYPE
 from sim_core.ship.model import OrderRejection
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.world import PlacedTiles, WorldEvents
@@ -30,8 +32,9 @@ class CodecError(ValueError):
     """Frames that are not a state message of this version."""
 
 
-def encode(events: WorldEvents, input_time: float | None = None) -> list[bytes]:
-    """Frames of one state message."""
+def encode(events: WorldEvents, input_time: float | None = None, traffic: np.ndarray | None = None) -> list[bytes]:
+    """Frames of one state message; ``traffic`` the other vessels (None: none)."""
+    traffic = np.zeros(0, dtype=TRAFFIC_DTYPE) if traffic is None else np.ascontiguousarray(traffic, TRAFFIC_DTYPE)
     arrays = [np.ascontiguousarray(getattr(events.placed, name)) for name in _PLACED]
     arrays += [np.ascontiguousarray(getattr(events, name), dtype=_WIRE.get(name)) for name in _ARRAYS]
     header = {
@@ -40,19 +43,21 @@ def encode(events: WorldEvents, input_time: float | None = None) -> list[bytes]:
         "floes_frozen": events.floes_frozen, "rejected": [dataclasses.asdict(r) for r in events.rejected],
         "arrays": [[a.dtype.str, list(a.shape)] for a in arrays],
     }
-    return [TOPIC, json.dumps(header).encode(), *(a.tobytes() for a in arrays)]
+    return [TOPIC, json.dumps(header).encode(), *(a.tobytes() for a in arrays), traffic.tobytes()]
 
 
-def decode(frames: list) -> tuple[WorldEvents, float | None]:
-    """The events and input time of a state message; raises CodecError for anything else."""
+def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
+    """The events, input time and traffic of a state message; raises CodecError for
+    anything else."""
     try:
         if bytes(frames[0]) != TOPIC:
             raise CodecError("not a state message")
         header = json.loads(bytes(frames[1]))
         specs = header["arrays"]
-        if len(specs) != len(_PLACED) + len(_ARRAYS) or len(frames) != 2 + len(specs):
+        if len(specs) != len(_PLACED) + len(_ARRAYS) or len(frames) != 3 + len(specs):
             raise CodecError("wrong number of frames")
-        arrays = [np.frombuffer(f, dtype=np.dtype(d)).reshape(shape) for f, (d, shape) in zip(frames[2:], specs)]
+        arrays = [np.frombuffer(f, dtype=np.dtype(d)).reshape(shape) for f, (d, shape) in zip(frames[2:-1], specs)]
+        traffic = np.frombuffer(frames[-1], dtype=TRAFFIC_DTYPE)
         placed = PlacedTiles(*arrays[:len(_PLACED)])
         named = dict(zip(_ARRAYS, arrays[len(_PLACED):]))
         events = WorldEvents(
@@ -65,4 +70,4 @@ def decode(frames: list) -> tuple[WorldEvents, float | None]:
         raise
     except (ValueError, KeyError, TypeError, IndexError) as exc:
         raise CodecError(f"malformed state message: {exc}") from None
-    return events, input_time
+    return events, input_time, traffic

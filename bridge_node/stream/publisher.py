@@ -7,9 +7,9 @@ is counted as dropped, and subscribers resynchronise). The thread sends each mes
 the PUB socket, whose high-water mark drops a slow subscriber's messages instead of
 waiting for it, and keeps a ``WorldView`` of everything published, from which it answers
 snapshot requests on the ROUTER socket: a late joiner gets every placed tile and every
-floe row, frozen channel included, then follows the live stream. Every ``HEARTBEAT_S`` it
-also publishes the last sequence number, so a subscriber that lost the last steps before a
-pause notices it too.
+floe row, frozen channel included, and the other vessels, then follows the live stream.
+Every ``HEARTBEAT_S`` it also publishes the last sequence number, so a subscriber that lost
+the last steps before a pause notices it too.
 """
 from __future__ import annotations
 
@@ -18,6 +18,7 @@ import logging
 import threading
 import time
 
+import numpy as np
 import zmq
 
 from bridge_node.stream.codec import HEARTBEAT, decode, encode
@@ -60,10 +61,11 @@ class StatePublisher:
         self._push.setsockopt(zmq.SNDHWM, HANDOVER_HWM)
         self._push.connect(self._inproc)
 
-    def publish(self, events: WorldEvents, input_time: float | None = None) -> None:
-        """Hand one step's events to the publisher thread; never blocks."""
+    def publish(self, events: WorldEvents, input_time: float | None = None, traffic: np.ndarray | None = None) -> None:
+        """Hand one step's events and the traffic picture (``TRAFFIC_DTYPE`` rows; None:
+        no other vessels) to the publisher thread; never blocks."""
         try:
-            self._push.send_multipart(encode(events, input_time), flags=zmq.NOBLOCK, copy=False)
+            self._push.send_multipart(encode(events, input_time, traffic), flags=zmq.NOBLOCK, copy=False)
         except zmq.Again:
             self.dropped += 1
 
@@ -114,13 +116,14 @@ class StatePublisher:
                 frames = pull.recv_multipart()
                 if frames == [b"stop"]:
                     return
-                view.apply(decode(frames)[0])
+                events, _, view.traffic = decode(frames)
+                view.apply(events)
                 pub.send_multipart(frames)  # PUB drops at a subscriber's high-water mark
                 self.sent += 1
             if router in ready:
                 identity, *request = router.recv_multipart()
                 if request == [SNAPSHOT_REQUEST] and view.ship is not None:
-                    router.send_multipart([identity, *encode(view.to_snapshot())])
+                    router.send_multipart([identity, *encode(view.to_snapshot(), traffic=view.traffic)])
                     self.snapshots += 1
                 else:
                     router.send_multipart([identity, b"not-ready"])

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
 import zmq
 
 from bridge_node.stream.codec import HEARTBEAT, CodecError, decode
@@ -73,8 +74,8 @@ class StateSubscriber:
             self._dealer.connect(self.snapshot_endpoint)
         self._dealer.send(SNAPSHOT_REQUEST)
 
-    def _apply(self, message: tuple[WorldEvents, float | None]) -> None:
-        events, input_time = message
+    def _apply(self, message: tuple[WorldEvents, float | None, np.ndarray]) -> None:
+        events, input_time, self.view.traffic = message
         self.view.apply(events)
         if input_time is not None:
             self.last_input = (events.seq, input_time)
@@ -89,16 +90,17 @@ class StateSubscriber:
                 self._heartbeat(frames)
                 continue
             try:
-                events, input_time = decode(frames)
+                message = decode(frames)
             except CodecError:
                 self.malformed += 1
                 continue
+            events = message[0]
             if events.seq <= self.view.seq or (drop is not None and drop(events.seq)):
                 continue
             if events.seq != self.view.seq + 1:
                 self._resync(events.seq - self.view.seq - 1)
                 continue
-            self._apply((events, input_time))
+            self._apply(message)
             applied.append(events)
         return applied
 
