@@ -27,6 +27,8 @@ from bridge_node.node.world_setup import build_world, start_world, warm_up
 from bridge_node.reports.run import plot_run
 from bridge_node.reports.summary import print_summary
 from bridge_node.stream.publisher import StatePublisher
+from bridge_node.traffic.picture import TrafficPicture
+from bridge_node.traffic.sources import traffic_picture
 from sim_core.frames.units import KNOT
 from sim_core.world import WorldEvents, snapshot
 
@@ -67,12 +69,13 @@ def _check(args: argparse.Namespace, rate: float) -> None:
         raise UserError(f"--frames-every {args.frames_every} s is outside the allowed range [0.1, 3600]")
 
 
-def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, renderers, record, console) -> tuple:
+def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, renderers, record, console,
+          traffic: TrafficPicture) -> tuple:
     """The real-time loop with its live status line; returns the statistics, the last
     events, the links' health and the active alarms."""
     last: list[WorldEvents] = [snapshot(model, data)]
     shown = [0.0]
-    with LinkHub(cfg.links, cfg.arbitration, record) as hub, \
+    with LinkHub(cfg.links, cfg.arbitration, record, traffic) as hub, \
             Live(console=console, refresh_per_second=4, transient=True) as live:
         publisher.publish(last[0])
         live.update("starting the render processes")
@@ -80,7 +83,7 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
 
         def on_events(events: WorldEvents, input_time: float | None) -> None:
             last[0] = events
-            publisher.publish(events, input_time)
+            publisher.publish(events, input_time, traffic.table(model.origin))
             if time.monotonic() - shown[0] > 0.25:
                 shown[0] = time.monotonic()
                 live.update(status_line(events, len(hub.active_alarms)))
@@ -93,6 +96,7 @@ def run(args: argparse.Namespace) -> int:
     cfg = load_config(args.config)
     rate = args.rate if args.rate is not None else cfg.realtime.rate_hz
     _check(args, rate)
+    traffic = traffic_picture(cfg, args.config)
     console = Console(stderr=args.json)
     out = Path(args.out)
     record = None if args.no_record else new_session_dir(cfg, args.config)
@@ -107,7 +111,8 @@ def run(args: argparse.Namespace) -> int:
                 model = build_world(cfg, args.config)
                 warm_up(model, cfg)
                 data = start_world(model, cfg)
-            stats, last, links, alarms = _loop(cfg, args, rate, model, data, publisher, renderers, record, console)
+            stats, last, links, alarms = _loop(cfg, args, rate, model, data, publisher, renderers, record, console,
+                                               traffic)
         finally:
             if renderers:  # before the stream closes, so that they draw the last state
                 rendered = renderers.stop()

@@ -20,6 +20,7 @@ from bridge_node.links.base import Alarm, ControlInput, Listener
 from bridge_node.links.registry import make_link
 from bridge_node.links.session_record import SessionRecord
 from bridge_node.links.settings import ArbitrationSettings, LinkSettings
+from bridge_node.traffic.picture import TrafficPicture
 from sim_core.ship.outputs import ShipOutputs
 
 log = logging.getLogger("icebridge.links")
@@ -32,8 +33,9 @@ class LinkHub:
     """The node's links, the arbiter, the alarms and the traffic listeners."""
 
     def __init__(self, links: Sequence[LinkSettings], arbitration: ArbitrationSettings,
-                 record_dir: Path | None = None) -> None:
+                 record_dir: Path | None = None, traffic: TrafficPicture | None = None) -> None:
         self.links = [make_link(s) for s in links]
+        self.traffic = traffic or TrafficPicture()
         self.arbiter = OrderArbiter(arbitration, {s.name: s.timeout_s for s in links})
         self.record_dir = record_dir
         self.record: SessionRecord | None = None  # while open with a record folder
@@ -121,7 +123,7 @@ class LinkHub:
         if now - self._last_announce >= ALARM_REPEAT_S:
             self._last_announce = now
             changes += [a for a in self.active_alarms.values() if a not in changes]
-        vessels = [v for link in self.links for v in link.vessels(now)]
+        vessels = self.traffic.gather([v for link in self.links for v in link.vessels(now)], now)
         for link in self.links:
             link.publish(state, now)
             link.publish_vessels(vessels, now)

@@ -20,6 +20,7 @@ from bridge_node.node.paths import expand_user, writable_dir
 from bridge_node.render.settings import RenderSettings
 from bridge_node.replay.settings import ReplaySettings
 from bridge_node.stream.settings import StreamSettings
+from bridge_node.traffic.settings import TrafficSettings
 from sim_core.fracture.tile_template import FractureSettings
 from sim_core.ice.model import IceDynamicsSettings
 from sim_core.material import IceMaterial
@@ -83,6 +84,7 @@ class NodeConfig(Params):
     stream: StreamSettings = StreamSettings()
     links: list[LinkSettings] = Field(default_factory=list)
     arbitration: ArbitrationSettings = ArbitrationSettings()
+    traffic: TrafficSettings = TrafficSettings()
     paths: PathSettings = PathSettings()
 
     @model_validator(mode="after")
