@@ -1,0 +1,116 @@
+"""The traffic picture: vessels scripted in the exercise and vessels of a replayed AIS log
+go out on a real NMEA link (UDP on the loopback) as !AIVDM that pyais decodes to their
+position, course, speed and name, moving as scripted or logged; bad traffic configs name
+the file, key, value and what is allowed."""
+import math
+
+import pytest
+from links_helpers import STATE
+from pyais import encode_dict
+from test_links_ais import QUIET, messages
+from test_links_dis import datagrams, receiver
+
+from bridge_node.links.hub import LinkHub
+from bridge_node.node.config import ConfigError, load_config
+from bridge_node.traffic.settings import ScriptedVessel
+from bridge_node.traffic.sources import ScriptedMotion, traffic_picture
+from sim_core.frames.geodesy import geodetic_to_local, local_to_geodetic
+from sim_core.frames.units import KNOT
+
+ORIGIN = math.radians(74.0), math.radians(20.0)  # the default [exercise] origin
+LOG_T0 = 1_767_000_000.0  # unix s of the log's first report
+LOGGED = 230999001
+START = math.radians(74.01), math.radians(20.02)  # the logged vessel's first position
+
+
+def ais_log(path, speed_kn: float = 8.0) -> None:
+    """An AIS log (unix time, then the sentence) of one vessel steaming north from
+    74.01 N 20.02 E, reporting every 10 s, and its static data; pyais encodes it."""
+    lines = [f"{LOG_T0 - 1:.1f} {s}" for s in encode_dict(
+        {"type": 5, "mmsi": LOGGED, "shipname": "LOGGED ONE", "to_bow": 40, "to_stern": 20, "to_port": 6,
+         "to_starboard": 6}, talker_id="AI", sentence_type="VDM", seq_id=1)]
+    for k in range(4):
+        lat, _ = local_to_geodetic(speed_kn * KNOT * 10.0 * k, 0.0, *START)
+        lines += [f"{LOG_T0 + 10 * k:.1f} {s}" for s in encode_dict(
+            {"type": 1, "mmsi": LOGGED, "lat": math.degrees(lat), "lon": 20.02, "speed": speed_kn, "course": 0.0, "heading": 0,
+             "second": (10 * k) % 60}, talker_id="AI", sentence_type="VDM")]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def config(folder, traffic: str):
+    path = folder / "node.toml"
+    path.write_text('[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n' + traffic)
+    return path
+
+
+SCRIPTED = ('[[traffic.vessels]]\nmmsi = 230000001\nname = "SCRIPTED ONE"\nlength = 80.0\nbeam = 14.0\n'
+            'speed_kn = 9.0\nnorth = 500.0\neast = 200.0\ncourse_deg = 90.0\n')
+
+
+def test_scripted_and_logged_vessels_go_out_as_aivdm(tmp_path):
+    ais_log(tmp_path / "traffic.nmea")
+    rx = receiver()
+    rates = "\n".join(f"{k} = 0" for k in QUIET)
+    links = (f'[[links]]\ntype = "nmea0183"\nname = "plotter"\nudp_port = {rx.getsockname()[1]}\n[links.rates]\n'
+             f'{rates}\n[links.ais]\nmmsi = 257123450\nto_bow = 20\nto_stern = 130\nto_port = 10\nto_starboard = 12\n')
+    path = config(tmp_path, f'[traffic]\nais_logs = ["traffic.nmea"]\n{SCRIPTED}{links}')
+    cfg = load_config(path)
+    with LinkHub(cfg.links, cfg.arbitration, traffic=traffic_picture(cfg, path)) as hub:
+        for now in (100.0, 100.1, 115.0):  # reports due at 0 s, then 10 s later (under 14 kn)
+            hub.poll(now)
+            hub.publish(STATE, now)
+    reports = [m for talker, m in messages([d.decode().strip() for d in datagrams(rx)]) if talker == "!AIVDM"]
+    rx.close()
+    by_mmsi = {}
+    for m in reports:
+        by_mmsi.setdefault((m["mmsi"], m["msg_type"]), []).append(m)
+    # the scripted vessel: from (500 m N, 200 m E) east at 9 kn; at 0 s and at 15 s
+    for m, t in zip(by_mmsi[(230000001, 1)], (0.0, 15.0)):
+        lat, lon = local_to_geodetic(500.0, 200.0 + 9.0 * KNOT * t, *ORIGIN)
+        assert m["lat"] == pytest.approx(math.degrees(lat), abs=1e-4 / 60)
+        assert m["lon"] == pytest.approx(math.degrees(lon), abs=1e-4 / 60)
+        assert m["course"] == 90.0 and m["heading"] == 90 and m["speed"] == 9.0
+    assert len(by_mmsi[(230000001, 1)]) == 2
+    assert by_mmsi[(230000001, 5)][0]["shipname"] == "SCRIPTED ONE"
+    assert by_mmsi[(230000001, 5)][0]["to_bow"] + by_mmsi[(230000001, 5)][0]["to_stern"] == 80
+    # the logged vessel: its first report plays at the first tick, then it moves as logged
+    first, later = by_mmsi[(LOGGED, 1)]
+    assert first["lat"] == pytest.approx(74.01, abs=1e-4 / 60) and first["lon"] == pytest.approx(20.02, abs=1e-4 / 60)
+    north, _ = geodetic_to_local(math.radians(later["lat"]), math.radians(later["lon"]), *START)
+    assert north == pytest.approx(8.0 * KNOT * 15.0, abs=0.5)
+    assert later["speed"] == pytest.approx(8.0, abs=0.1) and later["course"] == pytest.approx(0.0, abs=0.2)
+    assert later["heading"] == 0 and later["lon"] == pytest.approx(20.02, abs=1e-4 / 60)
+    static = by_mmsi[(LOGGED, 5)][0]
+    assert static["shipname"] == "LOGGED ONE" and static["to_bow"] + static["to_stern"] == 60
+
+
+def test_scripted_waypoints_are_steamed_in_turn():
+    boat = ScriptedVessel(mmsi=230000002, length=20.0, beam=5.0, speed_kn=10.0,
+                          waypoints=[[0.0, 0.0], [1000.0, 0.0], [1000.0, 500.0]])
+    v = 10.0 * KNOT
+    path, loop = ScriptedMotion(boat), ScriptedMotion(boat.model_copy(update={"loop": True}))
+    assert path.at(500.0 / v) == pytest.approx((500.0, 0.0, 0.0, v))
+    assert path.at(1200.0 / v) == pytest.approx((1000.0, 200.0, math.pi / 2, v))
+    assert path.at(2000.0 / v) == pytest.approx((1000.0, 500.0, math.pi / 2, 0.0))  # arrived: stopped
+    # looped: back from the last waypoint to the first (1118 m), then round again
+    back = math.hypot(1000.0, 500.0)
+    assert loop.at((1500.0 + 0.5 * back) / v)[:2] == pytest.approx((500.0, 250.0))
+    assert loop.at((3000.0 + back) / v) == pytest.approx(loop.at(1500.0 / v))
+
+
+@pytest.mark.parametrize("traffic, says", [
+    (("[[traffic.vessels]]\nmmsi = 230000001\nlength = 80.0\nbeam = 14.0\nspeed_kn = 45.0\nnorth = 0.0\n"
+      "east = 0.0\ncourse_deg = 0.0\n"), "traffic.vessels.0.speed_kn = 45.0: Input should be less than or equal to 40"),
+    ("[[traffic.vessels]]\nmmsi = 230000001\nlength = 80.0\nbeam = 14.0\nspeed_kn = 5.0\nwaypoints = [[0.0, 0.0]]\n",
+     "traffic.vessels.0: vessel 230000001: give at least 2 waypoints"),
+    (("[[traffic.vessels]]\nmmsi = 230000001\nlength = 80.0\nbeam = 14.0\nspeed_kn = 5.0\n"
+      "waypoints = [[0.0, 0.0], [5.0]]\n"), "traffic.vessels.0.waypoints.1 = [5.0]: List should have at least 2 items"),
+    ("[traffic]\nais_logs = [\"missing.nmea\"]\n", "traffic.ais_logs.0 = 'missing.nmea': no such file"),
+    ("[traffic]\nais_logs = [\"empty.nmea\"]\n", "traffic.ais_logs.0 = 'empty.nmea': no position reports of other"),
+])
+def test_traffic_config_errors_name_file_key_value_and_range(tmp_path, traffic, says):
+    (tmp_path / "empty.nmea").write_text("$GPZDA,120000.00,02,01,2026,00,00*6B\n")
+    path = config(tmp_path, traffic)
+    with pytest.raises(ConfigError) as err:
+        traffic_picture(load_config(path), path)
+    assert str(err.value).startswith(str(path)) and says in str(err.value)
