@@ -2,14 +2,20 @@
 subscribers end up with the published state, render processes (separate processes) draw
 what a single process draws, and a slow renderer never holds the physics back."""
 import json
+import math
+import socket
 import subprocess
 import sys
 import time
 
 import numpy as np
 import pytest
-from conftest import REPO, exercise_toml
+from conftest import REPO, exercise_toml, free_port
+from links_helpers import node_config, wait_for
 from PIL import Image
+from pyais import decode as ais_decode
+from test_links_ais import QUIET
+from test_links_dis import datagrams, other_simulator_pdu, receiver
 
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config
@@ -22,6 +28,7 @@ from bridge_node.stream.codec import decode, encode
 from bridge_node.stream.publisher import StatePublisher
 from bridge_node.stream.subscriber import StateSubscriber
 from bridge_node.stream.world_view import TRAFFIC_DTYPE, WorldView
+from sim_core.frames.geodesy import geodetic_to_local
 from sim_core.world import Controls, snapshot, step
 
 CHANNELS = ('[[render.channels]]\nname = "bow"\nwidth = 160\nheight = 90\npitch_deg = -10.0\nblend_right_deg = 5.0\n'
@@ -93,6 +100,47 @@ def test_late_joiner_and_lost_messages_end_with_the_published_state(exercise):
             views_equal(lossy.view, truth)
             assert lossy.resyncs >= 8 and lossy.lost >= 8
     assert publisher.dropped == 0 and publisher.snapshots >= 10
+
+
+def test_a_dis_vessel_goes_out_as_ais_and_reaches_a_late_joiners_traffic(exercise):
+    """Another simulator's Entity State PDU (opendis) becomes a vessel: !AIVDM on the NMEA
+    link, and a row of WorldView.traffic for a subscriber that joins after it was heard."""
+    _, cfg, model = exercise
+    data = start_world(model, cfg)
+    nmea_rx, listen, sim = receiver(), free_port(), socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    links = node_config([{"type": "dis", "name": "dis", "listen_port": listen,
+                          "send_to": [f"127.0.0.1:{free_port()}"]},
+                         {"type": "nmea0183", "name": "plotter", "udp_port": nmea_rx.getsockname()[1],
+                          "rates": dict.fromkeys(QUIET, 0), "ais": {"mmsi": 257123450, "to_bow": 20,
+                                                                    "to_stern": 130, "to_port": 10,
+                                                                    "to_starboard": 12}}]).links
+
+    def tick() -> None:
+        now = time.monotonic()
+        hub.poll(now)
+        events = step(model, data, 0.1)
+        hub.publish(events.ship, now)
+        publisher.publish(events, traffic=hub.traffic.table(model.origin))
+
+    with LinkHub(links, cfg.arbitration) as hub, StatePublisher(cfg.stream) as publisher:
+        sim.sendto(other_simulator_pdu(74.002, 20.003, math.radians(250.0), 6.0), ("127.0.0.1", listen))
+        wait_for(lambda: hub.traffic.current, poll=tick)
+        [vessel] = hub.traffic.current
+        with StateSubscriber(cfg.stream.publish, cfg.stream.snapshot) as late:
+            late.sync()
+            [row] = late.view.traffic
+            tick()
+            late.poll(1000)
+            assert late.view.traffic.dtype == TRAFFIC_DTYPE and len(late.view.traffic) == 1
+    sim.close()
+    vdm = [ais_decode(d.decode().strip()).asdict() for d in datagrams(nmea_rx) if d.startswith(b"!AIVDM,1,")]
+    nmea_rx.close()
+    assert [m["mmsi"] for m in vdm if m["msg_type"] == 1] == [vessel.mmsi]
+    assert vdm[0]["lat"] == pytest.approx(74.002, abs=1e-4 / 60) and vdm[0]["speed"] == pytest.approx(11.7, abs=0.1)
+    north, east = geodetic_to_local(math.radians(74.002), math.radians(20.003), *model.origin)
+    assert row["id"] == vessel.mmsi and (row["x"], row["y"]) == pytest.approx((east, north), abs=0.5)
+    assert row["heading"] == pytest.approx(math.radians(250.0), abs=1e-3)  # true, clockwise from north
+    assert row["speed"] == pytest.approx(6.0, abs=1e-3) and (row["length"], row["beam"]) == (0.0, 0.0)
 
 
 def render_node(config, out, *args) -> subprocess.Popen:
