@@ -76,6 +76,7 @@ def test_scripted_and_logged_vessels_go_out_as_aivdm(tmp_path):
     # the logged vessel: its first report plays at the first tick, then it moves as logged
     first, later = by_mmsi[(LOGGED, 1)]
     assert first["lat"] == pytest.approx(74.01, abs=1e-4 / 60) and first["lon"] == pytest.approx(20.02, abs=1e-4 / 60)
+    assert first["speed"] == pytest.approx(8.0, abs=0.1)  # under way from its first report
     north, _ = geodetic_to_local(math.radians(later["lat"]), math.radians(later["lon"]), *START)
     assert north == pytest.approx(8.0 * KNOT * 15.0, abs=0.5)
     assert later["speed"] == pytest.approx(8.0, abs=0.1) and later["course"] == pytest.approx(0.0, abs=0.2)

@@ -97,10 +97,11 @@ class Series:
         return cls(a[:, 0], np.unwrap(a[:, 1]) if angle else a[:, 1])
 
     def at(self, q: float, max_gap: float) -> tuple[float, float]:
-        """Value and rate of change (per s) at time q: linear between samples, held before
-        the first, after the last and through gaps longer than max_gap (rate 0 there)."""
+        """Value and rate of change (per s) at time q: linear between samples (at the first,
+        the first interval's rate), held before the first, after the last and through gaps
+        longer than max_gap (rate 0 there)."""
         t, v = self.t, self.value
-        if len(t) == 1 or q <= t[0]:
+        if len(t) == 1 or q < t[0]:
             return float(v[0]), 0.0
         if q >= t[-1]:
             return float(v[-1]), 0.0
