@@ -7,6 +7,7 @@ heading, rate of turn and alarms shown live."""
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import random
 import time
@@ -16,7 +17,7 @@ from rich.console import Console as Terminal
 from rich.live import Live
 
 from bridge_node.hil.console_links import AlarmReading, ConsoleLink, Order, Reading
-from bridge_node.hil.player import Console, play
+from bridge_node.hil.player import TICK_S, Console, ScenarioResult, play
 from bridge_node.hil.report import result_lines, write_junit
 from bridge_node.hil.scenario import Fault, load_scenario
 from bridge_node.hil.settings import load_console_config
@@ -42,6 +43,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--junit", default=None, metavar="FILE", help="with --script: write JUnit XML here")
     p.add_argument("--wait", type=float, default=30.0, metavar="S",
                    help="wait this long for the node's outputs on every end (default: 30 s)")
+    p.add_argument("--hold", action="store_true",
+                   help="with --script: after the scripts, keep sending the last orders until Ctrl-C or SIGTERM")
+    p.add_argument("--results", default=None, metavar="FILE",
+                   help="with --script: write the expectations met per scenario here (JSON) when the scripts end")
 
 
 class _FaultKeys:
@@ -114,6 +119,8 @@ def _steer(console: Console, terminal: Terminal) -> None:
 def run(args: argparse.Namespace) -> int:
     if not 0.0 < args.wait <= 3600.0:
         raise UserError(f"--wait {args.wait} s is outside the allowed range (0, 3600]")
+    if (args.hold or args.results) and not args.script:
+        raise UserError("--hold and --results go with --script")
     config = load_console_config(args.config or DEFAULT_CONSOLE)
     scripts = [(path, load_scenario(path)) for path in args.script]
     terminal = Terminal(highlight=False)
@@ -126,6 +133,33 @@ def run(args: argparse.Namespace) -> int:
         for path, scenario in scripts:
             results.append(play(console, scenario, path))
             print("\n".join(result_lines(results[-1])), flush=True)
-    if args.junit:
-        write_junit(results, Path(args.junit))
+        if args.junit:
+            write_junit(results, Path(args.junit))
+        if args.results:
+            _write_results(results, Path(args.results))
+        if args.hold:
+            _hold(console)
     return 1 if any(not r.passed for r in results) else 0
+
+
+def _write_results(results: list[ScenarioResult], path: Path) -> None:
+    """Expectations met per scenario, as JSON (written whole, then renamed into place)."""
+    rows = [{"name": r.name, "path": r.path, "passed": r.passed, "met": sum(o.passed for o in r.outcomes),
+             "total": len(r.outcomes), "duration_s": r.duration_s} for r in results]
+    part = path.with_name(path.name + ".part")
+    try:
+        part.write_text(json.dumps(rows), encoding="utf-8")
+        part.replace(path)
+    except OSError as exc:
+        raise UserError(f"--results {path}: cannot write it: {exc.strerror or exc}") from None
+
+
+def _hold(console: Console) -> None:
+    """Keep every end ticking (its last orders repeated, outputs read) until Ctrl-C or SIGTERM."""
+    print("scripts played; holding the last orders", flush=True)
+    try:
+        while True:
+            console.tick(time.monotonic())
+            time.sleep(TICK_S)
+    except KeyboardInterrupt:
+        pass

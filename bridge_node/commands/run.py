@@ -18,6 +18,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.live import Live
 
+from bridge_node.hil.run_console import RunConsole
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config, new_session_dir
 from bridge_node.node.errors import UserError
@@ -103,7 +104,8 @@ def run(args: argparse.Namespace) -> int:
     local = args.render == "local" or (args.render is None and cfg.render.processes == "local")
     renderers = RenderProcesses(cfg, args.config, out, args.frames_every) if local else None
     rendered = []
-    with open_stream(cfg.stream) as publisher:
+    with RunConsole(cfg, args.config, out) as run_console, open_stream(cfg.stream) as publisher:
+        cfg = run_console.cfg  # with the console's link, if the config has one
         try:
             if renderers:
                 renderers.start()  # they load the exercise while this process does
@@ -123,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
         "render_processes": rendered, "frames_rendered": sum(r.get("png_frames", 0) for r in rendered),
         "video": [r["video"] for r in rendered if "video" in r],
         "panorama": [r["panorama"] for r in rendered if "panorama" in r],
-        "record": str(record) if record else None,
+        "record": str(record) if record else None, "console": run_console.summary(),
     }
     try:  # a finished run's summary is never lost to a plotting error
         summary["plot"] = str(plot_run(stats, out / "run.png"))

@@ -89,9 +89,9 @@ class PtyPair:
         self.cut()
 
 
-def _node_link(role: str, kind: str, endpoint: str | int) -> dict:
-    """The node's side of one console end (a ``[[links]]`` table)."""
-    common = {"name": role, "type": kind, "timeout_s": LINK_TIMEOUT_S}
+def _node_link(name: str, kind: str, endpoint: str | int) -> dict:
+    """The node's side of one console end (a ``[[links]]`` table named ``name``)."""
+    common = {"name": name, "type": kind, "timeout_s": LINK_TIMEOUT_S}
     if kind == "can":
         return common | {"interface": "slcan", "channel": endpoint, "bitrate": 250000,
                          "allowed_sources": [CONSOLE_SOURCE]}
@@ -109,6 +109,24 @@ def _console_link(role: str, kind: str, endpoint: str | int) -> dict:
     if kind == "nmea0183":
         return {"role": role, "type": "nmea0183", "port": endpoint, "baudrate": 38400}
     return {"role": role, "type": "modbus", "port": endpoint, "registers": MODBUS_REGISTERS, "writes": MODBUS_WRITES}
+
+
+def wire_end(role: str, kind: str, node_name: str, ptys: Path, stack: ExitStack) -> tuple[dict, dict, PtyPair | None]:
+    """One console end wired to the node: a pty pair (socat) in ``ptys`` for CAN and NMEA
+    0183, a free port on 127.0.0.1 for Modbus; the node's ``[[links]]`` table (named
+    ``node_name``), the console's, and the pair (kept open by ``stack``)."""
+    if kind == "modbus":
+        port = free_port()
+        return _node_link(node_name, kind, port), _console_link(role, kind, port), None
+    pair = stack.enter_context(PtyPair(ptys, role))
+    return (_node_link(node_name, kind, str(pair.node_end)), _console_link(role, kind, str(pair.console_end)),
+            pair)
+
+
+def pty_folder(stack: ExitStack) -> Path:
+    """A temporary folder for pty pairs, removed by ``stack``: socat's address syntax has no
+    quoting, so the ptys live in a folder of plain characters."""
+    return Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="icebridge-hil-")))
 
 
 def parse_kinds(text: str) -> list[str]:
@@ -142,21 +160,17 @@ class Bench:
         load_config(self.base)  # the user's config is checked with the node's own errors first
         base = tomllib.loads(self.base.read_text(encoding="utf-8"))
         node_links, console_links = [], []
-        # socat's address syntax has no quoting: the ptys live in a folder of plain characters
-        ptys = Path(self._stack.enter_context(tempfile.TemporaryDirectory(prefix="icebridge-hil-")))
+        ptys = pty_folder(self._stack)
         for role, kind in [*zip(ORDER_ROLES, self.kinds), ("panel", "nmea0183")]:
-            if kind == "modbus":
-                endpoint = free_port()
-                node_end = console_end = endpoint
-            else:
-                pair = self._stack.enter_context(PtyPair(ptys, role))
+            node_link, console_link, pair = wire_end(role, kind, role, ptys, self._stack)
+            node_links.append(node_link)
+            console_links.append(console_link)
+            if pair is not None:
                 self.pairs[role] = pair
-                node_end, console_end = str(pair.node_end), str(pair.console_end)
-            node_links.append(_node_link(role, kind, node_end))
-            console_links.append(_console_link(role, kind, console_end))
         sources = list(ORDER_ROLES[:len(self.kinds)])
         paths = base.get("paths", {})
         cache = resolve_path(self.base, paths.get("cache_dir", "~/.cache/icebridge"))
+        base.pop("console", None)  # the bench's console gives the orders, not the config's own
         base |= {"links": node_links,
                  "arbitration": base.get("arbitration", {}) | {"rudder": sources, "engine": sources},
                  "paths": paths | {"cache_dir": str(cache), "session_dir": str(self.folder / "sessions")},

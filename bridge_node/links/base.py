@@ -176,7 +176,7 @@ class _Opener:
 
     def __init__(self, open_device: Callable[[], object], close_device: Callable[[object], None],
                  name: str) -> None:
-        self._close_device = close_device
+        self._close_device, self._name = close_device, name
         self._lock = threading.Lock()
         self._done = threading.Event()
         self._abandoned = False
@@ -197,8 +197,8 @@ class _Opener:
         if device is not None:
             try:
                 self._close_device(device)
-            except Exception:  # noqa: BLE001 (nobody is left to tell; the link is closed)
-                pass
+            except Exception as exc:  # noqa: BLE001 (the link is closed: the log is all that is left)
+                log.warning("%s: closing a device that opened after its link closed: %s", self._name, exc)
 
     def wait(self, timeout: float) -> bool:
         """Whether the open has finished, waiting up to ``timeout`` s."""

@@ -68,6 +68,17 @@ class RealtimeSettings(Params):
     rate_hz: float = Field(30.0, ge=5.0, le=120.0, description="world steps per second")
 
 
+class RunConsoleSettings(Params):
+    """The software console that gives a run its orders (``icebridge run``): ``icebridge
+    console`` in its own process plays ``script`` over a real link to the node, then holds its
+    last orders. The node's end is added to ``links`` as ``console``, first in the arbitration."""
+
+    script: str = Field(min_length=1, description="scenario file: relative to the config file's folder, else "
+                        "to config/")
+    link: Literal["can", "nmea0183", "modbus"] = Field("can", description="can: slcan on a pty pair; nmea0183: a "
+                                                       "pty pair; modbus: TCP on 127.0.0.1 (pty pairs need socat)")
+
+
 class NodeConfig(Params):
     """The whole node's configuration. ``ice_field`` and ``ship`` are required."""
 
@@ -86,6 +97,7 @@ class NodeConfig(Params):
     arbitration: ArbitrationSettings = ArbitrationSettings()
     traffic: TrafficSettings = TrafficSettings()
     paths: PathSettings = PathSettings()
+    console: RunConsoleSettings | None = None
 
     @model_validator(mode="after")
     def _link_names(self) -> "NodeConfig":
@@ -128,26 +140,40 @@ def _describe(err: dict) -> str:
 def load_config(path: str | Path | None = None) -> NodeConfig:
     """Read and validate a TOML config (default: config/default.toml). Raises ConfigError.
     A CAN link's relative DBC path is taken from the config file's folder when the file is
-    there, else from the project's ``config/`` folder; the file is checked here."""
+    there, else from the project's ``config/`` folder; the file is checked here. So is the
+    run console's script (``console.script``)."""
     path = Path(path) if path is not None else DEFAULT_CONFIG
     cfg = _load_validated(path, NodeConfig)
     links = [link.model_copy(update={"dbc": str(_dbc_file(path, f"links.{i}.dbc", link.dbc))})
              if link.type == "can" else link for i, link in enumerate(cfg.links)]
-    return cfg.model_copy(update={"links": links})
+    console = cfg.console and cfg.console.model_copy(
+        update={"script": str(_config_file(path, "console.script", cfg.console.script))})
+    return cfg.model_copy(update={"links": links, "console": console})
+
+
+def _config_file(config: Path, key: str, value: str) -> Path:
+    """A regular file a config names: absolute, else in the config file's folder, else in
+    the project's ``config/``. ConfigError naming the file, key and value otherwise."""
+    where = f"{config}: {key} = {value!r}"
+    given = expand_user(value, f"{config}: {key}")
+    candidates = [given] if given.is_absolute() else [config.resolve().parent / value, DEFAULT_CONFIG.parent / value]
+    try:
+        path = next((p for p in candidates if p.exists()), None)
+    except OSError as exc:  # a name too long...
+        raise ConfigError(f"{where}: {exc.strerror or exc}") from None
+    if path is None:
+        raise ConfigError(f"{where}: no such file (looked in {', '.join(str(p.parent) for p in candidates)})")
+    if not path.is_file():
+        raise ConfigError(f"{where}: {path} is not a regular file")
+    return path
 
 
 def _dbc_file(config: Path, key: str, value: str) -> Path:
     """The DBC file a CAN link names, resolved and checked: a regular, readable file of
     sane size that cantools parses. ConfigError naming the file, key and value otherwise."""
     where = f"{config}: {key} = {value!r}"
-    given = expand_user(value, f"{config}: {key}")
-    candidates = [given] if given.is_absolute() else [config.resolve().parent / value, DEFAULT_CONFIG.parent / value]
     try:
-        path = next((p for p in candidates if p.exists()), None)
-        if path is None:
-            raise ConfigError(f"{where}: no such file (looked in {', '.join(str(p.parent) for p in candidates)})")
-        if not path.is_file():
-            raise ConfigError(f"{where}: {path} is not a regular file")
+        path = _config_file(config, key, value)
         if path.stat().st_size > MAX_DBC_BYTES:
             raise ConfigError(f"{where}: {path} is larger than {MAX_DBC_BYTES // 2**20} MiB; not a DBC file")
         cantools.database.load_file(str(path), strict=False)
