@@ -37,9 +37,11 @@ class Camera:
         return self.proj @ self.view
 
 
-def channel_camera(channel: ChannelSettings, north: float, east: float, psi: float, far: float) -> Camera:
-    """The channel's camera for the ship at (north, east) m with heading psi (rad, from north)."""
-    eye = (ship_matrix(north, east, psi) @ np.array([*channel.eye, 1.0]))[:3]
+def channel_camera(channel: ChannelSettings, eye: tuple[float, float, float], north: float, east: float, psi: float,
+                   far: float) -> Camera:
+    """The channel's camera at `eye` (ship frame, m) for the ship at (north, east) m with
+    heading psi (rad, from north)."""
+    eye = (ship_matrix(north, east, psi) @ np.array([*eye, 1.0]))[:3]
     az, el = psi + math.radians(channel.yaw_deg), math.radians(channel.pitch_deg)
     f = np.array([math.sin(az) * math.cos(el), math.cos(az) * math.cos(el), math.sin(el)])
     r = np.cross(f, [0.0, 0.0, 1.0])

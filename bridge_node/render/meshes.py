@@ -1,5 +1,5 @@
-"""Static GPU geometry of a world: template cells as triangles and as cell rasters, and the
-own ship's hull."""
+"""Static GPU geometry of a world: template cells as triangles and as cell rasters (the
+ships' mesh is in ``ship_mesh``)."""
 from __future__ import annotations
 
 import numpy as np
@@ -51,22 +51,3 @@ def cell_rasters(model: WorldModel, size: int) -> np.ndarray:
             draw.polygon([tuple(p) for p in ring * scale], fill=c + 1)
         out.append(np.asarray(img, dtype=np.int64).astype(np.uint16))
     return np.vstack(out)
-
-
-def ship_vertices(contour: np.ndarray, freeboard: float) -> np.ndarray:
-    """Hull sides from the waterline contour up to the deck, and the deck, ship frame."""
-    tri, nrm = [], []
-    centre = contour.mean(axis=0)
-    for a, b in zip(contour, np.roll(contour, -1, axis=0)):
-        tri.append([[*centre, freeboard], [*a, freeboard], [*b, freeboard]])
-        nrm.append([0.0, 0.0, 1.0])
-        side = [[*a, 0.0], [*b, 0.0], [*b, freeboard], [*a, 0.0], [*b, freeboard], [*a, freeboard]]
-        out = np.array([b[1] - a[1], -(b[0] - a[0])])
-        out /= max(np.linalg.norm(out), 1e-12)
-        if out @ ((a + b) / 2 - centre) < 0:
-            out = -out
-        tri += [side[:3], side[3:]]
-        nrm += [[*out, 0.0]] * 2
-    p = np.array(tri, dtype="f4").reshape(-1, 3)
-    n = np.repeat(np.array(nrm, dtype="f4"), 3, axis=0)
-    return np.hstack([p, n]).astype("f4")

@@ -33,11 +33,13 @@ from bridge_node.render.camera import (
     ship_matrix,
     visible_boxes,
 )
-from bridge_node.render.meshes import cell_rasters, cell_vertices, ship_vertices
+from bridge_node.render.meshes import cell_rasters, cell_vertices
 from bridge_node.render.settings import (
     ChannelSettings,
     RenderSettings,
+    eye_point,
 )
+from bridge_node.render.ship_mesh import load_ship, ship_triangles
 from bridge_node.render.sky import Sky, sky_for
 from bridge_node.render.textures import relief_noise
 from bridge_node.stream.world_view import WorldView
@@ -51,7 +53,6 @@ POSE_WIDTH = 2048  # texels per line of the pose textures
 MAX_TILES = 4096 * 4096  # tile table of 8 bytes per tile: 134 MB of texture at most
 RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m tiles)
 WATER = (0.04, 0.09, 0.11)  # the sea's body colour (albedo of the light it sends back up)
-DECK, HULL = (0.35, 0.38, 0.36), (0.55, 0.12, 0.10)
 NOISE_UNIT, THICKNESS_UNIT = 8, 9  # texture units of the relief noise and the tile thicknesses
 EYE_WHITE_LUX = 40.0  # lux a surface needs to look white to eyes adapted to the night
 
@@ -109,8 +110,11 @@ class SceneRenderer:
         info = np.tile(np.array([-1, 0], "i4"), scene.nx * scene.ny)
         self.tile_info = ctx.texture((scene.nx, scene.ny), 2, info.tobytes(), dtype="i4")
         self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST
-        hull = ship_vertices(model.contour, settings.freeboard_m)
-        self.ship_vao = ctx.vertex_array(self.ship, [(ctx.buffer(hull.tobytes()), "3f 3f", "in_pos", "in_normal")])
+        mesh = load_ship(model.ship.particulars, model.contour, settings.freeboard_m)
+        self.ship_extent = mesh.bounds  # (2, 3): lower and upper corner, ship frame, m
+        hull = ship_triangles(mesh)
+        self.ship_vao = ctx.vertex_array(self.ship, [(ctx.buffer(hull.tobytes()), "3f 3f 3f", "in_pos", "in_normal",
+                                                      "in_colour")])
         self.cell_verts, self.cell_vert_start, self.cell_side_start = cell_vertices(model)
         self.raster_size = RASTER_SIZE if len(model.ice.templates) <= 4 else RASTER_SIZE // 2
         raster = cell_rasters(model, self.raster_size)
@@ -229,7 +233,8 @@ class SceneRenderer:
         the blend texture (width x 1 float: the channel's edge-blend factors)."""
         ctx, s = self.ctx, self.settings
         north, east, psi = view.ship.north, view.ship.east, view.ship.heading
-        cam = channel_camera(channel, north, east, psi, s.far_m)
+        p = self.model.ship.particulars
+        cam = channel_camera(channel, eye_point(channel.eye, p.look.bridge_eye, p.beam), north, east, psi, s.far_m)
         vp = cam.view_proj
         half = math.radians(channel.hfov_deg) / 2
         sky = self.sky
@@ -248,9 +253,9 @@ class SceneRenderer:
         # near to far: ship, floes, then the environment behind them, so that the depth test
         # spares the full-screen pass every pixel already covered
         ctx.enable(moderngl.DEPTH_TEST)
-        self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), deck_colour=DECK,
-                  hull_colour=HULL, **common)
+        self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), **common)
         self.ship_vao.render()
+        self._draw_traffic(getattr(view, "traffic", None), cam)
         if self.tile_floes:
             ctx.enable_direct(GL_CLIP_DISTANCE0)
             ctx.enable(moderngl.CULL_FACE)  # not for the ship: its matrix mirrors (starboard-handed frame)
@@ -326,6 +331,26 @@ class SceneRenderer:
                 tops.render()
                 if full:
                     sides.render()
+
+    def _draw_traffic(self, traffic: np.ndarray | None, cam: Camera) -> None:
+        """Each other vessel in view and within the far distance as the own ship's mesh,
+        scaled to its length and beam (the own ship's where unknown, 0) and in height as in
+        beam."""
+        if traffic is None or len(traffic) == 0:
+            return
+        p = self.model.ship.particulars
+        length = np.where(traffic["length"] > 0, traffic["length"], p.length)
+        beam = np.where(traffic["beam"] > 0, traffic["beam"], p.beam)
+        lo, hi = self.ship_extent
+        reach = np.hypot(lo[:2], hi[:2]).max() * np.maximum(length / p.length, beam / p.beam)
+        centre = np.column_stack([traffic["x"], traffic["y"], np.zeros(len(traffic))])
+        pad = np.column_stack([reach, reach, np.full(len(traffic), hi[2] * (beam / p.beam).max())])
+        near = np.hypot(traffic["x"] - cam.eye[0], traffic["y"] - cam.eye[1]) < self.settings.far_m
+        for k in np.flatnonzero(visible_boxes(cam.view_proj, centre - pad, centre + pad) & near):
+            scale = np.diag([length[k] / p.length, beam[k] / p.beam, beam[k] / p.beam, 1.0])
+            set_matrix(self.ship["ship_to_world"], ship_matrix(traffic["y"][k], traffic["x"][k],
+                                                               traffic["heading"][k]) @ scale)
+            self.ship_vao.render()
 
     @staticmethod
     def _set(prog: moderngl.Program, **uniforms) -> None:

@@ -1,8 +1,9 @@
 """Channels of the projection system and the look of the scene (``[render]`` in the config).
 
 A channel is one projector: its view direction relative to the ship's head (yaw, + to
-starboard; pitch, + up), its field of view, resolution, eye point on the bridge (ship
-frame: x forward, y to starboard, z up from the waterline, m), edge-blend bands (degrees at
+starboard; pitch, + up), its field of view, resolution, eye point (ship frame: x forward,
+y to starboard, z up from the waterline, m; or the ship's bridge eye, on the centre line or
+at a wing's end), edge-blend bands (degrees at
 its left and right edges, where it overlaps its neighbours), and its output: PNG frames,
 a window on a given monitor (glfw; full-screen or at the monitor's corner), or ``none``
 (render only, for timing).
@@ -18,6 +19,19 @@ from pydantic import AwareDatetime, Field, model_validator
 from sim_core.params import Params, repeated
 
 
+EyeName = Literal["bridge", "port_wing", "starboard_wing"]
+WING_OVERHANG_M = 0.5  # m: a wing's eye outside the beam, to look down the ship's side
+
+
+def eye_point(eye: list[float] | EyeName, bridge_eye: list[float], beam: float) -> tuple[float, float, float]:
+    """A channel's eye in the ship frame (m): its own point, or the ship's bridge eye (x, z)
+    on the centre line or at a wing's end."""
+    if not isinstance(eye, str):
+        return eye[0], eye[1], eye[2]
+    y = {"bridge": 0.0, "port_wing": -1.0, "starboard_wing": 1.0}[eye] * (0.5 * beam + WING_OVERHANG_M)
+    return bridge_eye[0], y, bridge_eye[1]
+
+
 class ChannelSettings(Params):
     name: Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9_\-]+$")]
     yaw_deg: float = Field(0.0, ge=-180.0, le=180.0, description="view direction from the bow, + starboard")
@@ -26,8 +40,8 @@ class ChannelSettings(Params):
     vfov_deg: float | None = Field(None, gt=1.0, lt=170.0, description="unset: from hfov and the aspect ratio")
     width: int = Field(1280, ge=16, le=8192)
     height: int = Field(720, ge=16, le=8192)
-    eye: list[float] = Field(default_factory=lambda: [10.0, 0.0, 25.0], min_length=3, max_length=3,
-                             description="ship frame, m")
+    eye: Annotated[list[float], Field(min_length=3, max_length=3)] | EyeName = Field(
+        "bridge", description="ship frame, m; or the ship's bridge eye: on the centre line or a wing's end")
     blend_left_deg: float = Field(0.0, ge=0.0, le=30.0)
     blend_right_deg: float = Field(0.0, ge=0.0, le=30.0)
     gamma: float = Field(2.2, ge=1.0, le=3.0, description="projector gamma for the blend ramps")
@@ -50,9 +64,10 @@ class ChannelSettings(Params):
 
 
 def _front_channels() -> list[ChannelSettings]:
-    return [ChannelSettings(name="port", yaw_deg=-55.0, blend_right_deg=5.0),
-            ChannelSettings(name="centre", yaw_deg=0.0, blend_left_deg=5.0, blend_right_deg=5.0),
-            ChannelSettings(name="starboard", yaw_deg=55.0, blend_left_deg=5.0),
+    # pitched 5 deg down, so that the bow and the ice beside it are on the screens
+    return [ChannelSettings(name="port", yaw_deg=-55.0, pitch_deg=-5.0, blend_right_deg=5.0),
+            ChannelSettings(name="centre", yaw_deg=0.0, pitch_deg=-5.0, blend_left_deg=5.0, blend_right_deg=5.0),
+            ChannelSettings(name="starboard", yaw_deg=55.0, pitch_deg=-5.0, blend_left_deg=5.0),
             ChannelSettings(name="astern", yaw_deg=180.0, eye=[-60.0, 0.0, 25.0])]
 
 

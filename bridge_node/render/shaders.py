@@ -262,23 +262,24 @@ uniform mat4 view_proj;
 uniform mat4 ship_to_world;
 in vec3 in_pos;
 in vec3 in_normal;
+in vec3 in_colour;
 out vec3 world;
 out vec3 normal;
+out vec3 albedo;
 void main() {
     world = (ship_to_world * vec4(in_pos, 1.0)).xyz;
-    normal = mat3(ship_to_world) * in_normal;
+    normal = normalize(inverse(transpose(mat3(ship_to_world))) * in_normal);  // scaled for other vessels
+    albedo = in_colour;
     gl_Position = view_proj * vec4(world, 1.0);
 }
 """
 SHIP_FS = "#version 330\n" + _COMMON + """
-uniform vec3 deck_colour;
-uniform vec3 hull_colour;
 in vec3 world;
 in vec3 normal;
+in vec3 albedo;
 out vec4 colour;
 void main() {
-    vec3 n = normalize(normal);
-    colour = opaque(fogged(lit(abs(n.z) > 0.5 ? deck_colour : hull_colour, n, world), world));
+    colour = opaque(fogged(lit(albedo, normalize(normal), world), world));
 }
 """
 

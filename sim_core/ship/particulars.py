@@ -113,6 +113,15 @@ class IceHull(Params):
         0.8, ge=0.0, le=1.0, description="share of the channel covered by broken ice")
 
 
+class ShipLook(Params):
+    """How the projector channels draw the ship; the simulation does not read it."""
+
+    model_glb: str | None = Field(None, description="GLB of hull and superstructure in the ship frame (m, x forward, "
+                                                    "y starboard, z up from the waterline); unset: generated")
+    bridge_eye: list[float] = Field(default_factory=lambda: [10.0, 25.0], min_length=2, max_length=2,
+                                    description="eye on the bridge's centre line: x forward of midship, z, m")
+
+
 class ShipParticulars(Params):
     """Everything static about one ship."""
 
@@ -133,3 +142,4 @@ class ShipParticulars(Params):
     rudder: Rudder
     engine: Engine
     ice: IceHull
+    look: ShipLook = Field(default_factory=ShipLook)

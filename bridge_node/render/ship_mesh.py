@@ -1,0 +1,117 @@
+"""The own ship's mesh (hull and superstructure) for the channels: loaded from the GLB that
+the ship file names (``[look] model_glb``), or generated from the particulars, so that its
+waterline is the hull contour the ice feels and the bridge stands under the bridge eye.
+
+Frame: the ship frame, metres: x forward from midship, y to starboard, z up from the
+waterline. Other vessels reuse the mesh, scaled to their length and beam.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from sim_core.ship.particulars import ShipParticulars
+
+HULL, BOOT, DECK, HOUSE, MAST = (0.50, 0.10, 0.08), (0.12, 0.12, 0.13), (0.33, 0.37, 0.34), (0.86, 0.86, 0.82), \
+    (0.85, 0.62, 0.10)
+BOTTOM_M = -2.0  # m: the hull is drawn this deep (floes sliding under it show in the water)
+EYE_ABOVE_FLOOR_M = 1.7  # m: the bridge eye above the bridge deck
+SHEER = 0.25  # the deck's rise at the stem over the freeboard
+
+
+class ShipModelError(ValueError):
+    """A ship's GLB that cannot be used; the message names the ship file's key and value."""
+
+
+def _faces(tris: np.ndarray, colour: tuple[float, float, float]) -> trimesh.Trimesh:
+    """Unshared triangles (n, 3, 3) of one colour (each vertex its own, so vertex and face
+    colours agree in a GLB)."""
+    mesh = trimesh.Trimesh(tris.reshape(-1, 3), np.arange(len(tris) * 3).reshape(-1, 3), process=False)
+    mesh.visual.face_colors = np.tile(np.round(np.array([*colour, 1.0]) * 255).astype(np.uint8), (len(tris), 1))
+    return mesh
+
+
+def _box(lo: tuple[float, float, float], hi: tuple[float, float, float], colour: tuple[float, float, float]
+         ) -> trimesh.Trimesh:
+    box = trimesh.creation.box(bounds=np.array([lo, hi], dtype=float))
+    return _faces(box.vertices[box.faces], colour)
+
+
+def _oriented(tris: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """The triangles wound so that their normals point away from `centre`."""
+    n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    inward = np.einsum("ij,ij->i", n, tris.mean(axis=1) - centre) < 0.0
+    tris = tris.copy()
+    tris[inward] = tris[inward][:, ::-1]
+    return tris
+
+
+def default_ship(particulars: ShipParticulars, contour: np.ndarray, freeboard: float) -> trimesh.Trimesh:
+    """A hull lofted from the waterline contour (m, ship frame) to a sheered deck, the stem
+    raked at the particulars' stem angle (the rake at most 5 % of the length), a boot
+    topping below the waterline, a deckhouse whose top is the bridge deck under the bridge
+    eye, bridge wings 1 m beyond the beam, and a foremast."""
+    L, B = particulars.length, particulars.beam
+    rise = np.clip((contour[:, 0] - 0.2 * L) / (0.3 * L), 0.0, 1.0) ** 2  # 0 amidships, 1 at the stem
+    rake = min(freeboard / math.tan(math.radians(particulars.ice.stem_angle_deg)), 0.05 * L)
+    deck = np.column_stack([contour[:, 0] + rake * rise, contour[:, 1], freeboard * (1.0 + SHEER * rise)])
+    water = np.column_stack([contour, np.zeros(len(contour))])
+    bottom = np.column_stack([contour * 0.97, np.full(len(contour), BOTTOM_M)])
+    centre = np.array([0.0, 0.0, 0.5 * freeboard])
+
+    def band(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+        a, b = lower, np.roll(lower, -1, axis=0)
+        c, d = upper, np.roll(upper, -1, axis=0)
+        return _oriented(np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]), centre)
+
+    middle = np.array([deck[:, 0].mean(), 0.0, deck[:, 2].mean()])
+    top = np.stack([np.repeat(middle[None], len(deck), 0), deck, np.roll(deck, -1, axis=0)], 1)
+    top = _oriented(top, middle - [0.0, 0.0, 1.0])
+    bx, bz = particulars.look.bridge_eye
+    floor = bz - EYE_ABOVE_FLOOR_M
+    fore = 0.5 * L - 0.12 * L
+    parts = [_faces(band(water, deck), HULL), _faces(band(bottom, water), BOOT), _faces(top, DECK),
+             _box((bx - 16.0, -0.4 * B, freeboard - 0.5), (bx + 2.0, 0.4 * B, floor), HOUSE),
+             _box((bx - 2.5, -0.5 * B - 1.0, floor - 0.4), (bx + 2.0, 0.5 * B + 1.0, floor), HOUSE),
+             _box((fore - 0.4, -0.4, freeboard), (fore + 0.4, 0.4, freeboard + 14.0), MAST)]
+    return trimesh.util.concatenate(parts)
+
+
+def load_ship(particulars: ShipParticulars, contour: np.ndarray, freeboard: float) -> trimesh.Trimesh:
+    """The ship's mesh: its GLB (an absolute path or one relative to the working directory)
+    if the ship file names one, else the generated default."""
+    name = particulars.look.model_glb
+    if name is None:
+        return default_ship(particulars, contour, freeboard)
+    where = f"ships/{particulars.name}.toml: look.model_glb = {name!r}"
+    path = Path(name)
+    if path.suffix.lower() != ".glb" or not path.is_file():
+        raise ShipModelError(f"{where}: expected an existing .glb file")
+    try:
+        mesh = trimesh.load(path, force="mesh", process=False)
+    except Exception as exc:  # trimesh raises many kinds on a damaged file
+        raise ShipModelError(f"{where}: not a GLB trimesh can read ({type(exc).__name__}: {exc})") from None
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        raise ShipModelError(f"{where}: the file holds no triangles")
+    return mesh
+
+
+def ship_triangles(mesh: trimesh.Trimesh) -> np.ndarray:
+    """Vertex data of the mesh's triangles: position 3f, face normal 3f, colour 3f (its face
+    colours; a textured mesh gives its main colour)."""
+    visual = mesh.visual if isinstance(mesh.visual, trimesh.visual.ColorVisuals) else mesh.visual.to_color()
+    colour = np.asarray(visual.face_colors, dtype=float)[:, :3] / 255.0
+    out = np.zeros((len(mesh.faces), 3, 9), dtype="f4")
+    out[:, :, :3] = mesh.vertices[mesh.faces]
+    out[:, :, 3:6] = mesh.face_normals[:, None]
+    out[:, :, 6:] = colour[:, None]
+    return out.reshape(-1, 9)
+
+
+def glb_bytes(mesh: trimesh.Trimesh) -> bytes:
+    """The mesh as a GLB file (ship frame, z up), e.g. the generated default as a start for a
+    ship's own model."""
+    return mesh.export(file_type="glb")
