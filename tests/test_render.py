@@ -12,6 +12,7 @@ from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
 from bridge_node.render.renderer import SceneRenderer
 from bridge_node.render.settings import ChannelSettings, RenderSettings
+from bridge_node.render.warp import WarpError, write_pfm
 from bridge_node.stream.world_view import WorldView
 from sim_core.ice.floes import FloeStatus
 from sim_core.world import snapshot, step
@@ -175,3 +176,20 @@ def test_bad_channel_config_is_a_clear_error(tmp_path):
         r = run_cli("render-snapshot", "--config", str(cfg), "--time", "0")
         assert r.returncode == 2 and message in r.stderr and str(cfg) in r.stderr, r.stderr
         assert "Traceback" not in r.stderr
+
+
+def test_a_warp_mesh_moves_pixels_as_its_grid_says(ctx, exercise, tmp_path):
+    model, data = exercise
+    c = channel(yaw_deg=180.0, pitch_deg=-20.0, eye=[-80.0, 0.0, 20.0])
+    dx, dy = 10, 6  # px: the grid shows each output pixel the flat image's pixel 10 left of and 6 above it
+    rows, cols = 5, 9
+    y, x = np.meshgrid(np.linspace(0.0, 1.0, rows), np.linspace(0.0, 1.0, cols), indexing="ij")
+    grid = tmp_path / "warp.pfm"
+    write_pfm(grid, np.dstack([x - dx / W, y + dy / H]))  # bottom row first, y up
+    flat, = render(ctx, model, data, [c])
+    warped, = render(ctx, model, data, [c.model_copy(update={"warp": str(grid)})])
+    assert np.abs(warped[dy:, dx:].astype(int) - flat[:-dy, :-dx]).max() <= 2
+    assert warped[:, :dx].max() == 0 and warped[:dy].max() == 0  # shown from outside the flat image: black
+    grid.write_bytes(grid.read_bytes()[:-12])
+    with pytest.raises(WarpError, match=r"render.channels \(c\): warp = .*warp.pfm.*bytes of data"):
+        render(ctx, model, data, [c.model_copy(update={"warp": str(grid)})])

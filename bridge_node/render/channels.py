@@ -11,6 +11,7 @@ import numpy as np
 from bridge_node.render.renderer import SceneRenderer
 from bridge_node.render.settings import ChannelSettings
 from bridge_node.render.video import save_png
+from bridge_node.render.warp import WarpMesh, read_pfm
 from bridge_node.render.windows import ChannelWindow, window_context
 from bridge_node.stream.world_view import WorldView
 
@@ -51,27 +52,39 @@ def column_factors(channel: ChannelSettings) -> np.ndarray:
 
 
 class ChannelTarget:
-    """The framebuffer of one channel: drawn multisampled (``samples`` > 1) and resolved
-    into the colour texture that windows show and frames are read from."""
+    """The framebuffer of one channel: drawn multisampled (``samples`` > 1) and resolved,
+    then, with a warp grid, drawn through it, into the colour texture that windows show and
+    frames are read from."""
 
     def __init__(self, ctx: moderngl.Context, channel: ChannelSettings, samples: int) -> None:
         size = (channel.width, channel.height)
         self.channel = channel
         self.colour = ctx.texture(size, 3)  # a texture, so that a channel window can show it
+        self.warp = self.flat = None
+        if channel.warp is not None:
+            self.warp = WarpMesh(ctx, read_pfm(Path(channel.warp),
+                                               f"render.channels ({channel.name}): warp = {channel.warp!r}"))
+            self.flat = ctx.texture(size, 3)
+        drawn = self.flat or self.colour
         if samples > 1:
-            self.fbo = ctx.framebuffer([self.colour])
+            self.resolved = ctx.framebuffer([drawn])
             self.draw_fbo = ctx.framebuffer([ctx.renderbuffer(size, 3, samples=samples)],
                                             ctx.depth_renderbuffer(size, samples=samples))
         else:
-            self.fbo = self.draw_fbo = ctx.framebuffer([self.colour], ctx.depth_renderbuffer(size))
+            self.resolved = self.draw_fbo = ctx.framebuffer([drawn], ctx.depth_renderbuffer(size))
+        self.fbo = ctx.framebuffer([self.colour]) if self.warp else self.resolved
         self.blend = ctx.texture((channel.width, 1), 1, column_factors(channel).tobytes(), dtype="f4")
         self.blend.filter = moderngl.NEAREST, moderngl.NEAREST
 
     def render(self, renderer: SceneRenderer, view: WorldView) -> None:
         self.draw_fbo.use()
         renderer.draw(view, self.channel, self.blend)
-        if self.draw_fbo is not self.fbo:
-            renderer.ctx.copy_framebuffer(self.fbo, self.draw_fbo)  # resolve the samples
+        if self.draw_fbo is not self.resolved:
+            renderer.ctx.copy_framebuffer(self.resolved, self.draw_fbo)  # resolve the samples
+        if self.warp is not None:
+            self.fbo.use()
+            renderer.ctx.disable(moderngl.DEPTH_TEST)
+            self.warp.draw(self.flat)
 
     def image(self) -> np.ndarray:
         """The last frame as (height, width, 3) uint8, top row first."""

@@ -7,6 +7,8 @@ from bridge_node.node.config import NodeConfig
 from bridge_node.node.errors import UserError
 from bridge_node.render.channels import ChannelSet, context_for
 from bridge_node.render.renderer import SceneRenderer
+from bridge_node.render.ship_mesh import ShipModelError
+from bridge_node.render.warp import WarpError
 from bridge_node.render.windows import WindowError
 from sim_core.world import WorldModel
 
@@ -32,6 +34,8 @@ def open_channels(cfg: NodeConfig, model: WorldModel) -> ChannelSet:
         ctx, hidden = context_for(cfg.render.channels)
     except WindowError as exc:
         raise UserError(f"render: {exc}; {no_display}") from None
+    except (ShipModelError, WarpError) as exc:
+        raise UserError(str(exc)) from None
     except Exception as exc:  # moderngl raises plain Exception when EGL cannot start
         raise UserError(f"cannot open a headless OpenGL context through EGL ({exc}); install the EGL and "
                         "Mesa libraries (scripts/setup.sh installs libegl1, libgl1, libegl-mesa0, "
@@ -40,3 +44,5 @@ def open_channels(cfg: NodeConfig, model: WorldModel) -> ChannelSet:
         return ChannelSet(SceneRenderer(ctx, model, cfg.render), cfg.render.channels, hidden)
     except WindowError as exc:
         raise UserError(f"render: {exc}; {no_display}") from None
+    except (ShipModelError, WarpError) as exc:
+        raise UserError(str(exc)) from None

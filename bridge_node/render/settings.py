@@ -45,6 +45,8 @@ class ChannelSettings(Params):
     blend_left_deg: float = Field(0.0, ge=0.0, le=30.0)
     blend_right_deg: float = Field(0.0, ge=0.0, le=30.0)
     gamma: float = Field(2.2, ge=1.0, le=3.0, description="projector gamma for the blend ramps")
+    warp: str | None = Field(None, description="PFM warp grid of the projector on a curved screen "
+                                               "(see render/warp.py); unset: flat")
     output: Literal["png", "window", "none"] = "png"
     monitor: int = Field(0, ge=0, le=15, description="window output: the monitor's number")
     fullscreen: bool = Field(False, description="window output: full-screen on that monitor")

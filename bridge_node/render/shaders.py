@@ -295,3 +295,21 @@ uniform sampler2D blend_ramp;    // per pixel column: the channel's edge-blend f
 out vec4 colour;
 void main() { colour = vec4(vec3(texelFetch(blend_ramp, ivec2(gl_FragCoord.x, 0), 0).r), 1.0); }
 """
+
+WARP_VS = """
+#version 330
+in vec2 in_ndc;                  // a grid node on the projector's output
+in vec2 in_uv;                   // the point of the flat image it shows (0..1; outside: black)
+out vec2 uv;
+void main() { uv = in_uv; gl_Position = vec4(in_ndc, 0.0, 1.0); }
+"""
+WARP_FS = """
+#version 330
+uniform sampler2D flat_image;    // the channel's image, drawn flat
+in vec2 uv;
+out vec4 colour;
+void main() {
+    bool inside = all(greaterThanEqual(uv, vec2(0.0))) && all(lessThanEqual(uv, vec2(1.0)));
+    colour = inside ? vec4(texture(flat_image, uv).rgb, 1.0) : vec4(0.0, 0.0, 0.0, 1.0);
+}
+"""
