@@ -228,3 +228,48 @@ def test_replayed_sentences_carry_the_logged_time(capsys, tmp_path, exercise):
     first = time.strftime("%H%M%S", time.gmtime(fixes[0].t))
     last = time.strftime("%H%M%S", time.gmtime(fixes[-1].t + 1))
     assert all(first <= r[1][:6] <= last for r in rmc)
+
+
+def test_the_other_vessels_of_a_replayed_ais_log_go_out_as_aivdm_on_its_clock(capsys, tmp_path, exercise):
+    """Replaying one vessel of an AIS log, the other goes out as !AIVDM where the log had
+    it at each report's logged UTC second, at the class A interval, named by its type 5."""
+    import re
+    import socket
+    import threading
+
+    from pyais import decode
+
+    port = int(re.search(r"udp_port = (\d+)", exercise.read_text()).group(1))
+    config = tmp_path / "ais.toml"
+    quiet = "".join(f"{k} = 0\n" for k in ("RMC", "GGA", "VTG", "ZDA", "HDT", "ROT", "RSA", "RPM", "VBW", "XDR"))
+    config.write_text(exercise.read_text() + f'[links.rates]\n{quiet}[links.ais]\nmmsi = 257123450\nto_bow = 20\n'
+                      'to_stern = 130\nto_port = 10\nto_starboard = 12\n')
+    other = voyage(start=(300.0, -200.0), heading0=90.0, rate_deg_s=0.0)  # due east at 6 kn
+    (tmp_path / "ais.log").write_text("\n".join(ais_lines({MMSI: ("ICE TEST", voyage()), OTHER: ("OTHER", other)})))
+    received = []
+
+    def listen(listener: socket.socket) -> None:  # read while the replay runs: --max outpaces a socket buffer
+        try:
+            while True:
+                received.extend(listener.recv(65536).decode("ascii").split("\r\n"))
+        except TimeoutError:
+            pass
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as listener:
+        listener.bind(("127.0.0.1", port))
+        listener.settimeout(2.0)
+        reader = threading.Thread(target=listen, args=(listener,))
+        reader.start()
+        code, _, err = replay(capsys, config, tmp_path / "out", tmp_path / "ais.log", "--mmsi", MMSI, "--max")
+        reader.join()
+    assert code == 0, err
+    vdm = [s for s in received if s.startswith("!AIVDM")]
+    reports = [decode(s).asdict() for s in vdm if s.split(",")[1] == "1"]
+    assert {r["mmsi"] for r in reports} == {OTHER} and 11 <= len(reports) <= 13  # every 10 s of 120 s
+    lon = np.array([f.lon for f in other])
+    for r in reports:
+        assert r["lat"] == pytest.approx(other[0].lat, abs=1e-4 / 60)
+        assert r["speed"] == pytest.approx(6.0, abs=0.1) and r["course"] == pytest.approx(90.0, abs=0.1)
+        at = np.interp(r["lon"], lon, [f.t for f in other])  # when the log had it there
+        assert -0.6 <= (at - r["second"] + 30.0) % 60.0 - 30.0 <= 1.1  # at that UTC second (0.5 s steps)
+    assert decode(*[s for s in vdm if s.split(",")[1] == "2"][:2]).asdict()["shipname"] == "OTHER"

@@ -116,10 +116,12 @@ class Outputs:
     """The replay's outputs: the configured links (polled only to keep them up; a live
     console's orders are counted and ignored) and the state stream. The links run on the
     source's clock, moved to start at this process's monotonic clock (their own timers,
-    a serial line's budget say, started on it)."""
+    a serial line's budget say, started on it). The hub's traffic picture goes on the
+    stream too, placed on the field whose corner is at ``origin`` (latitude, longitude rad)."""
 
-    def __init__(self, hub: LinkHub | None, publisher: StatePublisher | None) -> None:
-        self.hub, self.publisher = hub, publisher
+    def __init__(self, hub: LinkHub | None, publisher: StatePublisher | None,
+                 origin: tuple[float, float]) -> None:
+        self.hub, self.publisher, self.origin = hub, publisher, origin
         self._offset: float | None = None  # monotonic s - source clock s
 
     def publish(self, events: WorldEvents, clock: float, alarms: list[Alarm], stats: ReplayStats,
@@ -137,7 +139,7 @@ class Outputs:
                     stats.console_orders_ignored += len(link.poll(now))
                 self.hub.publish(events.ship, now)
         if self.publisher is not None and send:
-            self.publisher.publish(events)
+            self.publisher.publish(events, traffic=self.hub.traffic.table(self.origin) if self.hub else None)
 
     def resync(self, model: WorldModel, data: WorldData) -> None:
         """After a seek: the whole state to the stream (render processes take it as a snapshot)."""

@@ -127,15 +127,16 @@ def load_inputs(paths: list[str], mmsi: int | None, mapping: dict[str, str],
     for number, v in sentences.vessels.items():
         if v.reports:
             by_mmsi.setdefault(number, []).append(v.track(sentences.own.files, sentences.own.bad))
+    others = [v for number, v in sentences.vessels.items() if number != mmsi and v.reports and not v.own]
     if mmsi is not None:
         if mmsi not in by_mmsi:
             heard = ", ".join(str(m) for m in sorted(by_mmsi)) or "none"
             raise UserError(f"--mmsi {mmsi}: no position reports of that vessel in {names} "
                             f"(vessels with positions: {heard})")
-        return _merged(by_mmsi[mmsi])
+        return _merged(by_mmsi[mmsi], others)
     own = ([sentences.own] if sentences.own.fixes else []) + track_logs
     if own:
-        return _merged(own)
+        return _merged(own, others)
     if len(by_mmsi) == 1:
         return _merged(next(iter(by_mmsi.values())))
     if by_mmsi:
@@ -153,9 +154,10 @@ def load_inputs(paths: list[str], mmsi: int | None, mapping: dict[str, str],
     raise UserError(f"{names}: no usable track: no position in it (looked for {LOOKED_FOR}){found}")
 
 
-def _merged(logs: list[TrackLog]) -> TrackLog:
-    """One track log from the logs of one voyage (several files)."""
-    out = TrackLog([])
+def _merged(logs: list[TrackLog], others: list | None = None) -> TrackLog:
+    """One track log from the logs of one voyage (several files), with the other AIS
+    vessels heard in them (``sentences.Vessel``, replayed as traffic)."""
+    out = TrackLog([], others=others or [])
     for log in logs:
         out.merge(log)
     return out

@@ -38,6 +38,7 @@ class TrackLog:
     speed: list[tuple[float, float]] = field(default_factory=list)  # over ground
     absolute: bool = True
     vessel: str | None = None  # the AIS vessel replayed: MMSI and name
+    others: list = field(default_factory=list)  # the log's other AIS vessels (``sentences.Vessel``): traffic
     read: Counter = field(default_factory=Counter)
     ignored: Counter = field(default_factory=Counter)
     bad: Counter = field(default_factory=Counter)
@@ -57,6 +58,7 @@ class TrackLog:
             getattr(self, name).extend(getattr(other, name))
         self.absolute = self.absolute and other.absolute
         self.vessel = self.vessel or other.vessel
+        self.others += other.others
         self.read.update(other.read)
         self.ignored.update(other.ignored)
         self.bad.update(other.bad)

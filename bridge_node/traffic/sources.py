@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -17,8 +17,9 @@ from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, NodeConfig, res
 from bridge_node.node.errors import UserError
 from bridge_node.replay.inputs import read_text
 from bridge_node.replay.sentences import SentenceLog
+from bridge_node.replay.sentences import Vessel as LoggedVessel
 from bridge_node.replay.settings import ReplaySettings
-from bridge_node.replay.track import TrackPath, clean
+from bridge_node.replay.track import TrackPath, TrackSource, clean
 from bridge_node.traffic.picture import TrafficPicture, VesselSource
 from bridge_node.traffic.settings import ScriptedVessel
 from sim_core.frames.geodesy import local_to_geodetic
@@ -84,22 +85,22 @@ class ScriptedTraffic(_Clock):
 
 
 class AisLogTraffic(_Clock):
-    """The other vessels (``!AIVDM``) of an AIS log, replayed: the log's first position
-    report plays at the first call; each vessel is there from its first position report to
-    its last, moving between them as ``TrackPath`` places a replayed ship (linear, held
-    through gaps longer than ``replay.max_gap_s``, impossible jumps skipped), with the name
-    and dimensions the log gave. A log without times counts each vessel's reports on from
-    0 s by their UTC second."""
+    """Vessels of an AIS log (``sentences.Vessel``), replayed: at the first call the logged
+    time is ``start`` (None: the first position report); each vessel is there from its first
+    position report to its last, moving between them as ``TrackPath`` places a replayed
+    ship (linear, held through gaps longer than ``replay.max_gap_s``, impossible jumps
+    skipped), with the name and dimensions the log gave. A log without times counts each
+    vessel's reports on from 0 s by their UTC second."""
 
-    def __init__(self, log: SentenceLog, origin: tuple[float, float], replay: ReplaySettings) -> None:
+    def __init__(self, logged: Iterable[LoggedVessel], origin: tuple[float, float], replay: ReplaySettings,
+                 start: float | None = None) -> None:
         self.origin, self.max_gap = origin, replay.max_gap_s
         self.paths = []
-        for v in log.vessels.values():
-            track = clean(v.track(log.own.files, Counter()), replay.max_gap_s, replay.max_speed_kn * KNOT) \
-                if v.reports and not v.own else None
+        for v in logged:
+            track = clean(v.track([], Counter()), replay.max_gap_s, replay.max_speed_kn * KNOT)
             if track is not None:
                 self.paths.append((v, TrackPath(track, origin, replay.max_gap_s)))
-        self.t0 = min((path.track.start for _, path in self.paths), default=0.0)
+        self.t0 = start if start is not None else min((path.track.start for _, path in self.paths), default=0.0)
 
     def vessels(self, now: float) -> list[Vessel]:
         t, out = self.t0 + self.since_start(now), []
@@ -125,7 +126,7 @@ def read_ais_log(path: Path, where: str, origin: tuple[float, float], replay: Re
         raise ConfigError(f"{where}: {exc}") from None
     log = SentenceLog()
     log.read(str(path), text.splitlines())
-    traffic = AisLogTraffic(log, origin, replay)
+    traffic = AisLogTraffic([v for v in log.vessels.values() if v.reports and not v.own], origin, replay)
     if not traffic.paths:
         raise ConfigError(f"{where}: no position reports of other vessels (AIS types 1, 2, 3, 18, 19 as !AIVDM) "
                           "in it")
@@ -142,3 +143,13 @@ def traffic_picture(cfg: NodeConfig, config_path: str | Path | None) -> TrafficP
     if cfg.traffic.vessels:
         sources.append(ScriptedTraffic(cfg.traffic.vessels, origin))
     return TrafficPicture(sources)
+
+
+def replay_traffic(source: object, origin: tuple[float, float], replay: ReplaySettings) -> TrafficPicture:
+    """The picture of ``icebridge replay``: a replayed track log's other AIS vessels, on
+    its logged clock (the links' first tick is the source's first step); none for a
+    session record."""
+    if not isinstance(source, TrackSource) or not source.path.track.log.others:
+        return TrafficPicture()
+    return TrafficPicture([AisLogTraffic(source.path.track.log.others, origin, replay,
+                                         source.logged_time(0) + source.dt)])
