@@ -35,6 +35,7 @@ from bridge_node.replay.session import RecordedSession, SessionSource
 from bridge_node.replay.track import Track, TrackLog, TrackPath, TrackSource, clean, origin_under
 from bridge_node.reports.replay import plot_replay
 from bridge_node.reports.summary import print_summary
+from bridge_node.traffic.sources import replay_traffic
 from sim_core.frames.units import KNOT
 from sim_core.world import WorldData, WorldModel, new_world_data, snapshot
 
@@ -223,11 +224,13 @@ def _play(cfg: NodeConfig, args: argparse.Namespace, prep: _Prepared, playback: 
         try:
             if renderers:
                 renderers.start()
-            with LinkHub(cfg.links, cfg.arbitration, Path(args.record) if args.record else None) as hub, session, \
-                    KeyReader() as keys, ReplayProgress(console, prep.source, keys) as progress:
+            traffic = replay_traffic(prep.source, prep.model.origin, cfg.replay)
+            with LinkHub(cfg.links, cfg.arbitration, Path(args.record) if args.record else None, traffic) as hub, \
+                    session, KeyReader() as keys, ReplayProgress(console, prep.source, keys) as progress:
                 publisher.publish(snapshot(prep.model, prep.data))
                 wait_for_renderers(renderers, publisher, 300.0)
-                stats = run_replay(prep.model, prep.data, prep.source, playback, Outputs(hub, publisher), progress)
+                outputs = Outputs(hub, publisher, prep.model.origin)
+                stats = run_replay(prep.model, prep.data, prep.source, playback, outputs, progress)
                 links = [link.health().as_dict() for link in hub.links]
                 alarms = [a.text for a in hub.active_alarms.values()]
         finally:
