@@ -192,7 +192,7 @@ def test_any_datagram_is_a_vessel_or_a_counted_kind(data, where, value):
     corrupted[where] = value
     for pdu in (data, bytes(corrupted)):
         try:
-            entity = link._entity(pdu, 0.0)
+            entity = link.heard.entity(pdu, 0.0)
         except PduError as exc:
             assert exc.kind in ("malformed", "ignored", "bad_field")
             continue

@@ -137,48 +137,23 @@ class PduError(ValueError):
         self.kind = kind
 
 
-@register_link("dis")
-class DisLink(Link):
-    """Own ship out as Entity State PDUs, other simulators' entities in as vessels."""
-
-    lost_kind = "socket_lost"
+class HeardEntities:
+    """Other simulators' entities as their Entity State PDUs describe them, for the exercise,
+    own entity and MMSIs of ``settings``: dead-reckoned vessels until ``vessel_timeout_s``
+    of silence. The DIS link feeds it what it reads; a replay, what a session recorded."""
 
     def __init__(self, settings: DisLinkSettings) -> None:
-        super().__init__(settings)
+        self.settings = settings
         self._own = (settings.site, settings.application, settings.entity)
         self._entities: dict[str, _Entity] = {}
-        self._sent = None  # (now, north, east, north speed, east speed, heading, rate of turn) of the last PDU
 
-    def _open_device(self) -> socket.socket:
-        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        try:
-            sock.bind((self.settings.listen_host, self.settings.listen_port))
-        except OSError:
-            sock.close()
-            raise
-        sock.setblocking(False)
-        return sock
+    def hear(self, data: bytes, now: float) -> None:
+        """Take one PDU read at ``now`` (monotonic s); PduError for one that is no vessel."""
+        entity = self.entity(data, now)
+        if entity is not None:
+            self._entities[entity.key] = entity
 
-    def _close_device(self, sock: socket.socket) -> None:
-        sock.close()
-
-    def _poll_device(self, now: float) -> Iterator[ControlInput]:
-        for _ in range(MAX_PDUS_PER_POLL):
-            try:
-                data = self.device.recv(2048)
-            except BlockingIOError:
-                break
-            self._report("rx", data)
-            try:
-                entity = self._entity(data, now)
-            except PduError as exc:
-                self._count_error(exc.kind)
-                continue
-            if entity is not None:
-                self._entities[entity.key] = entity
-        return iter(())
-
-    def _entity(self, data: bytes, now: float) -> _Entity | None:
+    def entity(self, data: bytes, now: float) -> _Entity | None:
         """The vessel a PDU describes; None for the node's own; PduError for the rest."""
         if len(data) < 12:
             raise PduError("malformed")
@@ -208,9 +183,51 @@ class DisLink(Link):
                        location, velocity, math.atan2(east, north) % (2 * math.pi), rate)
 
     def vessels(self, now: float) -> list[Vessel]:
+        """The vessels heard within the timeout, dead-reckoned to ``now`` (monotonic s)."""
         timeout = self.settings.vessel_timeout_s
         self._entities = {k: e for k, e in self._entities.items() if now - e.time <= timeout}
         return [e.at(now) for e in self._entities.values()]
+
+
+@register_link("dis")
+class DisLink(Link):
+    """Own ship out as Entity State PDUs, other simulators' entities in as vessels."""
+
+    lost_kind = "socket_lost"
+
+    def __init__(self, settings: DisLinkSettings) -> None:
+        super().__init__(settings)
+        self.heard = HeardEntities(settings)
+        self._sent = None  # (now, north, east, north speed, east speed, heading, rate of turn) of the last PDU
+
+    def _open_device(self) -> socket.socket:
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            sock.bind((self.settings.listen_host, self.settings.listen_port))
+        except OSError:
+            sock.close()
+            raise
+        sock.setblocking(False)
+        return sock
+
+    def _close_device(self, sock: socket.socket) -> None:
+        sock.close()
+
+    def _poll_device(self, now: float) -> Iterator[ControlInput]:
+        for _ in range(MAX_PDUS_PER_POLL):
+            try:
+                data = self.device.recv(2048)
+            except BlockingIOError:
+                break
+            self._report("rx", data)
+            try:
+                self.heard.hear(data, now)
+            except PduError as exc:
+                self._count_error(exc.kind)
+        return iter(())
+
+    def vessels(self, now: float) -> list[Vessel]:
+        return self.heard.vessels(now)
 
     def _due(self, state: ShipOutputs, now: float) -> bool:
         """Heartbeat passed, or the receivers' dead reckoning drifted past a threshold."""
