@@ -30,6 +30,14 @@ def context_for(channels: list[ChannelSettings]) -> tuple[moderngl.Context, obje
     return create_context(), None
 
 
+def msaa_samples(ctx: moderngl.Context, setting: str | int) -> int:
+    """Samples per pixel for ``render.msaa_samples``: auto is 1 on Mesa's software
+    rasteriser (llvmpipe), 4 on a GPU."""
+    if setting != "auto":
+        return int(setting)
+    return 1 if "llvmpipe" in ctx.info["GL_RENDERER"] else 4
+
+
 def blend_ramp(channel: ChannelSettings, azimuth: np.ndarray) -> np.ndarray:
     """Light share (linear, 0..1) the channel gives at azimuths (rad from its centre). In
     each blend band the light falls linearly with azimuth, so where two channels overlap
@@ -97,7 +105,8 @@ class ChannelSet:
 
     def __init__(self, renderer: SceneRenderer, channels: list[ChannelSettings], hidden_window=None) -> None:
         self.renderer = renderer
-        self.targets = [ChannelTarget(renderer.ctx, c, renderer.settings.msaa_samples) for c in channels]
+        samples = msaa_samples(renderer.ctx, renderer.settings.msaa_samples)
+        self.targets = [ChannelTarget(renderer.ctx, c, samples) for c in channels]
         self.windows = [ChannelWindow(renderer.ctx, hidden_window, t.channel, t.colour)
                         for t in self.targets if t.channel.output == "window"]
 

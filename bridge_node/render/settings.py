@@ -98,8 +98,12 @@ class RenderSettings(Params):
                                                  "with the position, it sets the sun and the sky")
     searchlights: list[SearchlightSettings] = Field(
         default_factory=list, max_length=MAX_SEARCHLIGHTS, description="the own ship's searchlights, always on")
-    msaa_samples: Literal[1, 4] = Field(
-        4, description="multisample anti-aliasing samples per pixel (Mesa llvmpipe offers 4 at most)")
+    msaa_samples: Literal["auto", 1, 4] = Field(
+        "auto", description="multisample anti-aliasing samples per pixel (Mesa llvmpipe offers 4 at most); auto: 4 "
+                            "on a GPU, 1 on a software rasteriser (llvmpipe), where 4 cost a third of the frame rate")
+    relief_reach_m: float = Field(
+        300.0, ge=10.0, le=1.0e7, description="the finest snow relief octave (23 m period) is fetched within this "
+        "distance, coarser ones within as many times it as their period is longer; beyond, finer than a pixel row")
     freeboard_m: float = Field(9.0, ge=0.5, le=40.0, description="own ship's deck height above the waterline")
     lod_distance_m: float = Field(300.0, ge=0.0, le=1.0e6, description="floe side faces drawn within this distance")
     processes: Literal["local", "none"] = Field(

@@ -14,13 +14,16 @@ import math
 from bridge_node.render.textures import NOISE_RANGE
 
 
+PERIODS = (23.0, 290.0, 2100.0)  # m: of the relief's three noise fetches
+
+
 def _octaves() -> str:
     """GLSL constants of the relief fetches: world (m) to noise texture coordinates (rotation
     over period), and each fetch's slope amplitude times period (m) and relative albedo
     variation. The periods (23, 290 and 2100 m) and angles share no ratio, so the sum never
     repeats; each fetch spans five octaves (features of 1/8 to 1/256 of its period)."""
     rows = []
-    for k, (period, slope, albedo) in enumerate(((23.0, 0.16, 0.03), (290.0, 0.08, 0.04), (2100.0, 0.03, 0.05))):
+    for k, (period, slope, albedo) in enumerate(zip(PERIODS, (0.16, 0.08, 0.03), (0.03, 0.04, 0.05))):
         angle = 1.13 * k
         c, s = math.cos(angle) / period, math.sin(angle) / period
         rows.append((f"mat2({c:.6g}, {-s:.6g}, {s:.6g}, {c:.6g})", f"vec2({slope * period:.6g}, {albedo})"))
@@ -28,7 +31,7 @@ def _octaves() -> str:
             f"const mat2 OCTAVE[OCTAVES] = mat2[]({', '.join(r[0] for r in rows)});\n"
             f"const vec2 OCTAVE_AMP[OCTAVES] = vec2[]({', '.join(r[1] for r in rows)});\n"
             f"const vec3 NOISE_RANGE = vec3{NOISE_RANGE};\n"
-            "vec3 noise_at(vec2 uv) { return (texture(noise, uv).xyz - 0.5) * NOISE_RANGE; }\n")
+            f"const float OCTAVE_SCALE[OCTAVES] = float[]({', '.join(f'{p / PERIODS[0]:.6g}' for p in PERIODS)});\n")
 
 
 _COMMON = """
@@ -73,10 +76,19 @@ vec3 lit(vec3 albedo, vec3 n, vec3 world) {
     float d = max((dot(n, sun) + 0.25) / 1.25, 0.0);
     return albedo * (direct * d + ambient + searchlit(world, n));
 }
-// The noise under p (m), one fetch per octave; called in uniform control flow, as the
-// fetches' mip levels come from screen derivatives (finer features fade to their mean).
-void noise_under(vec2 p, out vec3 h[OCTAVES]) {
-    for (int k = 0; k < OCTAVES; k++) h[k] = noise_at(OCTAVE[k] * p);
+// The noise under p (m) seen from `dist` m, one fetch per octave within its reach (relief_reach
+// times its period over the finest's; beyond it, the mip level is the features' mean, 0, so
+// it fades to 0 over the last 30 % and is not fetched). The branch is smooth on the screen,
+// so the derivatives that pick the mip levels stay those of neighbours on the same side.
+uniform float relief_reach;      // m: how far the finest octave is fetched
+void noise_under(vec2 p, float dist, out vec3 h[OCTAVES]) {
+    for (int k = 0; k < OCTAVES; k++) {
+        vec2 uv = OCTAVE[k] * p;
+        float reach = relief_reach * OCTAVE_SCALE[k];
+        h[k] = vec3(0.0);
+        if (dist < reach)
+            h[k] = (texture(noise, uv).xyz - 0.5) * NOISE_RANGE * (1.0 - smoothstep(0.7 * reach, reach, dist));
+    }
 }
 // Snow relief from the noise: the normal, and the albedo factor.
 vec3 relief(vec3 h[OCTAVES], float depth, out float albedo) {
@@ -181,7 +193,7 @@ void main() {
     float t = (slab_z - eye.z) / g.z;
     vec2 p = eye.xy + g.xy * t;
     vec3 noise[OCTAVES];
-    noise_under(p, noise);
+    noise_under(p, t, noise);
     ivec2 tile = ivec2(floor(p / tile_side));
     bool on_field = t < far && p.x >= 0.0 && p.y >= 0.0 && p.x < field_size.x && p.y < field_size.y;
     vec3 ground;
@@ -236,7 +248,7 @@ flat in int top;
 out vec4 colour;
 void main() {
     vec3 noise[OCTAVES];
-    noise_under(local, noise);
+    noise_under(local, distance(world, eye), noise);
     vec3 n = normalize(normal);
     vec3 c;
     if (top == 1) {
