@@ -123,6 +123,7 @@ def test_a_dis_vessel_goes_out_as_ais_and_reaches_a_late_joiners_traffic(exercis
         publisher.publish(events, traffic=hub.traffic.table(model.origin))
 
     with LinkHub(links, cfg.arbitration) as hub, StatePublisher(cfg.stream) as publisher:
+        wait_for(lambda: hub.links[0].connected, poll=tick)
         sim.sendto(other_simulator_pdu(74.002, 20.003, math.radians(250.0), 6.0), ("127.0.0.1", listen))
         wait_for(lambda: hub.traffic.current, poll=tick)
         [vessel] = hub.traffic.current

@@ -1,19 +1,25 @@
 """The traffic picture: vessels scripted in the exercise and vessels of a replayed AIS log
 go out on a real NMEA link (UDP on the loopback) as !AIVDM that pyais decodes to their
-position, course, speed and name, moving as scripted or logged; bad traffic configs name
-the file, key, value and what is allowed."""
+position, course, speed and name, moving as scripted or logged; a session record's DIS
+vessels are heard again when it is replayed; bad traffic configs name the file, key, value
+and what is allowed."""
 import math
+import socket
+import time
 
 import pytest
-from links_helpers import STATE
+from conftest import free_port
+from links_helpers import STATE, node_config, tick, wait_for
 from pyais import encode_dict
 from test_links_ais import QUIET, messages
-from test_links_dis import datagrams, receiver
+from test_links_dis import datagrams, other_simulator_pdu, receiver
 
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import ConfigError, load_config
 from bridge_node.traffic.settings import ScriptedVessel
-from bridge_node.traffic.sources import ScriptedMotion, traffic_picture
+from bridge_node.replay.dis_log import read_dis_log
+from bridge_node.replay.session import SessionSource, read_session
+from bridge_node.traffic.sources import ScriptedMotion, replay_traffic, traffic_picture
 from sim_core.frames.geodesy import geodetic_to_local, local_to_geodetic
 from sim_core.frames.units import KNOT
 
@@ -115,3 +121,31 @@ def test_traffic_config_errors_name_file_key_value_and_range(tmp_path, traffic, 
     with pytest.raises(ConfigError) as err:
         traffic_picture(load_config(path), path)
     assert str(err.value).startswith(str(path)) and says in str(err.value)
+
+
+def test_a_sessions_dis_vessels_are_heard_again_when_it_is_replayed(tmp_path):
+    listen, sim = free_port(), socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    cfg = node_config([{"type": "dis", "name": "dis", "listen_port": listen, "send_to": [f"127.0.0.1:{free_port()}"]},
+                       {"type": "nmea0183", "name": "plotter", "udp_port": free_port()}])
+    pdu = other_simulator_pdu(74.02, 20.03, math.radians(250.0), 6.0)
+    with LinkHub(cfg.links, cfg.arbitration, tmp_path / "session") as hub:
+        wait_for(lambda: hub.links[0].connected and hub.links[1].health().outputs,
+                 poll=lambda: tick(hub, STATE, time.monotonic()))
+        sim.sendto(pdu, ("127.0.0.1", listen))  # after the record's first sentence
+        wait_for(lambda: hub.traffic.current, poll=lambda: tick(hub, STATE, time.monotonic()))
+        [live] = hub.traffic.current
+        heard = hub.links[0].heard
+    sim.close()
+    records, bad = read_dis_log(tmp_path / "session" / "dis.log")
+    [rx] = [r for r in records if r.direction == "rx"]
+    assert rx.pdu == pdu and rx.link == "dis" and not bad["torn"] and not bad["malformed"]
+    session = read_session(tmp_path / "session", {"nmea.log"}, 0.1)  # no tick log: ticks from the line times
+    with SessionSource(cfg, session) as source:
+        picture = replay_traffic(source, 0, ORIGIN, cfg)
+        assert picture.gather([], 50.0) == []  # the record's first tick: not heard yet
+        [again] = picture.gather([], 50.0 + rx.unix_time - session.ticks[0].unix + 2.0)  # 2 s after it was
+    expected = heard.vessels(live.time + 2.0)[0]  # the live link's own dead reckoning, 2 s on
+    assert (again.mmsi, again.name) == (live.mmsi, "ODEN")
+    assert again.latitude == pytest.approx(expected.latitude, abs=0.05 / 6.4e6)  # 5 cm: rx logged ms after read
+    assert again.longitude == pytest.approx(expected.longitude, abs=0.05 / 1.8e6)
+    assert again.heading == pytest.approx(expected.heading) and again.speed_over_ground == pytest.approx(6.0)

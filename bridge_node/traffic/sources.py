@@ -5,6 +5,7 @@ the DIS link's dead reckoning does; SI inside (m, m/s, rad).
 """
 from __future__ import annotations
 
+import contextlib
 import math
 from collections import Counter
 from collections.abc import Iterable, Sequence
@@ -13,11 +14,15 @@ from pathlib import Path
 import numpy as np
 
 from bridge_node.links.base import Vessel
+from bridge_node.links.dis_link import HeardEntities, PduError
+from bridge_node.links.settings import DisLinkSettings
 from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, NodeConfig, resolve_path
 from bridge_node.node.errors import UserError
+from bridge_node.replay.dis_log import DIS_FILE, DisRecord, read_dis_log
 from bridge_node.replay.inputs import read_text
 from bridge_node.replay.sentences import SentenceLog
 from bridge_node.replay.sentences import Vessel as LoggedVessel
+from bridge_node.replay.session import SessionSource
 from bridge_node.replay.settings import ReplaySettings
 from bridge_node.replay.track import TrackPath, TrackSource, clean
 from bridge_node.traffic.picture import TrafficPicture, VesselSource
@@ -115,6 +120,28 @@ class AisLogTraffic(_Clock):
         return out
 
 
+class DisLogTraffic(_Clock):
+    """The vessels a recorded session heard on DIS (the ``rx`` PDUs of its ``dis.log``),
+    played on the record's clock: at the first call the logged time is ``start`` (unix s);
+    each PDU is taken as its link (``links``: DIS link settings by name) took it, at its
+    logged time, and dead-reckoned from there."""
+
+    def __init__(self, records: Iterable[DisRecord], links: dict[str, DisLinkSettings], start: float) -> None:
+        self.records = sorted((r for r in records if r.direction == "rx" and r.link in links),
+                              key=lambda r: r.unix_time)
+        self.heard = {name: HeardEntities(s) for name, s in links.items()}
+        self.t0, self._next = start, 0
+
+    def vessels(self, now: float) -> list[Vessel]:
+        t = self.t0 + self.since_start(now)
+        while self._next < len(self.records) and self.records[self._next].unix_time <= t:
+            r = self.records[self._next]
+            self._next += 1
+            with contextlib.suppress(PduError):  # the live link counted these
+                self.heard[r.link].hear(r.pdu, now - (t - r.unix_time))
+        return [v for heard in self.heard.values() for v in heard.vessels(now)]
+
+
 def read_ais_log(path: Path, where: str, origin: tuple[float, float], replay: ReplaySettings) -> AisLogTraffic:
     """An AIS log as traffic; ConfigError naming ``where`` (file, key and value) if it
     cannot be read or has no other vessel's position reports."""
@@ -145,11 +172,15 @@ def traffic_picture(cfg: NodeConfig, config_path: str | Path | None) -> TrafficP
     return TrafficPicture(sources)
 
 
-def replay_traffic(source: object, origin: tuple[float, float], replay: ReplaySettings) -> TrafficPicture:
-    """The picture of ``icebridge replay``: a replayed track log's other AIS vessels, on
-    its logged clock (the links' first tick is the source's first step); none for a
-    session record."""
-    if not isinstance(source, TrackSource) or not source.path.track.log.others:
-        return TrafficPicture()
-    return TrafficPicture([AisLogTraffic(source.path.track.log.others, origin, replay,
-                                         source.logged_time(0) + source.dt)])
+def replay_traffic(source: object, first: int, origin: tuple[float, float], cfg: NodeConfig) -> TrafficPicture:
+    """The picture of ``icebridge replay``, on the logged clock from step ``first`` (the
+    first the links publish): a track log's other AIS vessels; a session record's DIS
+    vessels (its ``dis.log``, through the config's DIS links)."""
+    if isinstance(source, TrackSource) and source.path.track.log.others:  # its clock: the end of each step
+        return TrafficPicture([AisLogTraffic(source.path.track.log.others, origin, cfg.replay,
+                                             source.logged_time(first) + source.dt)])
+    links = {s.name: s for s in cfg.links if s.type == "dis"}
+    if isinstance(source, SessionSource) and links and (source.session.folder / DIS_FILE).is_file():
+        records, _ = read_dis_log(source.session.folder / DIS_FILE)  # its bad lines: the live link counted them
+        return TrafficPicture([DisLogTraffic(records, links, source.logged_time(first))])
+    return TrafficPicture()

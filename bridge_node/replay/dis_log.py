@@ -1,0 +1,37 @@
+"""The DIS traffic of a session record (``dis.log``: ``<unix time> <link> <rx|tx> <hex>``,
+one PDU a line), read back so that a replay can hear again what the node heard. A torn
+last line and lines that do not parse are counted, never fatal."""
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+from bridge_node.links.record_reader import complete_lines
+
+DIS_FILE = "dis.log"
+
+
+@dataclass(frozen=True)
+class DisRecord:
+    """One line of ``dis.log``: unix time (s), link name, "rx" or "tx", the PDU."""
+
+    unix_time: float
+    link: str
+    direction: str
+    pdu: bytes
+
+
+def read_dis_log(path: Path) -> tuple[list[DisRecord], Counter]:
+    """The PDUs of ``dis.log``, and counts of torn and malformed lines."""
+    lines, counts = complete_lines(path)
+    out = []
+    for line in lines:
+        parts = line.split(" ")
+        try:
+            if len(parts) != 4 or parts[2] not in ("rx", "tx"):
+                raise ValueError(line)
+            out.append(DisRecord(float(parts[0]), parts[1], parts[2], bytes.fromhex(parts[3])))
+        except ValueError:
+            counts["malformed"] += 1
+    return out, counts
