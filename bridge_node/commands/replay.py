@@ -224,7 +224,7 @@ def _play(cfg: NodeConfig, args: argparse.Namespace, prep: _Prepared, playback: 
         try:
             if renderers:
                 renderers.start()
-            traffic = replay_traffic(prep.source, prep.model.origin, cfg.replay)
+            traffic = replay_traffic(prep.source, prep.seek_to, prep.model.origin, cfg)
             with LinkHub(cfg.links, cfg.arbitration, Path(args.record) if args.record else None, traffic) as hub, \
                     session, KeyReader() as keys, ReplayProgress(console, prep.source, keys) as progress:
                 publisher.publish(snapshot(prep.model, prep.data))
