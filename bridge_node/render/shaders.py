@@ -187,8 +187,8 @@ void main() {
     // through the middle of that share
     float fw = max(fwidth(r.z), 1e-6);
     float below = clamp(0.5 - r.z / fw, 0.0, 1.0);
-    vec3 above = sky(r);
-    if (below <= 0.0) { colour = opaque(above); return; }
+    if (below <= 0.0) { colour = opaque(sky(r)); return; }
+    vec3 above = below < 1.0 ? sky(r) : vec3(0.0);  // the sky only in the horizon's pixels
     vec3 g = normalize(vec3(r.xy, min(r.z, 0.5 * (r.z - 0.5 * fw))));
     float t = (slab_z - eye.z) / g.z;
     vec2 p = eye.xy + g.xy * t;
