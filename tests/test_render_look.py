@@ -63,11 +63,13 @@ def ctx():
     return create_context()
 
 
-def render(ctx, world, channel: ChannelSettings, ship: dict | None = None, **look) -> np.ndarray:
-    """The channel's image of the world, the ship optionally moved (north, east, heading)."""
+def render(ctx, world, channel: ChannelSettings, ship: dict | None = None, later: float = 0.0, **look) -> np.ndarray:
+    """The channel's image of the world, the ship optionally moved (north, east, heading),
+    the clock optionally `later` s on."""
     model, data = world
     view = WorldView()
     view.apply(snapshot(model, data))
+    view.time += later
     view.ship = dataclasses.replace(view.ship, **(ship or {}))
     cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=[channel], **look)), [channel])
     cs.render(view)
@@ -167,6 +169,16 @@ def test_water_is_darker_than_ice_and_mirrors_the_sky_near_the_horizon(ctx, worl
     steep, grazing = math.radians(15.0), math.radians(1.0)
     assert water[row_at(stern, steep)] < ice[row_at(bow, steep)] - 100
     assert water[row_at(stern, grazing)] > water[row_at(stern, steep)] + 40  # Fresnel: more sky
+
+
+def test_waves_move_with_time(ctx, world):
+    stern = channel(yaw_deg=180.0, eye=[-80.0, 0.0, 20.0])
+    now, later = (luminance(render(ctx, world, stern, OPEN_WATER, later=t, start_utc=DAY)) for t in (0.0, 2.0))
+    near = slice(row_for_distance(stern, 200.0), H)
+    assert np.abs(now[near] - later[near]).mean() > 0.5  # the ripples have moved
+    assert np.abs(now[near] - later[near]).mean() < 0.1 * now[near].mean()  # and are slight
+    sky = slice(0, row_at(stern, -0.05))
+    assert np.abs(now[sky] - later[sky]).max() <= 1.0  # the sky stays (the sun moves 2 s worth)
 
 
 def test_fog_lowers_contrast_with_distance_as_the_visibility_says(ctx, world):

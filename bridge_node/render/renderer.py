@@ -243,7 +243,7 @@ class SceneRenderer:
         common = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "sun": sky.sun, "direct": sky.direct,
                   "ambient": sky.ambient, "zenith_colour": sky.zenith, "horizon_colour": sky.horizon,
                   "noise": NOISE_UNIT, "water_colour": WATER,
-                  "relief_reach": s.relief_reach_m, **self._searchlights(north, east, psi)}
+                  "relief_reach": s.relief_reach_m, "time": view.time, **self._searchlights(north, east, psi)}
         ctx.clear(*sky.horizon, depth=1.0)
         self.tile_info.use(0)
         self.cell_raster.use(3)

@@ -176,9 +176,12 @@ bool level_ice(vec2 p, ivec2 tile) {
     return texelFetch(status, ivec2(row % pose_width, row / pose_width), 0).r == 0u;
 }
 const float WAVE_SLOPE = 0.04;
-vec3 sea(vec3 r, vec3 noise[OCTAVES], vec3 world) {
-    // the finest relief octave as slight waves
-    vec2 slope = WAVE_SLOPE / length(OCTAVE[0][0]) * (noise[0].yz * OCTAVE[0]);
+const vec2 WAVE_DRIFT = vec2(0.6, 0.35);  // m/s: ripples travelling before a light air
+uniform float time;                       // s: the exercise's clock
+vec3 sea(vec3 r, vec3 world) {
+    // the finest relief octave as slight waves, moving with the time
+    vec2 uv = OCTAVE[0] * (world.xy - WAVE_DRIFT * time);
+    vec2 slope = WAVE_SLOPE / length(OCTAVE[0][0]) * ((texture(noise, uv).yz - 0.5) * NOISE_RANGE.yz * OCTAVE[0]);
     return through_surface(r, normalize(vec3(-slope, 1.0)), water_body(world));
 }
 void main() {
@@ -201,7 +204,7 @@ void main() {
         ground = fogged(ice_surface(noise, texelFetch(tile_thickness, tile, 0).r, vec3(p, slab_z)), vec3(p, slab_z));
     } else {  // the sea, out to the horizon
         vec3 at = eye - g * eye.z / g.z;
-        ground = fogged(sea(g, noise, at), at);
+        ground = fogged(sea(g, at), at);
     }
     colour = opaque(mix(above, ground, below));
 }
