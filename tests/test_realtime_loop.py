@@ -10,6 +10,7 @@ import pytest
 from links_helpers import console_frame
 from nmea2000.decoder import NMEA2000Decoder
 
+from bridge_node.hil.bench import PtyPair
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config
 from bridge_node.node.realtime_loop import run_realtime
@@ -66,3 +67,43 @@ def test_console_steers_the_ship_in_real_time(tmp_path):
             heading = {f.id: f.value for f in m.fields}["heading"]
     console.shutdown()
     assert heading == pytest.approx(data.ship.eta[5] % (2 * math.pi), abs=0.01)  # last published state
+
+
+def test_the_loop_ticks_on_while_a_lost_slcan_adapter_reopens(tmp_path):
+    """python-can's slcan sleeps 2 s after opening its port: the reopen after the adapter was
+    unplugged happens on the opener's thread while the loop keeps stepping the world."""
+    base = load_config()
+    cfg = type(base).model_validate(base.model_dump() | {
+        "ice_field": base.ice_field.model_dump() | {"width": 400.0, "height": 400.0},
+        "paths": base.paths.model_dump() | {"cache_dir": str(tmp_path / "tiles")}, "console": None})
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    with PtyPair(tmp_path, "adapter") as pair:
+        links = [{"type": "can", "name": "helm", "interface": "slcan", "channel": str(pair.node_end),
+                  "allowed_sources": [0x42]}]
+        cfg = type(cfg).model_validate(cfg.model_dump() | {"links": links})
+        states = []  # the link's (opening, connected) at every tick
+
+        def unplug_and_replug() -> None:
+            pair.cut()
+            stop.wait(0.5)
+            pair.restore()
+        stop = threading.Event()
+        with LinkHub(cfg.links, cfg.arbitration) as hub:
+            link = hub.links[0]
+            assert link.health().connected  # open() waited for the first open
+            threading.Thread(target=unplug_and_replug, daemon=True).start()
+
+            def on_events(events, _) -> None:
+                h = link.health()
+                states.append((h.opening, h.connected))
+            reopened = lambda: (True, False) in states and states[-1] == (False, True)  # noqa: E731
+            stats = run_realtime(model, data, hub, 30.0, None, on_events, should_stop=lambda: reopened()
+                                 or len(states) > 900)
+            stop.set()
+            health = link.health()
+    assert reopened(), f"the link did not come back: {health}"
+    assert health.errors["bus_lost"] == 1 and health.reconnects >= 1
+    opening = sum(1 for s in states if s == (True, False))
+    assert opening > 1  # several ticks ran while the adapter opened (one tick would be a loop held up)
+    assert stats.ticks == len(states)
