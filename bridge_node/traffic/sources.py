@@ -1,7 +1,8 @@
 """Where the traffic picture's own vessels come from: the config's scripted vessels
-(``ScriptedTraffic``) and AIS logs replayed (``AisLogTraffic``). Both start moving at their
-first ``vessels`` call (the run's first tick) and keep to the node's monotonic clock, as
-the DIS link's dead reckoning does; SI inside (m, m/s, rad).
+(``ScriptedTraffic``), AIS logs replayed (``AisLogTraffic``) and, in ``icebridge replay``,
+a session record's DIS traffic (``DisLogTraffic``). Each starts at its first ``vessels``
+call (the first tick that publishes) and keeps to the node's monotonic clock, as the DIS
+link's dead reckoning does; SI inside (m, m/s, rad).
 """
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from bridge_node.links.settings import DisLinkSettings
 from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, NodeConfig, resolve_path
 from bridge_node.node.errors import UserError
 from bridge_node.replay.dis_log import DIS_FILE, DisRecord, read_dis_log
+from bridge_node.replay.engine import Source
 from bridge_node.replay.inputs import read_text
 from bridge_node.replay.sentences import SentenceLog
 from bridge_node.replay.sentences import Vessel as LoggedVessel
@@ -172,7 +174,7 @@ def traffic_picture(cfg: NodeConfig, config_path: str | Path | None) -> TrafficP
     return TrafficPicture(sources)
 
 
-def replay_traffic(source: object, first: int, origin: tuple[float, float], cfg: NodeConfig) -> TrafficPicture:
+def replay_traffic(source: Source, first: int, origin: tuple[float, float], cfg: NodeConfig) -> TrafficPicture:
     """The picture of ``icebridge replay``, on the logged clock from step ``first`` (the
     first the links publish): a track log's other AIS vessels; a session record's DIS
     vessels (its ``dis.log``, through the config's DIS links)."""
@@ -181,6 +183,6 @@ def replay_traffic(source: object, first: int, origin: tuple[float, float], cfg:
                                              source.logged_time(first) + source.dt)])
     links = {s.name: s for s in cfg.links if s.type == "dis"}
     if isinstance(source, SessionSource) and links and (source.session.folder / DIS_FILE).is_file():
-        records, _ = read_dis_log(source.session.folder / DIS_FILE)  # its bad lines: the live link counted them
+        records, _ = read_dis_log(source.session.folder / DIS_FILE)  # a torn or bad line loses only its PDU
         return TrafficPicture([DisLogTraffic(records, links, source.logged_time(first))])
     return TrafficPicture()
