@@ -57,7 +57,7 @@ def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
         if len(specs) != len(_PLACED) + len(_ARRAYS) or len(frames) != 3 + len(specs):
             raise CodecError("wrong number of frames")
         arrays = [np.frombuffer(f, dtype=np.dtype(d)).reshape(shape) for f, (d, shape) in zip(frames[2:-1], specs)]
-        traffic = np.frombuffer(frames[-1], dtype=TRAFFIC_DTYPE)
+        traffic = np.frombuffer(frames[-1], dtype=TRAFFIC_DTYPE).copy()  # writable, as WorldView.traffic starts
         placed = PlacedTiles(*arrays[:len(_PLACED)])
         named = dict(zip(_ARRAYS, arrays[len(_PLACED):]))
         events = WorldEvents(
