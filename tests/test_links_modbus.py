@@ -1,6 +1,7 @@
 """Modbus link against a real pymodbus server playing the console: TCP on 127.0.0.1 and RTU
 over a pty pair; the server dies mid-run and comes back."""
 import math
+import random
 import time
 from contextlib import ExitStack
 
@@ -9,7 +10,12 @@ from conftest import free_port
 from links_helpers import STATE, node_config, order_collector, pty_pair, tick, wait_for
 from modbus_console import ModbusConsole
 
+from bridge_node.hil.console_links import ModbusConsole as ConsoleModbus
+from bridge_node.hil.console_links import Order
+from bridge_node.hil.scenario import Fault
+from bridge_node.hil.settings import ModbusConsoleSettings
 from bridge_node.links.arbiter import ALARM_NUMBERS
+from bridge_node.links.base import RUDDER
 from bridge_node.links.hub import LINK_DOWN_ALARM, LinkHub
 
 REGISTERS = [{"order": "rudder", "address": 0, "scale": 0.1}, {"order": "lever", "address": 1},
@@ -95,3 +101,35 @@ def test_worker_errors_reach_health_only_through_the_loop():
         hub.poll(time.monotonic())
         assert hub.errors()["connect_failed"] > before["connect_failed"]
         assert not link.health().connected
+
+
+def test_malformed_replies_are_failed_requests_and_the_link_recovers(tmp_path):
+    """The HIL console's register server sends malformed MBAP headers (corrupt = "format"):
+    each is a request that failed (counted, the connection reopened), never an order or a
+    crash; the orders held are the last good ones, and good replies are in use again after."""
+    port = free_port()
+    settings = ModbusConsoleSettings(role="primary", type="modbus", port=port, registers=REGISTERS[:1])
+    cfg = node_config([{"type": "modbus", "name": "io", "port": port, "registers": REGISTERS[:1], "poll_hz": 20}],
+                      rudder=["io"])
+    fault = Fault(at_s=0.0, kind="corrupt", corrupt="format", duration_s=600.0, probability=0.5)
+    rudders = []
+    with ConsoleModbus(settings) as console, LinkHub(cfg.links, cfg.arbitration, tmp_path / "rec") as hub:
+        console.order(Order(RUDDER, math.radians(5.0)), time.monotonic())
+
+        def tick_once() -> None:
+            console.tick(time.monotonic())
+            rudders.append(tick(hub, STATE, time.monotonic()).controls.rudder)
+        wait_for(lambda: math.radians(5.0) in rudders, poll=tick_once)
+        console.inject(fault, random.Random(7))
+        wait_for(lambda: hub.errors()["request_failed"] >= 5, timeout=20.0, poll=tick_once)
+        console.clear(fault)
+        console.order(Order(RUDDER, math.radians(-3.0)), time.monotonic())
+        wait_for(lambda: math.radians(-3.0) in rudders, timeout=10.0, poll=tick_once)
+        health = hub.links[0].health()
+    assert console.sent["bad_replies"] >= health.errors["request_failed"]
+    assert set(health.errors) == {"request_failed"}  # no order from a bad reply, no worker died
+    assert health.reconnects >= 1 and health.connected
+    assert {r for r in rudders if r is not None} <= {math.radians(5.0), math.radians(-3.0), 0.0}  # 0: fail-safe
+    reads = [row.split(",") for row in (tmp_path / "rec" / "modbus.csv").read_text().splitlines()[1:]]
+    assert len(reads) == health.inputs  # every order the node took is in the session record, and only those
+    assert {r[-1] for r in reads} == {"5.0", "-3.0"}

@@ -18,6 +18,7 @@ import threading
 import time
 from abc import ABC, abstractmethod
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import can
@@ -405,10 +406,32 @@ INDICATORS = {"rudder_angle": ("rudder_angle", math.radians(1.0)), "shaft_rpm": 
               "heading": ("heading", math.radians(1.0))}
 
 
-class _RegisterServer:
-    """A pymodbus TCP server (device registers 0..99) in a thread with its own event loop."""
+MBAP_FAULTS = ("length", "protocol", "transaction", "truncated")  # what a malformed reply gets wrong
 
-    def __init__(self, host: str, port: int, device_id: int, values: list[int]) -> None:
+
+def mangle_mbap(frame: bytes, rng: random.Random) -> bytes:
+    """A Modbus TCP frame with its MBAP header made wrong, one way drawn from ``rng``: a
+    length field that does not match what follows, a protocol id other than 0, another
+    request's transaction id, or the frame cut short."""
+    how = rng.choice(MBAP_FAULTS)
+    b = bytearray(frame)
+    if how == "length":
+        b[4:6] = max(0, int.from_bytes(b[4:6], "big") + rng.choice((-2, -1, 1, 3))).to_bytes(2, "big")
+    elif how == "protocol":
+        b[2:4] = rng.randrange(1, 0x10000).to_bytes(2, "big")
+    elif how == "transaction":
+        b[0:2] = ((int.from_bytes(b[0:2], "big") + rng.randrange(1, 0x10000)) & 0xFFFF).to_bytes(2, "big")
+    else:
+        del b[rng.randrange(1, len(b)):]
+    return bytes(b)
+
+
+class _RegisterServer:
+    """A pymodbus TCP server (device registers 0..99) in a thread with its own event loop;
+    ``trace_packet(sending, frame) -> frame`` sees (and may change) every frame."""
+
+    def __init__(self, host: str, port: int, device_id: int, values: list[int],
+                 trace_packet: Callable[[bool, bytes], bytes]) -> None:
         self.device_id = device_id
         self._server = None
         self._loop = None
@@ -416,7 +439,7 @@ class _RegisterServer:
         device = SimDevice(device_id, [SimData(0, count=REGISTERS, values=values, datatype=DataType.REGISTERS)])
 
         async def serve() -> None:
-            self._server = ModbusTcpServer(device, address=(host, port))
+            self._server = ModbusTcpServer(device, address=(host, port), trace_packet=trace_packet)
             self._loop = asyncio.get_running_loop()
             self._loop.call_soon(ready.set)
             await self._server.serve_forever()
@@ -442,22 +465,45 @@ class _RegisterServer:
 
 class ModbusConsole(ConsoleLink):
     """The console's register server: the node polls its order registers and writes its
-    indicators; register values survive a disconnect, as a PLC's do."""
+    indicators; register values survive a disconnect, as a PLC's do. Its framing fault
+    (corrupt = "format") is on the replies the node reads: malformed MBAP headers."""
 
     kind = "modbus"
+    corruptions = ("format", "range")
 
     def __init__(self, settings: ModbusConsoleSettings) -> None:
         super().__init__(settings)
         self._values = [0] * REGISTERS
         for w in settings.writes:
             self._values[w.address] = UNWRITTEN
+        self._bad_replies: tuple[Fault, random.Random] | None = None  # corrupt = "format", while on
+
+    def inject(self, fault: Fault, rng: random.Random) -> None:
+        if fault.kind == "corrupt" and fault.corrupt == "format":
+            self._bad_replies = (fault, rng)
+        else:
+            super().inject(fault, rng)
+
+    def clear(self, fault: Fault) -> None:
+        if self._bad_replies is not None and self._bad_replies[0] is fault:
+            self._bad_replies = None
+        super().clear(fault)
+
+    def _trace(self, sending: bool, frame: bytes) -> bytes:
+        """Every frame of the server (on its thread): a reply, while corrupt = "format" is
+        on, made malformed with the fault's probability."""
+        bad = self._bad_replies
+        if not sending or bad is None or bad[1].random() >= bad[0].probability:
+            return frame
+        self.sent["bad_replies"] += 1
+        return mangle_mbap(frame, bad[1])
 
     def supports(self, kind: str) -> bool:
         return any(r.order == kind for r in self.settings.registers)
 
     def _open(self) -> _RegisterServer:
         s = self.settings
-        return _RegisterServer(s.host, s.port, s.device_id, list(self._values))
+        return _RegisterServer(s.host, s.port, s.device_id, list(self._values), self._trace)
 
     def _close(self, server: _RegisterServer) -> None:
         self._values = server.values()

@@ -25,7 +25,7 @@ QUANTITIES = {"rudder_angle": ("deg", math.radians(1.0)), "shaft_speed": ("rpm",
               "heading": ("deg", math.radians(1.0)), "rate_of_turn": ("deg/min", math.radians(1.0) / 60.0),
               "rudder_rate": ("deg/s", math.radians(1.0))}
 FAULT_KINDS = ("drop", "delay", "duplicate", "corrupt", "garbage", "disconnect", "bus_off")
-CORRUPTIONS = ("format", "checksum", "dlc", "range")  # format: the link's framing (NMEA checksum, CAN DLC)
+CORRUPTIONS = ("format", "checksum", "dlc", "range")  # format: the link's framing (NMEA checksum, CAN DLC, MBAP)
 Seconds = Annotated[float, Field(ge=0.0, le=3600.0)]
 
 
@@ -54,7 +54,7 @@ class Fault(Params):
     """A fault on one console link from ``at_s`` for ``duration_s``: ``drop``, ``delay``
     (``delay_s``), ``duplicate`` or ``corrupt`` (``corrupt``: checksum, dlc or range) each
     outgoing message with ``probability`` (``format``: the link's own framing error, a bad NMEA
-    checksum or a short CAN frame); ``garbage``: ``count`` random frames or bytes at
+    checksum, a short CAN frame, or a Modbus register server's reply with a malformed MBAP header); ``garbage``: ``count`` random frames or bytes at
     once; ``disconnect``: the console's end closed, then reopened; ``bus_off``: the CAN
     adapter's pty pair gone, then back (hil run only). Random draws come from the scenario's
     seed and the fault's index: a rerun injects the same faults."""
