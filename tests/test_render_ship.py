@@ -2,6 +2,7 @@
 follows the contour the ice feels, a ship file's GLB replaces it, bridge eyes by name, and
 each row of ``WorldView.traffic`` drawn as a ship where its position says."""
 import math
+from datetime import datetime
 
 import numpy as np
 import pytest
@@ -85,3 +86,20 @@ def test_each_traffic_row_is_drawn_as_a_ship_where_it_is(ctx, exercise):
     empty = view_of(model, data)
     empty.traffic = np.zeros(0, dtype=TRAFFIC_DTYPE)
     assert np.array_equal(render(ctx, model, data, [c], view=empty)[0], base)
+
+
+def test_at_night_a_vessel_shows_the_sidelight_of_its_side_facing_the_eye(ctx, exercise):
+    model, data = exercise
+    c = channel()  # ahead, from the bridge
+    night = datetime.fromisoformat("2026-12-21T22:00:00+00:00")  # polar night
+    seen = {}
+    for turn in (90.0, -90.0):  # crossing ahead to starboard (its starboard side towards us), then to port
+        view = view_of(model, data)
+        s = view.ship
+        x, y = s.east + 500 * math.sin(s.heading), s.north + 500 * math.cos(s.heading)
+        view.traffic = np.array([(9, x, y, s.heading + math.radians(turn), 5.0, 100.0, 16.0)], dtype=TRAFFIC_DTYPE)
+        img = render(ctx, model, data, [c], view=view, start_utc=night)[0].astype(int)
+        r, g = img[..., 0], img[..., 1]
+        seen[turn] = ((g > r + 60).sum(), (r > g + 60).sum())  # green pixels, red pixels
+    assert seen[90.0][0] > 3 and seen[90.0][1] == 0, seen  # green: its starboard light
+    assert seen[-90.0][1] > 3 and seen[-90.0][0] == 0, seen  # red: its port light

@@ -39,7 +39,7 @@ from bridge_node.render.settings import (
     RenderSettings,
     eye_point,
 )
-from bridge_node.render.ship_mesh import load_ship, ship_triangles
+from bridge_node.render.ship_mesh import load_ship, nav_lights, ship_triangles
 from bridge_node.render.sky import Sky, sky_for
 from bridge_node.render.textures import relief_noise
 from bridge_node.stream.world_view import WorldView
@@ -54,6 +54,7 @@ MAX_TILES = 4096 * 4096  # tile table of 8 bytes per tile: 134 MB of texture at 
 RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m tiles)
 WATER = (0.04, 0.09, 0.11)  # the sea's body colour (albedo of the light it sends back up)
 NOISE_UNIT, THICKNESS_UNIT = 8, 9  # texture units of the relief noise and the tile thicknesses
+NAV_LIGHT_LUX = 10.0  # lux: daylight below which navigation lights show at full strength (civil dusk)
 EYE_WHITE_LUX = 40.0  # lux a surface needs to look white to eyes adapted to the night
 
 
@@ -115,6 +116,10 @@ class SceneRenderer:
         hull = ship_triangles(mesh)
         self.ship_vao = ctx.vertex_array(self.ship, [(ctx.buffer(hull.tobytes()), "3f 3f 3f", "in_pos", "in_normal",
                                                       "in_colour")])
+        self.nav = ctx.program(vertex_shader=shaders.NAV_VS, fragment_shader=shaders.NAV_FS)
+        points = nav_lights(model.ship.particulars, mesh.bounds)
+        self.nav_vao = ctx.vertex_array(self.nav, [(ctx.buffer(points.tobytes()), "3f 3f 2f", "in_pos", "in_colour",
+                                                    "in_sector")])
         self.cell_verts, self.cell_vert_start, self.cell_side_start = cell_vertices(model)
         self.raster_size = RASTER_SIZE if len(model.ice.templates) <= 4 else RASTER_SIZE // 2
         raster = cell_rasters(model, self.raster_size)
@@ -256,9 +261,11 @@ class SceneRenderer:
         # near to far: ship, floes, then the environment behind them, so that the depth test
         # spares the full-screen pass every pixel already covered
         ctx.enable(moderngl.DEPTH_TEST)
-        self._set(self.ship, view_proj=vp, ship_to_world=ship_matrix(north, east, psi), **common)
-        self.ship_vao.render()
-        self._draw_traffic(getattr(view, "traffic", None), cam)
+        ships = self._ship_matrices(view, cam)
+        self._set(self.ship, view_proj=vp, **common)
+        for m in ships:
+            set_matrix(self.ship["ship_to_world"], m)
+            self.ship_vao.render()
         if self.tile_floes:
             ctx.enable_direct(GL_CLIP_DISTANCE0)
             ctx.enable(moderngl.CULL_FACE)  # not for the ship: its matrix mirrors (starboard-handed frame)
@@ -275,6 +282,7 @@ class SceneRenderer:
                   cell_raster=3, raster_size=self.raster_size, status=7, pose_width=POSE_WIDTH,
                   field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
         self.env_vao.render()
+        self._draw_nav_lights(ships, cam, channel.height)
         self._blend_bands(channel, blend)
         return cam
 
@@ -335,12 +343,15 @@ class SceneRenderer:
                 if full:
                     sides.render()
 
-    def _draw_traffic(self, traffic: np.ndarray | None, cam: Camera) -> None:
-        """Each other vessel in view and within the far distance as the own ship's mesh,
-        scaled to its length and beam (the own ship's where unknown, 0) and in height as in
-        beam."""
+    def _ship_matrices(self, view: WorldView, cam: Camera) -> list[np.ndarray]:
+        """Ship frame to world of the own ship and of each other vessel in view and within the
+        far distance, scaled to its length and beam (the own ship's where unknown, 0) and in
+        height as in beam."""
+        ship = view.ship
+        out = [ship_matrix(ship.north, ship.east, ship.heading)]
+        traffic = getattr(view, "traffic", None)
         if traffic is None or len(traffic) == 0:
-            return
+            return out
         p = self.model.ship.particulars
         length = np.where(traffic["length"] > 0, traffic["length"], p.length)
         beam = np.where(traffic["beam"] > 0, traffic["beam"], p.beam)
@@ -351,9 +362,26 @@ class SceneRenderer:
         near = np.hypot(traffic["x"] - cam.eye[0], traffic["y"] - cam.eye[1]) < self.settings.far_m
         for k in np.flatnonzero(visible_boxes(cam.view_proj, centre - pad, centre + pad) & near):
             scale = np.diag([length[k] / p.length, beam[k] / p.beam, beam[k] / p.beam, 1.0])
-            set_matrix(self.ship["ship_to_world"], ship_matrix(traffic["y"][k], traffic["x"][k],
-                                                               traffic["heading"][k]) @ scale)
-            self.ship_vao.render()
+            out.append(ship_matrix(traffic["y"][k], traffic["x"][k], traffic["heading"][k]) @ scale)
+        return out
+
+    def _draw_nav_lights(self, matrices: list[np.ndarray], cam: Camera, height: int) -> None:
+        """The ships' navigation lights, added where their sectors face the eye, as strong
+        as the daylight leaves them (full below NAV_LIGHT_LUX)."""
+        strength = min(NAV_LIGHT_LUX / max(self.sky.illuminance, 1e-6), 1.0)
+        if strength < 0.01:
+            return
+        ctx = self.ctx
+        ctx.enable(moderngl.PROGRAM_POINT_SIZE | moderngl.BLEND)
+        ctx.blend_func = moderngl.ONE, moderngl.ONE
+        ctx.depth_mask = False
+        self._set(self.nav, view_proj=cam.view_proj, eye=tuple(cam.eye), visibility=self.settings.visibility_m,
+                  point_px=max(3.0, 6.0 * height / 720), strength=strength)
+        for m in matrices:
+            set_matrix(self.nav["ship_to_world"], m)
+            self.nav_vao.render(moderngl.POINTS)
+        ctx.depth_mask = True
+        ctx.disable(moderngl.PROGRAM_POINT_SIZE | moderngl.BLEND)
 
     @staticmethod
     def _set(prog: moderngl.Program, **uniforms) -> None:

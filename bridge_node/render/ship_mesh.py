@@ -111,6 +111,25 @@ def ship_triangles(mesh: trimesh.Trimesh) -> np.ndarray:
     return out.reshape(-1, 9)
 
 
+# COLREG rule 21 sectors: (centre, half width) in degrees from the bow, + to starboard
+MASTHEAD, STARBOARD, PORT, STERN = (0.0, 112.5), (56.25, 56.25), (-56.25, 56.25), (180.0, 67.5)
+WHITE, GREEN, RED = (1.0, 0.97, 0.88), (0.15, 1.0, 0.45), (1.0, 0.12, 0.08)
+
+
+def nav_lights(particulars: ShipParticulars, bounds: np.ndarray) -> np.ndarray:
+    """The navigation lights of a ship with this mesh's bounds ((2, 3), ship frame, m):
+    masthead on top over the forward part, sidelights at the bridge wings' ends, stern
+    light at the stern. Rows of position 3f, colour 3f, sector centre and half width (rad
+    from the bow, + to starboard)."""
+    (x0, y0, _), (x1, y1, z1) = bounds
+    bx, bz = particulars.look.bridge_eye
+    floor = bz - EYE_ABOVE_FLOOR_M
+    rise = 1.0  # m: the lanterns stand this far clear of the surfaces they are on
+    rows = [((x0 + 0.88 * (x1 - x0), 0.0, z1 + rise), WHITE, MASTHEAD), ((bx, y1, floor + rise), GREEN, STARBOARD),
+            ((bx, y0, floor + rise), RED, PORT), ((x0 - rise, 0.0, 0.5 * floor), WHITE, STERN)]
+    return np.array([[*pos, *colour, *np.radians(sector)] for pos, colour, sector in rows], dtype="f4")
+
+
 def glb_bytes(mesh: trimesh.Trimesh) -> bytes:
     """The mesh as a GLB file (ship frame, z up), e.g. the generated default as a start for a
     ship's own model."""
