@@ -10,6 +10,7 @@ import time
 
 import numpy as np
 import pytest
+import zmq
 from conftest import REPO, exercise_toml, free_port
 from links_helpers import node_config, wait_for
 from PIL import Image
@@ -100,6 +101,27 @@ def test_late_joiner_and_lost_messages_end_with_the_published_state(exercise):
             views_equal(lossy.view, truth)
             assert lossy.resyncs >= 8 and lossy.lost >= 8
     assert publisher.dropped == 0 and publisher.snapshots >= 10
+
+
+def test_the_publisher_process_that_dies_is_reported_and_the_physics_goes_on(exercise):
+    """The publisher runs in its own process: a second one on the same endpoints cannot
+    bind (ZMQError, as the first holds them); killed, it is named in ``error`` with its
+    exit code, and publishing on goes on without blocking (counted as dropped once the
+    handover is full)."""
+    _, cfg, model = exercise
+    data = start_world(model, cfg)
+    with StatePublisher(cfg.stream) as publisher:
+        with pytest.raises(zmq.ZMQError):
+            StatePublisher(cfg.stream).open()
+        publisher.publish(step(model, data, 0.1))
+        assert publisher.error is None
+        publisher._process.kill()
+        publisher._process.join(10.0)
+        assert "exit code -9" in publisher.error
+        events = step(model, data, 0.1)
+        for _ in range(1200):  # beyond the handover's high-water mark: dropped, never waited for
+            publisher.publish(events)
+    assert publisher.dropped > 0 and "exit code -9" in publisher.error
 
 
 def test_a_dis_vessel_goes_out_as_ais_and_reaches_a_late_joiners_traffic(exercise):
