@@ -294,7 +294,9 @@ in vec3 normal;
 in vec3 albedo;
 out vec4 colour;
 void main() {
-    colour = opaque(fogged(lit(albedo, normalize(normal), world), world));
+    vec3 n = normalize(normal);
+    n = dot(n, eye - world) < 0.0 ? -n : n;  // two-sided: a bulwark's inside is lit as its inside
+    colour = opaque(fogged(lit(albedo, n, world), world));
 }
 """
 

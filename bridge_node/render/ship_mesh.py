@@ -20,6 +20,7 @@ HULL, BOOT, DECK, HOUSE, MAST = (0.50, 0.10, 0.08), (0.12, 0.12, 0.13), (0.33, 0
 BOTTOM_M = -2.0  # m: the hull is drawn this deep (floes sliding under it show in the water)
 EYE_ABOVE_FLOOR_M = 1.7  # m: the bridge eye above the bridge deck
 SHEER = 0.25  # the deck's rise at the stem over the freeboard
+BULWARK_M = 1.2  # m: the bulwark around the deck edge (from the bridge, it outlines the bow)
 
 
 class ShipModelError(ValueError):
@@ -51,8 +52,8 @@ def _oriented(tris: np.ndarray, centre: np.ndarray) -> np.ndarray:
 
 def default_ship(particulars: ShipParticulars, contour: np.ndarray, freeboard: float) -> trimesh.Trimesh:
     """A hull lofted from the waterline contour (m, ship frame) to a sheered deck, the stem
-    raked at the particulars' stem angle (the rake at most 5 % of the length), a boot
-    topping below the waterline, a deckhouse whose top is the bridge deck under the bridge
+    raked at the particulars' stem angle (the rake at most 5 % of the length), a bulwark
+    round the deck, a boot topping below the waterline, a deckhouse whose top is the bridge deck under the bridge
     eye, bridge wings 1 m beyond the beam, and a foremast."""
     L, B = particulars.length, particulars.beam
     rise = np.clip((contour[:, 0] - 0.2 * L) / (0.3 * L), 0.0, 1.0) ** 2  # 0 amidships, 1 at the stem
@@ -73,7 +74,9 @@ def default_ship(particulars: ShipParticulars, contour: np.ndarray, freeboard: f
     bx, bz = particulars.look.bridge_eye
     floor = bz - EYE_ABOVE_FLOOR_M
     fore = 0.5 * L - 0.12 * L
+    rail = deck + [0.0, 0.0, BULWARK_M]
     parts = [_faces(band(water, deck), HULL), _faces(band(bottom, water), BOOT), _faces(top, DECK),
+             _faces(band(deck, rail), HULL),
              _box((bx - 16.0, -0.4 * B, freeboard - 0.5), (bx + 2.0, 0.4 * B, floor), HOUSE),
              _box((bx - 2.5, -0.5 * B - 1.0, floor - 0.4), (bx + 2.0, 0.5 * B + 1.0, floor), HOUSE),
              _box((fore - 0.4, -0.4, freeboard), (fore + 0.4, 0.4, freeboard + 14.0), MAST)]
