@@ -99,3 +99,22 @@ def test_slowed_steering_gear_fails_with_the_measured_rate(node_toml, tmp_path):
     assert rate == pytest.approx(1.2, abs=0.1)  # the slowed gear's rate, measured from RSA
     failure = next(c for c in ET.parse(junit).getroot().iter("testcase") if "steering" in c.get("name"))
     assert f"{rate:.2f} deg/s" in failure.find("failure").get("message")
+
+
+def test_modbus_bad_replies_over_tcp(node_toml, tmp_path):
+    """The Modbus console's out-of-range registers and malformed MBAP replies: the node counts
+    them (out_of_range, request_failed), reopens the connection, and the rudder holds."""
+    r = hil_run(SCENARIOS / "modbus_bad_replies.toml", "--links", "modbus", "--node-config", node_toml,
+                out=tmp_path / "out")
+    assert r.returncode == 0, r.stdout + r.stderr
+    run = next((tmp_path / "out").iterdir())
+    node = json.loads((run / "node.json").read_text().splitlines()[-1])
+    primary = node["links"][0]
+    assert primary["errors"]["out_of_range"] > 0 and primary["errors"]["request_failed"] > 0
+    assert set(primary["errors"]) <= {"out_of_range", "request_failed", "connect_failed"}
+    assert primary["connected"] and primary["reconnects"] >= 1
+    # nothing lost from the session record: every register the node read is there, an order
+    # or counted as out of range
+    record = next((run / "sessions").iterdir()) / "modbus.csv"
+    reads = [row for row in record.read_text().splitlines()[1:] if row.split(",")[2] == "read"]
+    assert len(reads) == primary["inputs"] + primary["errors"]["out_of_range"]

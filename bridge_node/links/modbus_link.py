@@ -6,8 +6,10 @@ thread (the link's device). The worker shares nothing mutable with the loop but 
 hand-overs: everything it learns (orders, errors, register traffic, console up or down)
 goes to the loop through a queue, which ``poll`` drains on the loop's thread, so health and
 errors change only there; the indicator values to write come the other way under a lock.
-A failed request drops the connection, and the worker reconnects with back-off (capped at
-1 s), so a console that comes back is in use again within about a second. A worker that
+A failed request (a malformed reply among them) drops the connection, and the worker
+reconnects with back-off (capped at 1 s), so a console that comes back is in use again
+within about a second; the orders of a good poll are kept even if an indicator write after
+it fails. A worker that
 dies is restarted by ``Link.poll`` like any lost device.
 """
 from __future__ import annotations
@@ -153,8 +155,14 @@ class _Worker:
                     backoff.failed(time.monotonic())
                 self._stop.wait(0.02)
                 continue
-            try:
-                events = self._poll_once() + self._write_indicators()
+            try:  # the orders of a good poll reach the loop even if a write after it fails
+                events = self._poll_once()
+                if not answering:  # up before the first orders, as the loop sees it
+                    answering = True
+                    events.insert(0, (UP, None))
+                    backoff.succeeded()
+                self._put(events)
+                self._put(self._write_indicators())
             except (ModbusException, OSError, ValueError) as exc:
                 self.events.put((DOWN, "bad_reply" if isinstance(exc, ValueError) else "request_failed"))
                 self._client.close()
@@ -162,17 +170,15 @@ class _Worker:
                 answering = False
                 backoff.failed(time.monotonic())
                 continue
-            if not answering:  # up before the first orders, as the loop sees it
-                answering = True
-                events.insert(0, (UP, None))
-                backoff.succeeded()
-            for event in events:
-                self.events.put(event)
             next_poll = max(next_poll + period, time.monotonic())
             self._stop.wait(max(0.0, next_poll - time.monotonic()))
         if self._client is not None:
             self._client.close()
             self._client = None
+
+    def _put(self, events: list[tuple[str, object]]) -> None:
+        for event in events:
+            self.events.put(event)
 
     def _read(self, table: str, start: int, count: int) -> list[int]:
         c, dev = self._client, self.settings.device_id
