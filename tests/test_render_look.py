@@ -19,6 +19,7 @@ from scipy.ndimage import binary_dilation, gaussian_filter
 
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, create_context
+from bridge_node.render.meshes import rim_rasters
 from bridge_node.render.renderer import SceneRenderer
 from bridge_node.render.settings import (
     ChannelSettings,
@@ -272,3 +273,30 @@ def test_bad_look_settings_are_clear_config_errors(tmp_path):
         r = run_cli("render-snapshot", "--config", str(cfg), "--time", "0")
         assert r.returncode == 2 and message in r.stderr and str(cfg) in r.stderr, r.stderr
         assert "Traceback" not in r.stderr
+
+
+def test_level_ice_is_wet_and_darker_along_open_water(ctx, world):
+    down = channel(yaw_deg=180.0, pitch_deg=-60.0, eye=[-80.0, 0.0, 40.0])  # onto the broken channel's edge
+    dry, wet = (luminance(render(ctx, world, down, start_utc=DAY, wet_rim_m=m)) for m in (0.0, 1.5))
+    changed = np.abs(wet - dry) > 4
+    assert changed.mean() > 0.005 and (wet[changed] < dry[changed]).all()  # a rim, only darker
+    # the rim of each cell: the nearest other cell within the width, and the distance to it
+    cells = np.ones((8, 8), np.uint16)
+    cells[:, 5:] = 2
+    rim = rim_rasters(cells, 8, 2.5)
+    assert (rim[:, :, 0] == [[0, 0, 2, 2, 2, 1, 1, 1]]).all()  # cells 1 | 2 meet between columns 4 and 5
+    assert np.allclose(rim[:, 3:5, 1] / 256, [[1, 0]])
+
+
+def test_no_rim_without_open_water(ctx, world):
+    model, data = world
+    down = channel(yaw_deg=180.0, pitch_deg=-60.0, eye=[-80.0, 0.0, 40.0])
+    images = []
+    for m in (0.0, 1.5):
+        view = WorldView()
+        view.apply(snapshot(model, data))
+        view.status[:] = 0  # nothing broken
+        cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=[down], start_utc=DAY, wet_rim_m=m)), [down])
+        cs.render(view)
+        images.append(cs.images()[0])
+    assert np.array_equal(*images)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 from PIL import Image, ImageDraw
+from scipy import ndimage
 
 from sim_core.world import WorldModel
 
@@ -51,3 +52,27 @@ def cell_rasters(model: WorldModel, size: int) -> np.ndarray:
             draw.polygon([tuple(p) for p in ring * scale], fill=c + 1)
         out.append(np.asarray(img, dtype=np.int64).astype(np.uint16))
     return np.vstack(out)
+
+
+def rim_rasters(cells: np.ndarray, size: int, width_px: float) -> np.ndarray:
+    """For each pixel of stacked cell rasters ((templates * size, size), 1 + cell, 0 in
+    cracks), the nearest other cell within `width_px` (1 + its index; 0: none) and the
+    distance to it in 1/256 px: (templates * size, size, 2) uint16. With the neighbour's
+    status, the environment pass darkens the rim of level ice along open water."""
+    out = np.zeros(cells.shape + (2,), dtype=np.uint16)
+    for k in range(cells.shape[0] // size):
+        lab = cells[k * size:(k + 1) * size].astype(np.int64)
+        # across: at each pixel on a boundary, the other (non-crack) cell beside it
+        across = np.zeros_like(lab)
+        padded = np.pad(lab, 1)  # no wrapping: outside the tile is no cell
+        for di, dj in ((0, 1), (2, 1), (1, 0), (1, 2)):
+            other = padded[di:di + size, dj:dj + size]
+            take = (other != lab) & (other != 0)
+            across = np.where(take, np.maximum(across, other), across)
+        edge = (across != 0) | (lab == 0)
+        dist, (i, j) = ndimage.distance_transform_edt(~edge, return_indices=True)
+        at_edge = np.where(lab[i, j] != lab, lab[i, j], across[i, j])
+        near = (dist < width_px) & (at_edge != lab) & (at_edge != 0) & (lab != 0)
+        out[k * size:(k + 1) * size, :, 0] = np.where(near, at_edge, 0)
+        out[k * size:(k + 1) * size, :, 1] = np.minimum(dist * 256, 65535)
+    return out

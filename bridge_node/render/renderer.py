@@ -33,7 +33,7 @@ from bridge_node.render.camera import (
     ship_matrix,
     visible_boxes,
 )
-from bridge_node.render.meshes import cell_rasters, cell_vertices
+from bridge_node.render.meshes import cell_rasters, cell_vertices, rim_rasters
 from bridge_node.render.settings import (
     ChannelSettings,
     RenderSettings,
@@ -122,8 +122,10 @@ class SceneRenderer:
                                                     "in_sector")])
         self.cell_verts, self.cell_vert_start, self.cell_side_start = cell_vertices(model)
         self.raster_size = RASTER_SIZE if len(model.ice.templates) <= 4 else RASTER_SIZE // 2
-        raster = cell_rasters(model, self.raster_size)
-        self.cell_raster = ctx.texture((self.raster_size, raster.shape[0]), 1, raster.tobytes(), dtype="u2")
+        cells = cell_rasters(model, self.raster_size)
+        self.rim_px = settings.wet_rim_m / scene.side * self.raster_size
+        raster = np.dstack([cells, rim_rasters(cells, self.raster_size, self.rim_px)])
+        self.cell_raster = ctx.texture((self.raster_size, raster.shape[0]), 3, raster.tobytes(), dtype="u2")
         self.cell_raster.filter = moderngl.NEAREST, moderngl.NEAREST
         self.tile_floes: dict[int, tuple[_FloeBuffer, _FloeBuffer]] = {}  # placement -> (tops, sides)
         self._drawn = np.zeros(0, dtype=bool)
@@ -279,7 +281,7 @@ class SceneRenderer:
         self.env_buf.write(np.hstack([corners, rays]).astype("f4").tobytes())
         scene = self.model.scene
         self._set(self.env, slab_z=self.slab_z, far=s.far_m, tile_info=0, tile_thickness=THICKNESS_UNIT,
-                  cell_raster=3, raster_size=self.raster_size, status=7, pose_width=POSE_WIDTH,
+                  cell_raster=3, raster_size=self.raster_size, rim_px=self.rim_px, status=7, pose_width=POSE_WIDTH,
                   field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
         self.env_vao.render()
         self._draw_nav_lights(ships, cam, channel.height)

@@ -104,6 +104,8 @@ class RenderSettings(Params):
     relief_reach_m: float = Field(
         300.0, ge=10.0, le=1.0e7, description="the finest snow relief octave (23 m period) is fetched within this "
         "distance, coarser ones within as many times it as their period is longer; beyond, finer than a pixel row")
+    wet_rim_m: float = Field(1.5, ge=0.0, le=10.0, description="width of the wet, darker rim of level ice along "
+                                                               "open water (0: none)")
     freeboard_m: float = Field(9.0, ge=0.5, le=40.0, description="own ship's deck height above the waterline")
     lod_distance_m: float = Field(300.0, ge=0.0, le=1.0e6, description="floe side faces drawn within this distance")
     processes: Literal["local", "none"] = Field(

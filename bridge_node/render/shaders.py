@@ -154,7 +154,9 @@ uniform float slab_z;
 uniform float far;               // m: level ice is looked up this far
 uniform isampler2D tile_info;    // per tile: first floe row (-1: unbreakable), template | quarter turns << 16
 uniform sampler2D tile_thickness;  // per tile: level-ice thickness, m
-uniform usampler2D cell_raster;  // templates stacked in y: 1 + cell index, 0 in a crack
+uniform usampler2D cell_raster;  // templates stacked in y: 1 + cell index (0 in a crack), 1 + the nearest
+                                 // other cell's within rim_px (0: none), distance to it (1/256 px)
+uniform float rim_px;
 uniform int raster_size;
 uniform usampler2D status;       // per floe row: 0 intact, 1 free, 2 frozen
 uniform int pose_width;
@@ -162,7 +164,11 @@ uniform vec2 field_size;         // m
 uniform float tile_side;
 in vec3 ray;
 out vec4 colour;
-bool level_ice(vec2 p, ivec2 tile) {
+uint row_status(int row) { return texelFetch(status, ivec2(row % pose_width, row / pose_width), 0).r; }
+// Whether level ice lies at p, and its rim: 1 at the edge of a broken neighbour (open
+// water), falling to 0 at rim_px pixels of the raster from it.
+bool level_ice(vec2 p, ivec2 tile, out float rim) {
+    rim = 0.0;
     ivec2 info = texelFetch(tile_info, tile, 0).rg;
     if (info.x < 0) return true;                                        // the unbreakable slab
     vec2 local = p - vec2(tile) * tile_side - 0.5 * tile_side;          // about the tile centre
@@ -170,11 +176,13 @@ bool level_ice(vec2 p, ivec2 tile) {
     float c = k == 0 ? 1.0 : (k == 2 ? -1.0 : 0.0), s = k == 1 ? 1.0 : (k == 3 ? -1.0 : 0.0);
     local = vec2(c * local.x + s * local.y, c * local.y - s * local.x);
     vec2 uv = clamp((local / tile_side + 0.5) * float(raster_size), vec2(0.0), vec2(float(raster_size) - 1.0));
-    uint cell = texelFetch(cell_raster, ivec2(uv) + ivec2(0, (info.y & 0xFFFF) * raster_size), 0).r;
-    if (cell == 0u) return false;
-    int row = info.x + int(cell) - 1;
-    return texelFetch(status, ivec2(row % pose_width, row / pose_width), 0).r == 0u;
+    uvec3 cell = texelFetch(cell_raster, ivec2(uv) + ivec2(0, (info.y & 0xFFFF) * raster_size), 0).rgb;
+    if (cell.r == 0u || row_status(info.x + int(cell.r) - 1) != 0u) return false;
+    if (cell.g != 0u && row_status(info.x + int(cell.g) - 1) != 0u)
+        rim = 1.0 - float(cell.b) / (256.0 * rim_px);
+    return true;
 }
+const vec3 WET = vec3(0.55, 0.62, 0.68);  // wet snow and slush against the dry
 const float WAVE_SLOPE = 0.04;
 const vec2 WAVE_DRIFT = vec2(0.6, 0.35);  // m/s: ripples travelling before a light air
 uniform float time;                       // s: the exercise's clock
@@ -200,8 +208,10 @@ void main() {
     ivec2 tile = ivec2(floor(p / tile_side));
     bool on_field = t < far && p.x >= 0.0 && p.y >= 0.0 && p.x < field_size.x && p.y < field_size.y;
     vec3 ground;
-    if (on_field && level_ice(p, tile)) {
-        ground = fogged(ice_surface(noise, texelFetch(tile_thickness, tile, 0).r, vec3(p, slab_z)), vec3(p, slab_z));
+    float rim;
+    if (on_field && level_ice(p, tile, rim)) {
+        vec3 ice = ice_surface(noise, texelFetch(tile_thickness, tile, 0).r, vec3(p, slab_z));
+        ground = fogged(mix(ice, ice * WET, rim), vec3(p, slab_z));   // wet, darker along open water
     } else {  // the sea, out to the horizon
         vec3 at = eye - g * eye.z / g.z;
         ground = fogged(sea(g, at), at);
