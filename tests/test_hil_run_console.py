@@ -1,7 +1,7 @@
 """The run's software console (``[console]``, the default config's demo): ``icebridge run``
 starts ``icebridge console`` in its own process over a real link (slcan on a socat pty
-pair, Modbus TCP on 127.0.0.1), the ship obeys its script, and the run summary says how the
-script's expectations went. What a user can get wrong is a clear error."""
+pair, Modbus TCP on 127.0.0.1), the ship obeys its script, the run summary says how the
+script's expectations went, and the session record replays the run exactly. What a user can get wrong is a clear error."""
 import json
 import os
 import subprocess
@@ -40,6 +40,13 @@ def test_the_console_process_gives_the_run_its_orders(tmp_path, link):
     # the orders went over the wire: the session record holds the console link's traffic
     record = next((tmp_path / "sessions").iterdir())
     assert (record / ("can.log" if link == "can" else "modbus.csv")).stat().st_size > 0
+    # and the node config the run used, with which the record is re-simulated exactly
+    r = run_cli("replay", str(record), "--config", str(record / "node.toml"), "--max", "--render", "none", "--json",
+                "--out", str(tmp_path / "replay"))
+    assert r.returncode == 0, r.stderr
+    replay = json.loads(r.stdout.splitlines()[-1])
+    assert replay["input"]["exact"] and replay["input"]["orders"]["console/rudder/0"] > 0
+    assert replay["end"] == {"north_m": out["north_m"], "east_m": out["east_m"]}
 
 
 def test_a_missing_socat_is_a_clear_error_naming_the_way_out(tmp_path):

@@ -104,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     local = args.render == "local" or (args.render is None and cfg.render.processes == "local")
     renderers = RenderProcesses(cfg, args.config, out, args.frames_every) if local else None
     rendered = []
-    with RunConsole(cfg, args.config, out) as run_console, open_stream(cfg.stream) as publisher:
+    with RunConsole(cfg, args.config, out, record) as run_console, open_stream(cfg.stream) as publisher:
         cfg = run_console.cfg  # with the console's link, if the config has one
         try:
             if renderers:

@@ -18,7 +18,7 @@ import tomli_w
 
 from bridge_node.hil.bench import STOP_TIMEOUT_S, pty_folder, wire_end
 from bridge_node.hil.scenario import load_scenario
-from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig
+from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig, resolve_path
 from bridge_node.node.errors import UserError
 
 LINK_NAME = "console"  # the node's end
@@ -28,13 +28,17 @@ WAIT_S = 3600.0  # the console waits this long for the node's first outputs (a f
 class RunConsole:
     """The run's console process and its link, in ``folder`` (config, log, results); a
     context manager. ``cfg``: the node config with the console's link (unchanged where the
-    config has no ``[console]``)."""
+    config has no ``[console]``). With a session ``record`` folder, the node config the run
+    uses goes there as ``node.toml`` (the console's link as the node saw it, pty path and
+    all): ``icebridge replay RECORD --config RECORD/node.toml`` re-simulates the run exactly."""
 
-    def __init__(self, cfg: NodeConfig, config_path: str | Path | None, folder: Path) -> None:
+    def __init__(self, cfg: NodeConfig, config_path: str | Path | None, folder: Path,
+                 record: Path | None = None) -> None:
         self.settings = cfg.console
         self.cfg = cfg
+        self.config_path = config_path
         self.where = f"{config_path or DEFAULT_CONFIG}: console"
-        self.folder = folder
+        self.folder, self.record = folder, record
         self.log, self.results = folder / "console.log", folder / "console.json"
         self._process: subprocess.Popen | None = None
         self._stopped = False  # the run stopped the console (else it exited on its own)
@@ -66,6 +70,8 @@ class RunConsole:
             "links": [*self.cfg.model_dump()["links"], node_link],
             "arbitration": arbitration.model_dump() | {"rudder": [LINK_NAME, *arbitration.rudder],
                                                        "engine": [LINK_NAME, *arbitration.engine]}})
+        if self.record is not None:
+            self._keep_node_config()
         self.folder.mkdir(parents=True, exist_ok=True)
         config = self.folder / "console.toml"
         config.write_text(tomli_w.dumps({"links": [console_link]}), encoding="utf-8")
@@ -75,6 +81,14 @@ class RunConsole:
                 [sys.executable, "-m", "bridge_node", "console", "--config", str(config), "--script", s.script,
                  "--wait", str(WAIT_S), "--hold", "--results", str(self.results)],
                 stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
+
+    def _keep_node_config(self) -> None:
+        """``node.toml`` in the record: the run's node config, its paths absolute, without
+        ``[console]`` (the console was another process; its link is among the links)."""
+        paths = {k: str(resolve_path(self.config_path, v)) for k, v in self.cfg.paths.model_dump().items()}
+        node = self.cfg.model_dump(exclude_none=True, exclude={"console"}) | {"paths": paths}
+        self.record.mkdir(parents=True, exist_ok=True)
+        (self.record / "node.toml").write_text(tomli_w.dumps(node), encoding="utf-8")
 
     def __exit__(self, *exc) -> None:
         try:
