@@ -6,7 +6,9 @@ here unless ``--render none``) draw the channels from it, so physics never waits
 pictures. With a display they show the window channels; headless they write a video of
 the run and a panorama PNG at the end. Shows a live status line; at the end prints a
 summary (tick statistics, transport delays, the render processes' files) and writes the
-ship's track and the tick times as plots. Ctrl-C (or SIGTERM) ends the run cleanly.
+ship's track and the tick times as plots. Ctrl-C (or SIGTERM) ends the run cleanly. With
+``[console]`` (the default config's demo) the software console gives the orders from its own
+process over a real link (``bridge_node.hil.run_console``); its result is in the summary.
 """
 from __future__ import annotations
 
