@@ -83,6 +83,7 @@ def channel(**kw) -> ChannelSettings:
 
 ASTERN = channel(yaw_deg=180.0, pitch_deg=-20.0, eye=[-80.0, 0.0, 20.0])  # down the broken channel
 AHEAD = channel(pitch_deg=-8.0, eye=[10.0, 0.0, 25.0])  # level ice to the horizon
+WING = channel(yaw_deg=160.0, pitch_deg=-30.0, eye="starboard_wing")  # down the side aft: floes pushed aside
 ON_THIN, ON_THICK = {"east": 0.25 * SIDE, "north": 800.0}, {"east": 0.75 * SIDE, "north": 800.0}
 OPEN_WATER = {"north": -3000.0}  # south of the field, looking south
 LOOKS = {
@@ -92,6 +93,7 @@ LOOKS = {
     "thin_ice": (AHEAD, ON_THIN, {"start_utc": DAY}),
     "thick_ice": (AHEAD, ON_THICK, {"start_utc": DAY}),
     "night_searchlight": (AHEAD, ON_THICK, {"start_utc": NIGHT, "searchlights": [SEARCHLIGHT]}),
+    "from_the_wing": (WING, None, {"start_utc": DAY}),
 }
 
 
