@@ -78,7 +78,7 @@ def default_ship(particulars: ShipParticulars, contour: np.ndarray, freeboard: f
     parts = [_faces(band(water, deck), HULL), _faces(band(bottom, water), BOOT), _faces(top, DECK),
              _faces(band(deck, rail), HULL),
              _box((bx - 16.0, -0.4 * B, freeboard - 0.5), (bx + 2.0, 0.4 * B, floor), HOUSE),
-             _box((bx - 2.5, -0.5 * B - 1.0, floor - 0.4), (bx + 2.0, 0.5 * B + 1.0, floor), HOUSE),
+             _box((bx - 1.5, -0.5 * B - 1.0, floor - 0.4), (bx + 1.5, 0.5 * B + 1.0, floor), DECK),
              _box((fore - 0.4, -0.4, freeboard), (fore + 0.4, 0.4, freeboard + 14.0), MAST)]
     return trimesh.util.concatenate(parts)
 
