@@ -1,6 +1,7 @@
 """CAN link on python-can's virtual bus and on slcan over a pty: console orders in, NMEA 2000
 out, checked with an independent decoder (the nmea2000 package and its canboat database)."""
 import math
+import threading
 import time
 
 import can
@@ -126,3 +127,27 @@ def test_console_over_slcan_on_a_pty(tmp_path):
         finally:
             console.shutdown()
             hub.close()
+
+
+def test_a_far_end_that_does_not_read_never_holds_up_the_loop(tmp_path):
+    """slcan over a pty pair whose console end nobody reads: python-can drains the port after
+    every frame, which would wait for ever; the node's writer thread waits instead, and the
+    loop's publishing goes on, the frames it cannot hand over counted as send_failed."""
+    with pty_pair(tmp_path) as (node_end, _):
+        cfg = node_config([{"type": "can", "name": "helm", "interface": "slcan", "channel": node_end,
+                            "allowed_sources": [0x42]}])
+        hub = LinkHub(cfg.links, cfg.arbitration)
+        done = threading.Event()
+
+        def publish_for_a_while() -> None:
+            now = time.monotonic()
+            while hub.links[0].health().errors["send_failed"] < 10:  # the writer's queue has filled up
+                now += 0.1
+                tick(hub, STATE, now)  # 7 to 8 frames a tick
+            done.set()
+        with hub:
+            publisher = threading.Thread(target=publish_for_a_while, daemon=True)
+            publisher.start()
+            publisher.join(60.0)
+            assert done.is_set(), "the loop's publish is stuck in a write"
+            assert hub.links[0].health().outputs > 256  # the pty's buffers filled, then the queue

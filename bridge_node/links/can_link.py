@@ -2,11 +2,15 @@
 127245 rudder orders in as a helm source, and the ship's state out as NMEA 2000 PGNs
 127245, 127488, 127489 (fast packet), 127250, 127251, 129025, 129026 at their rates and
 at the priorities of canboat's database. The node is an NMEA 2000 citizen: it claims and
-defends its address, answers ISO requests and sends its heartbeat (``n2k_network``)."""
+defends its address, answers ISO requests and sends its heartbeat (``n2k_network``). Over a
+serial line (slcan) the frames go out through a writer thread: the loop never waits for a
+far end that does not read."""
 from __future__ import annotations
 
 import functools
 import math
+import queue
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -78,6 +82,62 @@ def _n2k_fields(name: str, s: ShipOutputs, sid: int) -> dict:
             "Sog": s.speed_over_ground, "Reserved2": 65535}
 
 
+SERIAL_INTERFACES = frozenset({"slcan", "serial", "robotell", "seeedstudio"})  # python-can over a serial line
+SEND_QUEUE = 256  # frames a serial-line bus's writer may hold; beyond this a frame is dropped (send_failed)
+WRITER_STOP_S = 1.0  # closing waits this long for the writer; one stuck in a write is left behind
+
+
+class _Bus:
+    """An open bus. Over a serial line (``SERIAL_INTERFACES``) python-can's send writes the
+    port and drains it, which waits for as long as the far end does not read: there a
+    writer thread sends the frames and the loop only queues them (a full queue drops the
+    frame), and the writer, last, shuts the bus down. Other interfaces send at once."""
+
+    def __init__(self, bus: can.BusABC, threaded: bool, name: str) -> None:
+        self.bus = bus
+        self.failures: queue.SimpleQueue = queue.SimpleQueue()  # the writer's send errors, for the loop
+        self._frames: queue.Queue | None = queue.Queue(SEND_QUEUE) if threaded else None
+        self._writer = None
+        if threaded:
+            self._writer = threading.Thread(target=self._write, name=f"can-send-{name}", daemon=True)
+            self._writer.start()
+
+    def send(self, msg: can.Message) -> bool:
+        """Send ``msg`` (or queue it for the writer); False if the queue is full. Raises
+        can.CanOperationError where python-can could not send it at once."""
+        if self._frames is None:
+            self.bus.send(msg, timeout=0.0)
+            return True
+        try:
+            self._frames.put_nowait(msg)
+        except queue.Full:
+            return False
+        return True
+
+    def _write(self) -> None:
+        while (msg := self._frames.get()) is not None:
+            try:
+                self.bus.send(msg, timeout=0.1)
+            except (can.CanError, OSError) as exc:
+                self.failures.put(exc)
+        try:
+            self.bus.shutdown()
+        except (can.CanError, OSError):  # a bus already lost; the link has let go of it
+            pass
+
+    def close(self) -> None:
+        if self._writer is None:
+            self.bus.shutdown()
+            return
+        while True:  # frames not yet sent are let go
+            try:
+                self._frames.get_nowait()
+            except queue.Empty:
+                break
+        self._frames.put_nowait(None)
+        self._writer.join(WRITER_STOP_S)
+
+
 @register_link("can")
 class CanLink(Link):
     """Any python-can interface; the console's frames from the DBC of the settings."""
@@ -99,7 +159,7 @@ class CanLink(Link):
                                       settings.heartbeat_s, [pgn for _, pgn, _ in OUTPUTS.values()],
                                       received | ({RUDDER_PGN} if settings.rudder_order_pgn else set()))
 
-    def _open_device(self) -> can.BusABC:
+    def _open_device(self) -> _Bus:
         s = self.settings
         try:
             bus = can.Bus(interface=s.interface, channel=s.channel, bitrate=s.bitrate)
@@ -109,15 +169,20 @@ class CanLink(Link):
             raise can.CanInitializationError(f"python-can cannot start interface {s.interface!r}: "
                                              f"{type(exc).__name__}: {exc}") from exc
         self.network.restart()  # a new bus: claim the address again
-        return bus
+        return _Bus(bus, s.interface in SERIAL_INTERFACES, self.name)
 
-    def _close_device(self, bus: can.BusABC) -> None:
-        bus.shutdown()
+    def _close_device(self, bus: _Bus) -> None:
+        bus.close()
 
     def _poll_device(self, now: float) -> Iterator[ControlInput]:
+        while not self.device.failures.empty():  # frames the writer could not send
+            exc = self.device.failures.get_nowait()
+            if not isinstance(exc, can.CanOperationError):
+                raise exc
+            self._count_error("send_failed")
         self._transmit(self.network.tick(now))
         for _ in range(MAX_FRAMES_PER_POLL):
-            msg = self.device.recv(timeout=0.0)
+            msg = self.device.bus.recv(timeout=0.0)
             if msg is None:
                 return
             self._report("rx", msg, msg.timestamp)
@@ -249,10 +314,13 @@ class CanLink(Link):
                                        is_rx=False))
 
     def _send(self, msg: can.Message) -> None:
-        """Send one frame; a full transmit buffer drops it (counted), the next cycle follows."""
+        """Send one frame; a full transmit buffer (or writer's queue) drops it (counted), the
+        next cycle follows."""
         try:
-            self.device.send(msg, timeout=0.0)
+            sent = self.device.send(msg)
         except can.CanOperationError:
+            sent = False
+        if not sent:
             self._count_error("send_failed")
             return
         self._health.outputs += 1
