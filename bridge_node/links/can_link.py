@@ -84,7 +84,6 @@ def _n2k_fields(name: str, s: ShipOutputs, sid: int) -> dict:
 
 SERIAL_INTERFACES = frozenset({"slcan", "serial", "robotell", "seeedstudio"})  # python-can over a serial line
 SEND_QUEUE = 256  # frames a serial-line bus's writer may hold; beyond this a frame is dropped (send_failed)
-WRITER_STOP_S = 1.0  # closing waits this long for the writer; one stuck in a write is left behind
 
 
 class _Bus:
@@ -126,6 +125,7 @@ class _Bus:
             pass
 
     def close(self) -> None:
+        """Shut the bus down (over a serial line: have the writer do it, without waiting)."""
         if self._writer is None:
             self.bus.shutdown()
             return
@@ -134,8 +134,7 @@ class _Bus:
                 self._frames.get_nowait()
             except queue.Empty:
                 break
-        self._frames.put_nowait(None)
-        self._writer.join(WRITER_STOP_S)
+        self._frames.put_nowait(None)  # the writer shuts the bus down once its write is through; not waited for
 
 
 @register_link("can")
