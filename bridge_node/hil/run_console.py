@@ -22,6 +22,7 @@ from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig, resolve_path
 from bridge_node.node.errors import UserError
 
 LINK_NAME = "console"  # the node's end
+INTERRUPTED = 130  # the console's exit status after Ctrl-C (which a terminal sends the run and it alike)
 WAIT_S = 3600.0  # the console waits this long for the node's first outputs (a first run builds its tiles)
 
 
@@ -118,10 +119,10 @@ class RunConsole:
         try:
             results = json.loads(self.results.read_text(encoding="utf-8"))
         except (OSError, ValueError):
-            if self._stopped:
+            code = self._process.returncode if self._process else None
+            if self._stopped or code == INTERRUPTED:
                 return out | {"result": "the run ended before the script did"}
             tail = self.log.read_text(errors="replace").strip().splitlines()[-1:] if self.log.exists() else []
-            code = self._process.returncode if self._process else None
             return out | {"result": f"the console exited with status {code}: {' '.join(tail) or 'no output'}"}
         met = sum(r["met"] for r in results)
         total = sum(r["total"] for r in results)
