@@ -76,29 +76,27 @@ vec3 lit(vec3 albedo, vec3 n, vec3 world) {
     float d = max((dot(n, sun) + 0.25) / 1.25, 0.0);
     return albedo * (direct * d + ambient + searchlit(world, n));
 }
-// The noise under p (m) seen from `dist` m, one fetch per octave within its reach (relief_reach
+// The snow relief under p (m) seen from `dist` m: the sum over the octaves of their slope
+// (before the depth) and albedo variation, one fetch each within its reach (relief_reach
 // times its period over the finest's; beyond it, the mip level is the features' mean, 0, so
 // it fades to 0 over the last 30 % and is not fetched). The branch is smooth on the screen,
 // so the derivatives that pick the mip levels stay those of neighbours on the same side.
 uniform float relief_reach;      // m: how far the finest octave is fetched
-void noise_under(vec2 p, float dist, out vec3 h[OCTAVES]) {
+vec3 snow_under(vec2 p, float dist) {
+    vec3 sum = vec3(0.0);        // slope x, y; albedo
     for (int k = 0; k < OCTAVES; k++) {
-        vec2 uv = OCTAVE[k] * p;
         float reach = relief_reach * OCTAVE_SCALE[k];
-        h[k] = vec3(0.0);
-        if (dist < reach)
-            h[k] = (texture(noise, uv).xyz - 0.5) * NOISE_RANGE * (1.0 - smoothstep(0.7 * reach, reach, dist));
+        if (dist < reach) {
+            vec3 h = (texture(noise, OCTAVE[k] * p).xyz - 0.5) * NOISE_RANGE * (1.0 - smoothstep(0.7 * reach, reach, dist));
+            sum += vec3(OCTAVE_AMP[k].x * (h.yz * OCTAVE[k]), OCTAVE_AMP[k].y * h.x);  // chain rule: d/dp = (d/duv) M
+        }
     }
+    return sum;
 }
-// Snow relief from the noise: the normal, and the albedo factor.
-vec3 relief(vec3 h[OCTAVES], float depth, out float albedo) {
-    vec2 slope = vec2(0.0);
-    albedo = 1.0;
-    for (int k = 0; k < OCTAVES; k++) {
-        slope += OCTAVE_AMP[k].x * depth * (h[k].yz * OCTAVE[k]);   // chain rule: d/dp = (d/duv) M
-        albedo += OCTAVE_AMP[k].y * h[k].x;
-    }
-    return normalize(vec3(-slope, 1.0));
+// The relief's normal for a snow depth (1: full), and its albedo factor.
+vec3 relief(vec3 snow, float depth, out float albedo) {
+    albedo = 1.0 + snow.z;
+    return normalize(vec3(-depth * snow.xy, 1.0));
 }
 // Sea ice by thickness (m): dark nilas, grey and grey-white young ice, snow-covered white
 vec3 ice_albedo(float h) {
@@ -108,9 +106,9 @@ vec3 ice_albedo(float h) {
 }
 // snow relief depth by thickness: slight on nilas, full on snow-covered ice
 float snow_depth(float h) { return mix(0.15, 1.0, smoothstep(0.1, 0.4, h)); }
-vec3 ice_surface(vec3 noise[OCTAVES], float h, vec3 world) {
+vec3 ice_surface(vec3 snow, float h, vec3 world) {
     float albedo;
-    vec3 n = relief(noise, snow_depth(h), albedo);
+    vec3 n = relief(snow, snow_depth(h), albedo);
     return lit(ice_albedo(h) * albedo, n, world);
 }
 uniform vec3 water_colour;
@@ -203,14 +201,13 @@ void main() {
     vec3 g = normalize(vec3(r.xy, min(r.z, 0.5 * (r.z - 0.5 * fw))));
     float t = (slab_z - eye.z) / g.z;
     vec2 p = eye.xy + g.xy * t;
-    vec3 noise[OCTAVES];
-    noise_under(p, t, noise);
+    vec3 snow = snow_under(p, t);
     ivec2 tile = ivec2(floor(p / tile_side));
     bool on_field = t < far && p.x >= 0.0 && p.y >= 0.0 && p.x < field_size.x && p.y < field_size.y;
     vec3 ground;
     float rim;
     if (on_field && level_ice(p, tile, rim)) {
-        vec3 ice = ice_surface(noise, texelFetch(tile_thickness, tile, 0).r, vec3(p, slab_z));
+        vec3 ice = ice_surface(snow, texelFetch(tile_thickness, tile, 0).r, vec3(p, slab_z));
         ground = fogged(mix(ice, ice * WET, rim), vec3(p, slab_z));   // wet, darker along open water
     } else {  // the sea, out to the horizon
         vec3 at = eye - g * eye.z / g.z;
@@ -260,13 +257,12 @@ in vec2 local;
 flat in int top;
 out vec4 colour;
 void main() {
-    vec3 noise[OCTAVES];
-    noise_under(local, distance(world, eye), noise);
+    vec3 snow = snow_under(local, distance(world, eye));
     vec3 n = normalize(normal);
     vec3 c;
     if (top == 1) {
         float albedo;
-        vec3 bump = relief(noise, snow_depth(thickness), albedo);
+        vec3 bump = relief(snow, snow_depth(thickness), albedo);
         c = lit(ice_albedo(thickness) * albedo, normalize(n + vec3(bump.xy, 0.0)), world);
     } else {
         c = lit(mix(vec3(0.42, 0.50, 0.53), vec3(0.30, 0.62, 0.64), smoothstep(0.1, 0.5, thickness)), n, world);
