@@ -193,3 +193,5 @@ def test_a_warp_mesh_moves_pixels_as_its_grid_says(ctx, exercise, tmp_path):
     grid.write_bytes(grid.read_bytes()[:-12])
     with pytest.raises(WarpError, match=r"render.channels \(c\): warp = .*warp.pfm.*bytes of data"):
         render(ctx, model, data, [c.model_copy(update={"warp": str(grid)})])
+    with pytest.raises(ValueError, match=r"warp.pfm.*bytes of data"):  # in a config: when it loads
+        channel(warp=str(grid))

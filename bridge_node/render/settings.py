@@ -12,10 +12,12 @@ from __future__ import annotations
 
 import math
 from datetime import datetime
+from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import AwareDatetime, Field, model_validator
+from pydantic import AwareDatetime, Field, field_validator, model_validator
 
+from bridge_node.render.warp import read_pfm
 from sim_core.params import Params, repeated
 
 
@@ -50,6 +52,13 @@ class ChannelSettings(Params):
     output: Literal["png", "window", "none"] = "png"
     monitor: int = Field(0, ge=0, le=15, description="window output: the monitor's number")
     fullscreen: bool = Field(False, description="window output: full-screen on that monitor")
+
+    @field_validator("warp")
+    @classmethod
+    def _warp_readable(cls, path: str | None) -> str | None:
+        if path is not None:
+            read_pfm(Path(path), repr(path))  # a clear error when the config loads, not when the channel opens
+        return path
 
     @model_validator(mode="after")
     def _blend_fits(self) -> "ChannelSettings":
