@@ -27,7 +27,7 @@ from bridge_node.render.settings import (
     SearchlightSettings,
 )
 from bridge_node.render.sky import sky_for, sun_position
-from bridge_node.stream.world_view import WorldView
+from bridge_node.stream.world_view import TRAFFIC_DTYPE, WorldView
 from sim_core.world import snapshot, step
 
 W, H = 384, 216
@@ -35,6 +35,7 @@ THIN, THICK = 0.05, 0.6  # m: the field's west and east halves
 SIDE = 1600.0  # m, the field's width and height
 DAY = datetime.fromisoformat("2026-04-10T10:40:00+00:00")  # 74 N 20 E: the sun 24 deg up in the south
 TWILIGHT = datetime.fromisoformat("2026-04-10T19:30:00+00:00")  # the sun 3 deg below the horizon
+DUSK = datetime.fromisoformat("2026-04-10T21:00:00+00:00")  # the sun 6 deg below: navigation lights full
 NIGHT = datetime.fromisoformat("2026-12-21T22:00:00+00:00")  # polar night, the sun 35 deg below
 SEARCHLIGHT = SearchlightSettings(position=[20.0, 0.0, 30.0], depression_deg=10.0)  # ahead, 170 m out
 REFERENCES = REPO / "docs" / "images"
@@ -64,13 +65,16 @@ def ctx():
     return create_context()
 
 
-def render(ctx, world, channel: ChannelSettings, ship: dict | None = None, later: float = 0.0, **look) -> np.ndarray:
+def render(ctx, world, channel: ChannelSettings, ship: dict | None = None, later: float = 0.0,
+           traffic: list | None = None, **look) -> np.ndarray:
     """The channel's image of the world, the ship optionally moved (north, east, heading),
-    the clock optionally `later` s on."""
+    the clock optionally `later` s on, with other vessels (TRAFFIC_DTYPE rows)."""
     model, data = world
     view = WorldView()
     view.apply(snapshot(model, data))
     view.time += later
+    if traffic is not None:
+        view.traffic = np.array(traffic, dtype=TRAFFIC_DTYPE)
     view.ship = dataclasses.replace(view.ship, **(ship or {}))
     cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=[channel], **look)), [channel])
     cs.render(view)
@@ -94,6 +98,9 @@ LOOKS = {
     "thick_ice": (AHEAD, ON_THICK, {"start_utc": DAY}),
     "night_searchlight": (AHEAD, ON_THICK, {"start_utc": NIGHT, "searchlights": [SEARCHLIGHT]}),
     "from_the_wing": (WING, None, {"start_utc": DAY}),
+    "traffic_at_dusk": (AHEAD, ON_THICK, {"start_utc": DUSK, "traffic": [
+        (1, ON_THICK["east"] - 150.0, ON_THICK["north"] + 600.0, math.pi / 2, 5.0, 120.0, 20.0),  # crossing: green
+        (2, ON_THICK["east"] + 60.0, ON_THICK["north"] + 1500.0, math.pi, 5.0, 200.0, 32.0)]}),  # head-on: both
 }
 
 
