@@ -86,6 +86,11 @@ class FakeLink(Link):
         pass
 
 
+def opened(link: Link) -> bool:
+    """Wait (in the test, not the loop) for the link's opener to finish; whether it did."""
+    return link._opener.wait(5.0)
+
+
 def order(t: float) -> ControlInput:
     return ControlInput(t, "fake", "rudder", 0.1)
 
@@ -101,10 +106,15 @@ def test_poll_reopens_a_lost_device_after_the_back_off():
     assert link.devices[0].closed == 1 and link.device is None
     link.fail_opens = 1
     assert link.poll(10.05) == [] and link.health().reconnects == 0  # back-off: 0.1 s
-    link.poll(10.1)  # reopen tried and failed: next back-off 0.2 s
-    assert link.health().reconnects == 1 and link.health().errors["open_failed"] == 1
+    link.poll(10.1)  # reopen started on the opener's thread; the poll does not wait for it
+    assert link.health().reconnects == 1 and link.health().opening
+    assert opened(link) and link.health().errors["open_failed"] == 0
+    link.poll(10.1)  # the next poll takes the failure: next back-off 0.2 s
+    assert link.health().errors["open_failed"] == 1 and not link.health().opening
     link.poll(10.29)
     assert link.health().reconnects == 1
+    link.poll(10.3)
+    assert opened(link) and not link.health().connected
     link.poll(10.3)
     h = link.health()
     assert h.reconnects == 2 and h.connected and len(link.devices) == 2

@@ -19,6 +19,7 @@ import dataclasses
 import errno
 import logging
 import math
+import queue
 import threading
 import time
 from abc import ABC, abstractmethod
@@ -37,8 +38,6 @@ RUDDER, TELEGRAPH, LEVER = "rudder", "telegraph", "lever"  # the kinds of order
 RUDDER_ORDER_LIMIT_DEG = 90.0  # beyond this a rudder order is nonsense, not an order to clamp
 ALARM_TEXT_MAX = 52  # characters: what an ALR sentence's text field holds within NMEA 0183's 82
 OPEN_WAIT_S = 5.0  # ``Link.open`` waits this long for the device; a slower one is taken up by a later poll
-OPEN_GRACE_S = 0.01  # ``Link.poll`` waits this long for a reopen, so a fast device (a port, a socket)
-# is in use at once; a slow one (slcan) is taken up by a later poll, and the tick goes on
 # ETL position codes (IEC 61162-1; also the console's CAN and Modbus codes) -> telegraph positions
 ETL_POSITIONS = {
     "00": "stop", "01": "dead_slow_ahead", "02": "slow_ahead", "03": "half_ahead", "04": "full_ahead",
@@ -217,6 +216,58 @@ class _Opener:
             self._close_device(device)
 
 
+class QueuedWriter:
+    """Writes on a worker thread, so the loop never waits for a far end that does not read:
+    the loop queues (``put``; a full queue refuses), the thread writes with ``write`` and
+    hands what it raises of ``errors`` back (``failures``). Closing lets queued items go and
+    does not wait: the thread calls ``finish`` (closing the device) once its write is
+    through; a ``write`` that waits should give up when ``closing`` is set."""
+
+    def __init__(self, write: Callable[[object], None], finish: Callable[[], None],
+                 errors: tuple[type[Exception], ...], name: str, size: int) -> None:
+        self._write, self._finish, self._errors = write, finish, errors
+        self._items: queue.Queue = queue.Queue(size)
+        self._failures: queue.SimpleQueue = queue.SimpleQueue()
+        self.closing = threading.Event()
+        threading.Thread(target=self._run, name=name, daemon=True).start()
+
+    def put(self, item: object) -> bool:
+        """Queue ``item`` for the thread; False if the queue is full (the item is dropped)."""
+        try:
+            self._items.put_nowait(item)
+        except queue.Full:
+            return False
+        return True
+
+    def failures(self) -> list[Exception]:
+        """What the thread's writes raised since the last call."""
+        out = []
+        while not self._failures.empty():
+            out.append(self._failures.get_nowait())
+        return out
+
+    def _run(self) -> None:
+        while (item := self._items.get()) is not None:
+            try:
+                self._write(item)
+            except self._errors as exc:
+                self._failures.put(exc)
+        try:
+            self._finish()
+        except self._errors:  # a device already lost; the link has let go of it
+            pass
+
+    def close(self) -> None:
+        """Let queued items go and have the thread finish (not waited for)."""
+        self.closing.set()
+        while True:
+            try:
+                self._items.get_nowait()
+            except queue.Empty:
+                break
+        self._items.put_nowait(None)
+
+
 class RateSchedule:
     """When each periodic output is next due; rates in Hz."""
 
@@ -294,15 +345,16 @@ class Link(ABC):
         self.close()
 
     def poll(self, now: float) -> list[ControlInput]:
-        """Orders received since the last poll (``now``: monotonic s); never blocks. Reopens
-        a lost device once its back-off has passed."""
+        """Orders received since the last poll (``now``: monotonic s); never blocks (not even
+        for a reopen: a device the opener has opened is taken up by the next poll). Reopens a
+        lost device once its back-off has passed."""
         if not self._active:
             return []
         if self.device is None:
             if self._opener is None and self._backoff.ready(now):
                 self._health.reconnects += 1
                 self._start_open()
-            if self._opener is not None and self._opener.wait(OPEN_GRACE_S):
+            elif self._opener is not None and self._opener.wait(0.0):
                 self._take_device(now)
             return []
         inputs = []

@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import functools
 import math
-import queue
-import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -25,6 +23,7 @@ from bridge_node.links.base import (
     TELEGRAPH,
     ControlInput,
     Link,
+    QueuedWriter,
     RateSchedule,
     register_link,
 )
@@ -89,52 +88,32 @@ SEND_QUEUE = 256  # frames a serial-line bus's writer may hold; beyond this a fr
 class _Bus:
     """An open bus. Over a serial line (``SERIAL_INTERFACES``) python-can's send writes the
     port and drains it, which waits for as long as the far end does not read: there a
-    writer thread sends the frames and the loop only queues them (a full queue drops the
-    frame), and the writer, last, shuts the bus down. Other interfaces send at once."""
+    ``QueuedWriter`` sends the frames and, last, shuts the bus down; the loop only queues
+    them (a full queue drops the frame). Other interfaces send at once."""
 
     def __init__(self, bus: can.BusABC, threaded: bool, name: str) -> None:
         self.bus = bus
-        self.failures: queue.SimpleQueue = queue.SimpleQueue()  # the writer's send errors, for the loop
-        self._frames: queue.Queue | None = queue.Queue(SEND_QUEUE) if threaded else None
-        self._writer = None
-        if threaded:
-            self._writer = threading.Thread(target=self._write, name=f"can-send-{name}", daemon=True)
-            self._writer.start()
+        self._writer = QueuedWriter(lambda msg: bus.send(msg, timeout=0.1), bus.shutdown, (can.CanError, OSError),
+                                    f"can-send-{name}", SEND_QUEUE) if threaded else None
 
     def send(self, msg: can.Message) -> bool:
         """Send ``msg`` (or queue it for the writer); False if the queue is full. Raises
         can.CanOperationError where python-can could not send it at once."""
-        if self._frames is None:
+        if self._writer is None:
             self.bus.send(msg, timeout=0.0)
             return True
-        try:
-            self._frames.put_nowait(msg)
-        except queue.Full:
-            return False
-        return True
+        return self._writer.put(msg)
 
-    def _write(self) -> None:
-        while (msg := self._frames.get()) is not None:
-            try:
-                self.bus.send(msg, timeout=0.1)
-            except (can.CanError, OSError) as exc:
-                self.failures.put(exc)
-        try:
-            self.bus.shutdown()
-        except (can.CanError, OSError):  # a bus already lost; the link has let go of it
-            pass
+    def failures(self) -> list[Exception]:
+        """The writer's send errors since the last call."""
+        return [] if self._writer is None else self._writer.failures()
 
     def close(self) -> None:
         """Shut the bus down (over a serial line: have the writer do it, without waiting)."""
         if self._writer is None:
             self.bus.shutdown()
-            return
-        while True:  # frames not yet sent are let go
-            try:
-                self._frames.get_nowait()
-            except queue.Empty:
-                break
-        self._frames.put_nowait(None)  # the writer shuts the bus down once its write is through; not waited for
+        else:
+            self._writer.close()
 
 
 @register_link("can")
@@ -174,8 +153,7 @@ class CanLink(Link):
         bus.close()
 
     def _poll_device(self, now: float) -> Iterator[ControlInput]:
-        while not self.device.failures.empty():  # frames the writer could not send
-            exc = self.device.failures.get_nowait()
+        for exc in self.device.failures():  # frames the writer could not send
             if not isinstance(exc, can.CanOperationError):
                 raise exc
             self._count_error("send_failed")

@@ -2,10 +2,14 @@
 line (paced within its baud budget) and, where the settings say so, copied to UDP (port
 10110 on the loopback by default) for chart plotters such as OpenCPN. A link without a
 serial port sends on UDP only; one with a port copies to UDP only if ``udp_output``. With
-``[links.ais]`` the own ship also goes out as ``!AIVDO`` and the other vessels as ``!AIVDM``."""
+``[links.ais]`` the own ship also goes out as ``!AIVDO`` and the other vessels as ``!AIVDM``.
+The serial line is written by a writer thread: the loop never waits for a far end that does
+not read."""
 from __future__ import annotations
 
 import datetime as dt
+import io
+import select
 import socket
 import time
 from collections.abc import Iterator
@@ -13,13 +17,15 @@ from collections.abc import Iterator
 import serial
 
 from bridge_node.links.ais import AisReporter
-from bridge_node.links.base import Alarm, ControlInput, Link, RateSchedule, Vessel, register_link
+from bridge_node.links.base import Alarm, ControlInput, Link, QueuedWriter, RateSchedule, Vessel, register_link
 from bridge_node.links.nmea0183 import SentenceError, parse_order, render_alarm, render_outputs
 from bridge_node.links.settings import NmeaLinkSettings
 from bridge_node.node.network import is_loopback_host
 from sim_core.ship.outputs import ShipOutputs
 
 MAX_PENDING = 1024  # characters of a line without its end: beyond this it is noise
+SEND_QUEUE = 64  # sentences the writer may hold; beyond this a sentence is dropped (send_failed)
+ROOM_WAIT_S = 0.1  # the writer looks this often whether the link is closing while the line is full
 
 
 class _NoPort:
@@ -29,6 +35,41 @@ class _NoPort:
 
     def close(self) -> None:
         pass
+
+
+class _SerialPort:
+    """An open serial port: read on the loop's thread, written by a ``QueuedWriter``, which
+    closes the port last. pyserial's write spins while an OS port's buffer is full, so the
+    writer waits for room with ``select``; a URL handler's port (``loop://``,
+    ``socket://``) has no descriptor and is written blocking, as its own write waits."""
+
+    def __init__(self, port: serial.SerialBase, name: str) -> None:
+        self.port = port
+        try:
+            self._fd: int | None = port.fileno()
+        except io.UnsupportedOperation:
+            self._fd = None
+            port.write_timeout = None
+        self.writer = QueuedWriter(self._write, port.close, (serial.SerialException, OSError),
+                                   f"nmea-send-{name}", SEND_QUEUE)
+
+    @property
+    def in_waiting(self) -> int:
+        return self.port.in_waiting
+
+    def read(self, size: int) -> bytes:
+        return self.port.read(size)
+
+    def _write(self, data: bytes) -> None:
+        """Write all of ``data`` (on the writer's thread), waiting for room; a write cut
+        short by closing is let go."""
+        while data and not self.writer.closing.is_set():
+            if self._fd is None or select.select([], [self._fd], [], ROOM_WAIT_S)[1]:
+                data = data[self.port.write(data):]
+
+    def close(self) -> None:
+        """Have the writer close the port once its write is through (not waited for)."""
+        self.writer.close()
 
 
 @register_link("nmea0183")
@@ -65,15 +106,19 @@ class NmeaLink(Link):
             self._udp.close()
             self._udp = None
 
-    def _open_device(self) -> serial.SerialBase | _NoPort:
+    def _open_device(self) -> _SerialPort | _NoPort:
         if not self.settings.port:
             return _NoPort()
-        return serial.serial_for_url(self.settings.port, baudrate=self.settings.baudrate, timeout=0, write_timeout=0)
+        port = serial.serial_for_url(self.settings.port, baudrate=self.settings.baudrate, timeout=0, write_timeout=0)
+        return _SerialPort(port, self.name)
 
-    def _close_device(self, port: serial.SerialBase | _NoPort) -> None:
+    def _close_device(self, port: _SerialPort | _NoPort) -> None:
         port.close()
 
     def _poll_device(self, now: float) -> Iterator[ControlInput]:
+        if self.settings.port:  # a write that failed on the writer's thread: the port is lost
+            for exc in self.device.writer.failures():
+                raise exc
         waiting = self.device.in_waiting
         chunk = self.device.read(waiting) if waiting else b""
         lines = (self._pending + chunk).split(b"\n")
@@ -91,18 +136,14 @@ class NmeaLink(Link):
             except SentenceError as exc:
                 self._count_error(exc.kind)
 
-    def _write_serial(self, data: bytes, now: float) -> bool:
-        """Write one sentence within the baud budget; False if it was not written."""
+    def _write_serial(self, data: bytes) -> bool:
+        """Queue one sentence for the writer within the baud budget; False if it was not
+        (counted: ``baud_budget_skipped``, or ``send_failed`` while the far end does not read)."""
         if len(data) > self._tokens:
             self._count_error("baud_budget_skipped")
             return False
-        try:
-            self.device.write(data)
-        except serial.SerialTimeoutException:
-            self._count_error("write_blocked")
-            return False
-        except self.lost_errors:
-            self._lost(now)
+        if not self.device.writer.put(data):
+            self._count_error("send_failed")
             return False
         self._tokens -= len(data)
         return True
@@ -117,7 +158,7 @@ class NmeaLink(Link):
                     self._udp.sendto(data, (self.settings.udp_host, self.settings.udp_port))
                 except OSError:
                     self._count_error("udp_send_failed")
-            if self.settings.port and self.device is not None and not self._write_serial(data, now):
+            if self.settings.port and self.device is not None and not self._write_serial(data):
                 continue
             self._report("tx", s)
             self._health.outputs += 1

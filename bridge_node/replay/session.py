@@ -169,8 +169,6 @@ class SessionSource:
     def __enter__(self) -> SessionSource:
         for link in self.links:
             link.open()
-            if isinstance(link, NmeaLink):  # the loop port: written at once, not at the line's pace
-                link.device.write_timeout = None
         return self
 
     def __exit__(self, *exc) -> None:
@@ -184,7 +182,7 @@ class SessionSource:
         for record in inputs["nmea0183"]:
             link = by_name.get(record.link)
             if isinstance(link, NmeaLink):
-                link.device.write((record.sentence + "\r\n").encode("ascii", errors="replace"))
+                link.device.port.write((record.sentence + "\r\n").encode("ascii", errors="replace"))
         for msg in inputs["can"]:  # the frame's link by its recorded channel, else the first CAN link
             link = self._can_channels.get(str(msg.channel), next(iter(self._can_channels.values()), None))
             if link is not None:
