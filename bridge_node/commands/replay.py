@@ -23,7 +23,7 @@ import numpy as np
 from rich.console import Console
 
 from bridge_node.links.hub import LinkHub
-from bridge_node.node.config import NodeConfig, load_config
+from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig, load_config
 from bridge_node.node.errors import UserError
 from bridge_node.node.render_processes import RenderProcesses, open_stream, wait_for_renderers
 from bridge_node.node.world_setup import build_world, start_position, start_world, warm_up
@@ -31,7 +31,7 @@ from bridge_node.replay.console import KeyReader, ReplayProgress, logged_text
 from bridge_node.replay.csv_track import parse_mapping
 from bridge_node.replay.engine import MAX_SPEED, MIN_SPEED, Outputs, Playback, ReplayStats, Source, run_replay
 from bridge_node.replay.inputs import LOOKED_FOR, VesselChoice, load_inputs
-from bridge_node.replay.session import RecordedSession, SessionSource
+from bridge_node.replay.session import RecordedSession, SessionSource, recorded_config
 from bridge_node.replay.track import Track, TrackLog, TrackPath, TrackSource, clean, origin_under
 from bridge_node.reports.replay import plot_replay
 from bridge_node.reports.summary import print_summary
@@ -243,6 +243,7 @@ def _play(cfg: NodeConfig, args: argparse.Namespace, prep: _Prepared, playback: 
 
 
 def run(args: argparse.Namespace) -> int:
+    args.config = args.config or recorded_config(args.files)  # a record's own node.toml: an exact replay
     cfg = load_config(args.config)
     _check(args)
     console = Console(stderr=args.json)
@@ -260,7 +261,7 @@ def run(args: argparse.Namespace) -> int:
         with console.status("compiling the ice kernels"):
             warm_up(prep.model, cfg)
     stats, outputs = _play(cfg, args, prep, playback, console)
-    summary = _summary(prep, stats, playback) | outputs
+    summary = _summary(prep, stats, playback) | outputs | {"config": str(args.config or DEFAULT_CONFIG)}
     if isinstance(prep.source, SessionSource):
         summary["input"] |= {"orders": dict(prep.source.orders), "console_errors": prep.source.errors()}
     title = prep.info.get("vessel") or ", ".join(Path(f).name for f in prep.info["files"])

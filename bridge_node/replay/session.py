@@ -31,6 +31,7 @@ from bridge_node.node.tick_record import PROTOCOLS, TICKS_FILE, Tick, read_ticks
 from sim_core.world import Controls
 
 RECORD_FILES = {"nmea0183": "nmea.log", "can": "can.log", "modbus": "modbus.csv"}  # protocol -> file
+NODE_CONFIG = "node.toml"  # the node config a run used, kept in its session record
 _channels = itertools.count()
 
 
@@ -71,6 +72,17 @@ def _received(folder: Path, names: set[str], bad: Counter) -> tuple[dict[str, li
             times[protocol] = [unix_time(r) for r in records]
             bad.update({f"{RECORD_FILES[protocol]} {k}": n for k, n in counts.items() if n})
     return inputs, times
+
+
+def recorded_config(paths: list[str]) -> Path | None:
+    """The node config kept in the session record that ``paths`` name (the record's folder
+    or files in it: one folder with a tick log), or None where there is none."""
+    folders = {path if path.is_dir() else path.parent for path in (Path(p).expanduser() for p in paths)}
+    if len(folders) != 1:
+        return None
+    folder = folders.pop()
+    config = folder / NODE_CONFIG
+    return config if config.is_file() and (folder / TICKS_FILE).is_file() else None
 
 
 def read_session(folder: Path, names: set[str], period: float) -> RecordedSession:
