@@ -41,6 +41,8 @@ def test_prepared_tiles_switch_in_with_the_same_physics_as_tiles_built_at_the_sw
     assert np.count_nonzero(a.cause == BreakCause.CONTACT) > 0
     np.testing.assert_array_equal(a.status, b.status)
     np.testing.assert_array_equal(a.xy, b.xy)  # bit for bit: contacts are read in a fixed order
+    assert a.resting.any()  # floes at rest astern left the dynamic set, the same ones in both runs
+    np.testing.assert_array_equal(a.resting, b.resting)
 
 
 @pytest.mark.parametrize("settle", [True, False], ids=["after-leaving", "while-leaving"])

@@ -235,14 +235,22 @@ def _hull_overlaps(offsets, present, status, gcell, xy, yaw, outline, outline_st
 
 
 @numba.njit(cache=True)
-def _scatter_free(ids, f, status, xy, yaw, vel, yaw_rate):
+def _scatter_free(ids, f, status, resting, xy, yaw, vel, yaw_rate):
     """Write the pose and velocity rows f (n, 6) of floe bodies with these ids into the
-    arrays, but not of rows already frozen (bodies of a tile still leaving the space)."""
+    arrays, but not of rows already frozen (bodies of a tile still leaving the space) or
+    resting (their static bodies report no velocity). Returns the rows written."""
+    out = np.empty(len(ids), np.int64)
+    n = 0
     for k in range(len(ids)):
-        if ids[k] >= _ROW0 and ids[k] < _TILE0 and status[ids[k] - _ROW0] == 1:
+        if ids[k] >= _ROW0 and ids[k] < _TILE0:
             i = ids[k] - _ROW0
+            if status[i] != 1 or resting[i]:
+                continue
             xy[i, 0], xy[i, 1], yaw[i] = f[k, 0], f[k, 1], f[k, 2]
             vel[i, 0], vel[i, 1], yaw_rate[i] = f[k, 3], f[k, 4], f[k, 5]
+            out[n] = i
+            n += 1
+    return out[:n]
 
 
 def _seed_grid(model: IceModel) -> tuple[np.ndarray, ...]:
@@ -341,8 +349,8 @@ def _contact_rows(ints, f, status, working, template, corner, turns, row_start, 
 def warm_up() -> None:
     """Load the compiled kernels of this module (numba compiles or loads on first call)."""
     none = np.zeros(0, dtype=np.int64)
-    _scatter_free(none.astype(np.uintp), np.zeros((0, 6)), none.astype(np.uint8), np.zeros((0, 2)), np.zeros(0),
-                  np.zeros((0, 2), np.float32), np.zeros(0, np.float32))
+    _scatter_free(none.astype(np.uintp), np.zeros((0, 6)), none.astype(np.uint8), none.astype(np.bool_),
+                  np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2), np.float32), np.zeros(0, np.float32))
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     one = np.zeros(1, dtype=np.int64)
     _contact_rows(np.zeros((0, 3), np.uintp), np.zeros((0, 12)), none.astype(np.uint8), none.astype(np.uint8),
@@ -371,7 +379,8 @@ class ContactSpace:
         # and the packed channel astern is one group of thousands: one touch, or the removal
         # of one frozen floe, woke them all, in steps of 0.1-1.1 s. Putting single floes to
         # sleep (cpBodySleep) breaks its rule that touching bodies sleep together, and freed
-        # its contact memory twice.
+        # its contact memory twice. Floes at rest leave the dynamic set one by one instead, as
+        # static bodies (``rest``, ``wake``; sim_core/ice/resting.py decides when).
         self.space.damping = math.exp(-1.0 / s.drag_time_s)  # per second: v *= damping ** dt
         hull = lib.cpBodyNewKinematic()
         lib.cpBodySetUserData(hull, ffi.cast("void *", _HULL_ID))
@@ -395,7 +404,9 @@ class ContactSpace:
         self._insert_budget, self._removal_work = s.swap_objects_per_step, s.swap_removal_work
         self._arbiters = 0  # contacts Chipmunk kept at the last read
         d = np.hypot(model.outline[:, 0], model.outline[:, 1])
-        self._extent = np.maximum.reduceat(d, model.outline_start[:-1]) if len(d) else np.zeros(0)
+        self.extent = np.maximum.reduceat(d, model.outline_start[:-1]) if len(d) else np.zeros(0)  # cell radius, m
+        # farthest a point of the hull and of a cell it touches can be from the hull's reference point, m
+        self.reach = float(np.hypot(*np.abs(self.hull_outline).max(axis=0))) + float(self.extent.max(initial=0.0))
         self._grid = _seed_grid(model)
         self._sides = np.array([t.side for t in model.templates], dtype=float)
         self._buffer = pb.Buffer()
@@ -565,7 +576,7 @@ class ContactSpace:
         xy, angle = self._hull_pose
         c, s = math.cos(angle), math.sin(angle)
         hull = self.hull_outline @ np.array([[c, s], [-s, c]]) + xy
-        reach = float(np.hypot(*np.abs(self.hull_outline).max(axis=0))) + float(self._extent.max(initial=0.0))
+        reach = self.reach
         found = []
         for tile, bodies in self._tiles.items():
             start, count = int(self.tiles.row_start[tile]), int(self.tiles.row_count[tile])
@@ -575,7 +586,7 @@ class ContactSpace:
                 continue
             rows = slice(start, start + count)
             hit = _hull_overlaps(np.arange(count), bodies.in_space & _INTACT_IN, state.status[rows], state.gcell[rows],
-                                 state.xy[rows], state.yaw[rows], m.outline, m.outline_start, self._extent,
+                                 state.xy[rows], state.yaw[rows], m.outline, m.outline_start, self.extent,
                                  hull, xy, c, s, self._hull_box)
             found.append(hit + start)
         return np.sort(np.concatenate(found)) if found else np.zeros(0, dtype=np.int64)
@@ -585,14 +596,50 @@ class ContactSpace:
         self._swap_work()
         self.space.step(dt)
 
-    def read_free(self, state: FloeState) -> None:
-        """Copy pose and velocity of the free floes from Chipmunk into the arrays."""
+    def read_free(self, state: FloeState) -> np.ndarray:
+        """Copy pose and velocity of the moving free floes (not resting) from Chipmunk into
+        the arrays; returns their rows."""
         buf = self._buffer
         buf.clear()
         pb.get_space_bodies(self.space, _BODY_FIELDS, buf)
         ids = np.frombuffer(buf.int_buf(), dtype=np.uintp)
-        _scatter_free(ids, np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ids), 6), state.status,
-                      state.xy, state.yaw, state.vel, state.yaw_rate)
+        return _scatter_free(ids, np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ids), 6),
+                             state.status, state.resting, state.xy, state.yaw, state.vel, state.yaw_rate)
+
+    @property
+    def rest_budget(self) -> int:
+        """Floes a step may take out of the dynamic set: each costs Chipmunk a walk over every
+        cached contact, so by the same work budget as tile removals (a count, not a time)."""
+        return max(1, self._removal_work // max(self._arbiters, 1))
+
+    def rest(self, state: FloeState, rows: np.ndarray) -> None:
+        """Take free rows out of the dynamic set: their bodies become static (no solver
+        work; moving floes still collide with them). Their arrays keep the pose and the
+        velocity they came to rest with. Each shape leaves the space and comes back, so that
+        Chipmunk forgets its contacts: it keeps contacts between static bodies for good, and
+        every step would list them again."""
+        for b, p in zip(self._floe_bodies(state, rows), self._floe_shapes(state, rows)):
+            shape = _shape(p)
+            lib.cpSpaceRemoveShape(self._cp, shape)
+            lib.cpBodySetType(_body(b), lib.CP_BODY_TYPE_STATIC)
+            lib.cpSpaceAddShape(self._cp, shape)
+        state.resting[rows] = True
+
+    def wake(self, state: FloeState, rows: np.ndarray) -> None:
+        """Bring resting rows back into the dynamic set with their mass, moment and the
+        velocity they came to rest with."""
+        m = self.model
+        g = state.gcell[rows]
+        for p, mass, moment, v, w in zip(self._floe_bodies(state, rows), m.mass[g].tolist(), m.inertia[g, 2].tolist(),
+                                         state.vel[rows].tolist(), state.yaw_rate[rows].tolist()):
+            body = _body(p)
+            lib.cpBodySetType(body, lib.CP_BODY_TYPE_DYNAMIC)  # Chipmunk sums mass from the shapes: none here
+            lib.cpBodySetMass(body, mass)
+            lib.cpBodySetMoment(body, moment)
+            lib.cpBodySetVelocity(body, (v[0], v[1]))
+            lib.cpBodySetAngularVelocity(body, w)
+        state.resting[rows] = False
+        state.calm[rows] = 0
 
     def read_contacts(self, state: FloeState) -> Contacts:
         """Contacts of the last step, in Chipmunk's order (which follows hashes of C

@@ -12,6 +12,9 @@ centre of mass height above the water plane); yaw is counter-clockwise from the 
 frame. ``home`` is where the cell sat in the level ice (its placed centroid), kept for
 channel measurements. ``cause`` says what broke a cell. ``submerged`` marks free floes
 pushed under the hull: they collide with nothing until the hull has passed over them.
+``resting`` marks free floes that came to rest far from the hull: the engine holds them as
+static bodies (they cost no solver work) until the hull comes near or a moving floe pushes
+them; their pose and velocity stay as they were when they came to rest.
 """
 from __future__ import annotations
 
@@ -97,6 +100,8 @@ class FloeState(_Table):
     status = _Column(np.uint8)  # FloeStatus; written only through set_status
     cause = _Column(np.uint8)  # BreakCause
     submerged = _Column(np.bool_)  # under the hull, out of planar contact
+    resting = _Column(np.bool_)  # a free floe at rest far from the hull, out of the dynamic set
+    calm = _Column(np.uint8)  # steps in a row a free floe has been at rest (saturates at 255)
     home = _Column(np.float32, 2)  # placed centroid in the level ice, world m
     xy = _Column(np.float64, 2)  # centre of mass, world m
     yaw = _Column(np.float64)  # rad, CCW

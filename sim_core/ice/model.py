@@ -32,6 +32,17 @@ class IceDynamicsSettings(Params):
                                  description="share of its weight a floe riding onto an edge rests on it")
     solver_iterations: int = Field(10, ge=1, le=100)
     collision_slop: float = Field(0.01, ge=0.0, le=0.5, description="allowed overlap, m")
+    rest_far_floes: bool = Field(True, description="floes at rest far from the hull leave the dynamic set")
+    rest_distance: float = Field(
+        150.0, ge=20.0, le=5000.0,
+        description="m from the hull's reference point beyond which a floe at rest may leave the dynamic set; "
+                    "it rejoins within 0.8 of this (or nearer than the hull's reach plus a floe and 10 m, "
+                    "whichever is farther)")
+    rest_speed: float = Field(0.02, gt=0.0, le=1.0,
+                              description="m/s: a floe slower than this (centre, and its rim turning) is at rest; "
+                                          "a contact that would give a resting floe this speed wakes it")
+    rest_after_s: float = Field(1.0, ge=0.0, le=60.0, description="s a floe must stay at rest before it leaves")
+    rest_per_step: int = Field(200, ge=1, le=1_000_000, description="floes a step may take out of the dynamic set")
     swap_objects_per_step: int = Field(
         800, ge=1, le=1_000_000, description="engine objects a step switches in for tile swaps")
     swap_removal_work: int = Field(

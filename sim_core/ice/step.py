@@ -22,16 +22,15 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from sim_core.ice import contact
+from sim_core.ice import contact, resting
 from sim_core.ice import vertical
 from sim_core.ice.breaking import pushed_hard
 from sim_core.ice.contact import Contacts
 from sim_core.ice.floes import BreakCause, FloeState, FloeStatus
 from sim_core.ice.model import IceModel, vertical_substeps
 from sim_core.ice.tiles import IceData, break_cells
-from sim_core.ice.vertical import vertical_step
+from sim_core.ice.vertical import settled, vertical_step
 
-_SETTLED = 1e-7  # m, rad, m/s, rad/s: a floe this close to rest at its draft is left alone
 _PUSHED_DOWN_TILT = 0.25  # rad: roll of a floe the bow has turned under
 _CLEAR_AHEAD = 10.0  # m ahead of the stem: a submerged floe there is no longer held down
 _BESIDE = 5.0  # m beyond the beam lines: a submerged floe there is no longer pressed by the hull
@@ -123,17 +122,14 @@ def _surfacing(down, xy, hull_xy, c, s, outline, reach, stem, clear_ahead):
 
 @numba.njit(cache=True)
 def _unsettled_free(status, submerged, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate, pitch_rate):
-    """Free rows above water not yet at rest at their floating draft. In-plane contact does
-    not couple into heave, roll or pitch, so a settled floe stays settled and needs no
-    vertical update."""
+    """Free rows above water not yet at rest at their floating draft (``vertical.settled``):
+    a settled floe needs no vertical update."""
     out = np.empty(len(status), np.int64)
     n = 0
     for i in range(len(status)):
         if status[i] != 1 or submerged[i]:
             continue
-        off = abs(heave[i] - z_equilibrium[gcell[i]]) + abs(roll[i]) + abs(pitch[i])
-        rates = abs(heave_rate[i]) + abs(roll_rate[i]) + abs(pitch_rate[i])
-        if off > _SETTLED or rates > _SETTLED:
+        if not settled(i, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate, pitch_rate):
             out[n] = i
             n += 1
     return out[:n]
@@ -172,7 +168,10 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
 def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> IceStepReport:
     """Advance the breakable ice by dt seconds with the hull moving as given."""
     st, space = data.state, data.contacts
+    rest = model.settings.rest_far_floes
     space.set_hull(hull.xy, hull.angle, hull.velocity, hull.angular_velocity)
+    if rest:
+        resting.wake_near_hull(model, data, hull.xy)
     by_hull = space.hull_touching(st)
     if len(by_hull):
         break_cells(data, by_hull, BreakCause.HULL)
@@ -180,7 +179,7 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
     space.step(dt)
     con = space.read_contacts(st)
     by_contact, jammed = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
-    space.read_free(st)
+    moving = space.read_free(st)
     if len(by_contact):
         break_cells(data, by_contact, BreakCause.CONTACT)
     free = _unsettled_free(st.status, st.submerged, st.gcell, model.z_equilibrium, st.heave, st.roll, st.pitch,
@@ -193,6 +192,9 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
                       dt, vertical_substeps(model, dt))
     struck, impulse, point = con.with_hull()
     _update_submersion(model, data, hull, struck[struck >= 0], jammed)
+    if rest:
+        resting.wake_struck(model, data, con)
+        resting.rest_far(model, data, moving, hull.xy, dt)
     force, moment = _hull_load(impulse, point, hull, dt)
     return IceStepReport(by_hull, by_contact, force, moment)
 
@@ -200,6 +202,7 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
 def warm_up(model: IceModel, data: IceData) -> None:
     """Load every compiled kernel the ice step uses, so that no step waits for a compile."""
     contact.warm_up()
+    resting.warm_up(model)
     none, f32 = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.float32)
     _surfacing(none, np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hull_outline, 1.0, 1.0, 1.0)
     _unsettled_free(none.astype(np.uint8), none.astype(np.bool_), none.astype(np.int32), model.z_equilibrium,

@@ -135,6 +135,8 @@ def freeze_tile(data: IceData, placement: int) -> None:
     rows = data.tiles.rows(placement)
     st = data.state
     st.submerged[rows] = False  # a frozen floe keeps its pose; it surfaces if thawed
+    st.resting[rows] = False  # nor is it resting: it thaws into the dynamic set
+    st.calm[rows] = 0
     data.contacts.drop_tile(placement)
     st.set_status(rows[st.status[rows] == FloeStatus.FREE], FloeStatus.FROZEN)
 

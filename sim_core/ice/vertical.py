@@ -20,6 +20,16 @@ from sim_core.ice.buoyancy import _floe_submerged
 
 
 PARALLEL_FROM = 4000  # floes: below this the serial kernel runs
+SETTLED = 1e-7  # m, rad, m/s, rad/s: a floe this close to rest at its draft is left alone
+
+
+@numba.njit(cache=True)
+def settled(i, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate, pitch_rate) -> bool:
+    """Whether row i floats at rest at its draft (within ``SETTLED``). In-plane contact
+    does not couple into heave, roll or pitch, so a settled floe stays settled."""
+    off = abs(heave[i] - z_equilibrium[gcell[i]]) + abs(roll[i]) + abs(pitch[i])
+    rates = abs(heave_rate[i]) + abs(roll_rate[i]) + abs(pitch_rate[i])
+    return off <= SETTLED and rates <= SETTLED
 
 
 def _vertical_kernel(rows, gcell, tris, tri_start, mass, inertia, damping, added_mass,

@@ -1,0 +1,88 @@
+"""Benchmark: floes at rest leaving the dynamic set, against the previous design, same run.
+
+Two worlds of the default exercise steam the same transit at 60 Hz, one with
+``ice_dynamics.rest_far_floes`` on (the default) and one with it off (every free floe in
+the engine's dynamic set, the previous design). Their steps alternate, so both see the same
+machine load. Printed: whole world step and bare engine step (median, p99, max), their
+ratios, the live, resting and frozen floes, and the cells broken by hull and by contact
+(the physics should stay the same). Run: .venv/bin/python benchmarks/bench_resting.py
+[--distance M]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+from rich.progress import Progress
+
+from bridge_node.node.config import load_config
+from bridge_node.node.world_setup import build_world, start_world
+from sim_core.ice.floes import BreakCause, FloeStatus
+from sim_core.world import step
+
+DT = 1 / 60
+
+
+class _Timed:
+    """One world of the comparison, with its step and engine-step times (ms)."""
+
+    def __init__(self, rest: bool) -> None:
+        cfg = load_config()
+        cfg = cfg.model_copy(update={"ice_dynamics": cfg.ice_dynamics.model_copy(update={"rest_far_floes": rest})})
+        self.rest, self.model = rest, build_world(cfg, None)
+        self.data = start_world(self.model, cfg)
+        self.start = self.data.ship.eta[:2].copy()
+        self.step_ms, self.engine_ms = [], []
+        space = self.data.ice.contacts.space
+        engine_step = space.step
+
+        def timed(dt: float) -> None:
+            t0 = time.perf_counter()
+            engine_step(dt)
+            self.engine_ms.append((time.perf_counter() - t0) * 1e3)
+
+        space.step = timed
+
+    def step(self) -> float:
+        """One world step; returns the distance made good (m)."""
+        t0 = time.perf_counter()
+        step(self.model, self.data, DT)
+        self.step_ms.append((time.perf_counter() - t0) * 1e3)
+        return float(np.hypot(*(self.data.ship.eta[:2] - self.start)))
+
+
+def _figures(ms: list[float]) -> str:
+    a = np.array(ms)
+    return f"median {np.median(a):6.2f} ms, p99 {np.percentile(a, 99):6.2f} ms, max {a.max():6.1f} ms"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--distance", type=float, default=1500.0, help="transit distance, m")
+    args = ap.parse_args()
+    before, after = _Timed(False), _Timed(True)
+    with Progress(transient=True) as progress:
+        task = progress.add_task("transit, resting off and on, steps alternating", total=args.distance)
+        made = 0.0
+        while made < args.distance:
+            before.step()
+            made = after.step()
+            progress.update(task, completed=made)
+    print(f"default exercise, {args.distance:.0f} m at 60 Hz, {os.cpu_count()} cores, steps alternating:")
+    for w in (before, after):
+        st = w.data.ice.state
+        print(f"  resting {'on ' if w.rest else 'off'}: world step {_figures(w.step_ms)}; engine {_figures(w.engine_ms)}")
+        print(f"              live {st.count(FloeStatus.FREE)}, resting {int(st.resting.sum())}, frozen "
+              f"{st.count(FloeStatus.FROZEN)}; broken by hull {int((st.cause == BreakCause.HULL).sum())}, "
+              f"by contact {int((st.cause == BreakCause.CONTACT).sum())}")
+    half = len(after.step_ms) // 2  # the second half: the channel astern has filled
+    print(f"  ratio on/off (same run): world step median {np.median(after.step_ms) / np.median(before.step_ms):.2f}, "
+          f"second half {np.median(after.step_ms[half:]) / np.median(before.step_ms[half:]):.2f}, "
+          f"p99 {np.percentile(after.step_ms, 99) / np.percentile(before.step_ms, 99):.2f}; engine median "
+          f"{np.median(after.engine_ms) / np.median(before.engine_ms):.2f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,132 @@
+"""Floes at rest far from the hull leave the dynamic set, and come back when they are needed.
+
+Astern of the ship the broken channel packs and comes to rest: thousands of floes the engine
+would otherwise solve every step for nothing. A free floe that has stayed slower than
+``rest_speed`` (its centre, and its rim turning) for ``rest_after_s``, settled on the water
+and farther from the hull than the rest radius becomes a static body
+(``ContactSpace.rest``): moving floes still strike it, but it and its resting neighbours
+cost no solver work. It wakes (``ContactSpace.wake``), with the velocity it came to rest
+with, when the hull comes within the wake radius (Chipmunk does not collide kinematic and
+static bodies, so the hull must never meet a resting floe), or when a contact's impulse
+would give it ``rest_speed``; then it also takes that impulse, which in the step it met as
+a wall.
+
+This is Chipmunk's sleeping done floe by floe. Chipmunk sleeps and wakes whole touching
+groups, and the packed channel is one group of thousands: one touch woke them all, in steps
+of 0.1-1.1 s. Every test here is a count or a threshold, so reruns stay the same.
+"""
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from sim_core.ice.contact import Contacts
+from sim_core.ice.model import IceModel
+from sim_core.ice.tiles import IceData
+from sim_core.ice.vertical import settled
+
+_WAKE_SHARE = 0.8  # the wake radius as a share of the rest radius
+_CLEARANCE = 10.0  # m beyond the hull's reach that a resting floe always wakes
+
+
+def radii(model: IceModel, data: IceData) -> tuple[float, float]:
+    """The rest and wake radii about the hull's reference point (m): ``rest_distance`` and
+    0.8 of it, both pushed out so that the wake radius clears the hull's reach plus a
+    floe's radius by 10 m."""
+    wake = max(_WAKE_SHARE * model.settings.rest_distance, data.contacts.reach + _CLEARANCE)
+    return wake / _WAKE_SHARE, wake
+
+
+@numba.njit(cache=True)
+def _calm_far(rows, vel, yaw_rate, gcell, extent, calm, speed, steps, submerged, z_equilibrium, heave, roll,
+              pitch, heave_rate, roll_rate, pitch_rate, xy, hull_xy, radius):
+    """Count the moving rows' steps at rest (slower than speed, m/s: the centre's speed
+    plus the rim's from turning; a faster step starts the count again), and return those at
+    rest for ``steps``, above water, settled at their draft and farther than radius (m)
+    from the hull's reference point."""
+    out = np.empty(len(rows), np.int64)
+    n = 0
+    for k in range(len(rows)):
+        i = rows[k]
+        v = math.sqrt(vel[i, 0] ** 2 + vel[i, 1] ** 2) + abs(yaw_rate[i]) * extent[gcell[i]]
+        if v >= speed:
+            calm[i] = 0
+            continue
+        if calm[i] < 255:
+            calm[i] += 1
+        if calm[i] < steps or submerged[i]:
+            continue
+        if (xy[i, 0] - hull_xy[0]) ** 2 + (xy[i, 1] - hull_xy[1]) ** 2 <= radius * radius:
+            continue
+        if settled(i, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate, pitch_rate):
+            out[n] = i
+            n += 1
+    return out[:n]
+
+
+def wake_near_hull(model: IceModel, data: IceData, hull_xy: np.ndarray) -> None:
+    """Wake the resting floes within the wake radius of the hull's reference point (m)."""
+    st = data.state
+    resting = np.nonzero(st.resting)[0]
+    if len(resting):
+        near = resting[np.hypot(*(st.xy[resting] - hull_xy).T) < radii(model, data)[1]]
+        if len(near):
+            data.contacts.wake(st, near)
+
+
+def wake_struck(model: IceModel, data: IceData, con: Contacts) -> None:
+    """Wake the resting floes that the contacts of the last step pushed hard enough to give
+    them ``rest_speed``, and give them that push: in the step, a resting floe met its
+    striker as a wall (a static body takes no impulse), so the impulse it put on the striker
+    is added to the momentum it wakes with (about its centre, the moment too), and the
+    pair's momentum is kept."""
+    st = data.state
+    floe, other = np.concatenate([con.a, con.b]), np.concatenate([con.b, con.a])
+    impulse = np.concatenate([con.impulse, -con.impulse])  # on a, and on b
+    point = np.concatenate([con.point, con.point])
+    keep = floe >= 0
+    keep[keep] = st.resting[floe[keep]]
+    if not keep.any():
+        return
+    # in the order of the pairs, not the engine's (which follows C pointers), so that the
+    # sums round the same in every rerun
+    order = np.nonzero(keep)[0][np.lexsort((other[keep], floe[keep]))]
+    floe, impulse, point = floe[order], impulse[order], point[order]
+    rows, index = np.unique(floe, return_inverse=True)
+    arm = point - st.xy[floe]
+    push = np.zeros((len(rows), 2))
+    np.add.at(push, index, impulse)
+    turn = np.zeros(len(rows))
+    np.add.at(turn, index, arm[:, 0] * impulse[:, 1] - arm[:, 1] * impulse[:, 0])
+    g = st.gcell[rows]
+    mass = model.mass[g]
+    woken = np.hypot(push[:, 0], push[:, 1]) > model.settings.rest_speed * mass
+    if woken.any():
+        rows, g = rows[woken], g[woken]
+        st.vel[rows] += (push[woken] / mass[woken, None]).astype(np.float32)
+        st.yaw_rate[rows] += (turn[woken] / model.inertia[g, 2]).astype(np.float32)
+        data.contacts.wake(st, rows)
+
+
+def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.ndarray, dt: float) -> None:
+    """Count the moving rows' steps at rest, and take out of the dynamic set, up to
+    ``rest_per_step`` of them and the contact space's ``rest_budget`` (lowest rows first),
+    those at rest for ``rest_after_s``, above water, settled and beyond the rest radius."""
+    s, st = model.settings, data.state
+    steps = min(255, max(1, math.ceil(s.rest_after_s / dt)))
+    far = _calm_far(moving, st.vel, st.yaw_rate, st.gcell, data.contacts.extent, st.calm, s.rest_speed, steps,
+                    st.submerged, model.z_equilibrium, st.heave, st.roll, st.pitch, st.heave_rate, st.roll_rate,
+                    st.pitch_rate, st.xy, np.asarray(hull_xy, dtype=np.float64), radii(model, data)[0])
+    far = np.sort(far)[:min(s.rest_per_step, data.contacts.rest_budget)]
+    if len(far):
+        data.contacts.rest(st, far)
+
+
+def warm_up(model: IceModel) -> None:
+    """Load the compiled kernel."""
+    none, f32 = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.float32)
+    _calm_far(none, np.zeros((0, 2), np.float32), f32, none.astype(np.int32), np.ones(1), none.astype(np.uint8),
+              1.0, 1, none.astype(np.bool_), model.z_equilibrium, f32, f32, f32, f32, f32, f32, np.zeros((0, 2)),
+              np.zeros(2), 1.0)

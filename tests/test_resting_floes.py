@@ -1,0 +1,77 @@
+"""Floes at rest far from the hull leave the dynamic set (static bodies in the engine) and
+come back with the pose and momentum they left with: when the hull comes near, and when a
+moving floe pushes them."""
+import numpy as np
+import pytest
+
+from sim_core.fracture.tile_template import FractureSettings, build_tile
+from sim_core.frames.hull_contour import waterline_contour
+from sim_core.ice import resting
+from sim_core.ice.floes import BreakCause
+from sim_core.ice.model import IceDynamicsSettings, compile_ice_model
+from sim_core.ice.step import HullMotion, ice_step
+from sim_core.ice.tiles import break_cells, new_ice_data, place_tile
+
+DT = 1 / 30
+FAR = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
+
+
+@pytest.fixture
+def rested():
+    """A 40 m tile with a broken strip drifting slower than the rest speed, the hull far
+    away, stepped until the strip has left the dynamic set."""
+    settings = IceDynamicsSettings(rest_after_s=0.2, rest_distance=150.0)
+    model = compile_ice_model([build_tile(0.5, 5, FractureSettings(tile_side=40.0, colliders="sphere"))],
+                              settings=settings)
+    data = new_ice_data(model, waterline_contour(150.0, 24.0), 0.1)
+    rows = data.tiles.rows(place_tile(model, data, 0, (0.0, 0.0)))
+    st = data.state
+    loose = rows[np.abs(st.home[rows, 0] - 20.0) < 6.0]
+    break_cells(data, loose, BreakCause.HULL)
+    rng = np.random.default_rng(5)
+    data.contacts.set_velocity(st, loose, rng.uniform(-0.004, 0.004, (len(loose), 2)),
+                               rng.uniform(-1e-4, 1e-4, len(loose)))
+    for _ in range(30):
+        ice_step(model, data, FAR, DT)
+    return model, data, loose
+
+
+def test_resting_floes_keep_pose_and_momentum_and_wake_when_the_hull_comes(rested):
+    model, data, loose = rested
+    st = data.state
+    assert st.resting[loose].all()  # every floe of the strip came to rest
+    held = st.xy[loose].copy(), st.yaw[loose].copy(), st.vel[loose].copy(), st.yaw_rate[loose].copy()
+    assert np.abs(held[2]).max() > 0.0  # they rest with the small velocity they had
+    for _ in range(10):
+        ice_step(model, data, FAR, DT)
+    assert not len(np.intersect1d(data.contacts.read_free(st), loose))  # out of the dynamic set
+    for now, then in zip((st.xy[loose], st.yaw[loose], st.vel[loose], st.yaw_rate[loose]), held):
+        np.testing.assert_array_equal(now, then)
+    near = np.array([20.0, -60.0])  # the hull south of the tile, inside the wake radius, touching nothing
+    assert np.hypot(*(st.xy[loose] - near).T).max() < resting.radii(model, data)[1]
+    resting.wake_near_hull(model, data, near)
+    assert not st.resting[loose].any()
+    moving = data.contacts.read_free(st)  # the engine's bodies, read back
+    assert set(loose.tolist()) <= set(moving.tolist())
+    for now, then in zip((st.xy[loose], st.yaw[loose], st.vel[loose], st.yaw_rate[loose]), held):
+        np.testing.assert_array_equal(now, then)  # pose and momentum as they came to rest
+
+
+def test_a_moving_floe_that_strikes_a_resting_one_wakes_it(rested):
+    model, data, loose = rested
+    st = data.state
+    striker = loose[np.argmin(st.xy[loose, 1])]  # the southernmost floe of the strip
+    others = loose[loose != striker]
+    target = others[np.argmin(np.hypot(*(st.xy[others] - st.xy[striker]).T))]
+    data.contacts.wake(st, np.array([striker]))
+    push = st.xy[target] - st.xy[striker]
+    data.contacts.set_velocity(st, np.array([striker]), (push / np.hypot(*push))[None, :] * 1.0, np.zeros(1))
+    start = st.xy[target].copy()
+    for _ in range(30):
+        ice_step(model, data, FAR, DT)
+        if not st.resting[target]:
+            break
+    assert not st.resting[target]
+    for _ in range(10):
+        ice_step(model, data, FAR, DT)
+    assert np.hypot(*(st.xy[target] - start)) > 0.01  # pushed away, as a floe in the dynamic set
