@@ -27,6 +27,18 @@ def hil_run(*args, out) -> subprocess.CompletedProcess:
                           cwd=REPO, capture_output=True, text=True, timeout=240)
 
 
+@pytest.mark.parametrize("link", ["can", "nmea", "modbus"])
+def test_the_shipped_helm_response_passes_over_every_link_kind(node_toml, tmp_path, link):
+    """helm_response.toml as shipped: rudder at 20 starboard on RSA and on the console's own
+    link, at the SOLAS rate, the ship turning; over slcan, NMEA 0183 and Modbus TCP."""
+    junit = tmp_path / "hil.xml"
+    r = hil_run(SCENARIOS / "helm_response.toml", "--links", link, "--node-config", node_toml, "--junit", junit,
+                out=tmp_path / "out")
+    assert r.returncode == 0, r.stdout + r.stderr
+    suites = ET.parse(junit).getroot()
+    assert suites.get("failures") == "0" and int(suites.get("tests")) >= 4
+
+
 def test_link_loss_bad_input_and_bus_off_over_slcan(node_toml, tmp_path):
     junit = tmp_path / "hil.xml"
     r = hil_run(SCENARIOS / "link_loss.toml", SCENARIOS / "bad_input.toml", SCENARIOS / "can_bus_off.toml",

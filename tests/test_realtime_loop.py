@@ -91,7 +91,8 @@ def test_the_loop_ticks_on_while_a_lost_slcan_adapter_reopens(tmp_path):
         stop = threading.Event()
         with LinkHub(cfg.links, cfg.arbitration) as hub:
             link = hub.links[0]
-            assert link.health().connected  # open() waited for the first open
+            link.await_open(None)  # the hub waits 5 s at most; a loaded machine may take longer
+            assert link.health().connected
             threading.Thread(target=unplug_and_replug, daemon=True).start()
 
             def on_events(events, _) -> None:

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from conftest import exercise_config, run_cli
 
+from bridge_node.node.config import ConfigError, load_config
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
 from bridge_node.render.renderer import SceneRenderer
@@ -193,5 +194,9 @@ def test_a_warp_mesh_moves_pixels_as_its_grid_says(ctx, exercise, tmp_path):
     grid.write_bytes(grid.read_bytes()[:-12])
     with pytest.raises(WarpError, match=r"render.channels \(c\): warp = .*warp.pfm.*bytes of data"):
         render(ctx, model, data, [c.model_copy(update={"warp": str(grid)})])
-    with pytest.raises(ValueError, match=r"warp.pfm.*bytes of data"):  # in a config: when it loads
-        channel(warp=str(grid))
+    config = tmp_path / "node.toml"  # in a config: relative to its folder, checked when it loads
+    config.write_text('[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n[[render.channels]]\nname = "c"\nwarp = "warp.pfm"\n')
+    with pytest.raises(ConfigError, match=r"node.toml: render.channels.0.warp = 'warp.pfm'.*bytes of data"):
+        load_config(config)
+    write_pfm(grid, np.dstack([x, y]))
+    assert load_config(config).render.channels[0].warp == str(grid)

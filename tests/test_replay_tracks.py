@@ -246,22 +246,26 @@ def test_the_other_vessels_of_a_replayed_ais_log_go_out_as_aivdm_on_its_clock(ca
                       'to_stern = 130\nto_port = 10\nto_starboard = 12\n')
     other = voyage(start=(300.0, -200.0), heading0=90.0, rate_deg_s=0.0)  # due east at 6 kn
     (tmp_path / "ais.log").write_text("\n".join(ais_lines({MMSI: ("ICE TEST", voyage()), OTHER: ("OTHER", other)})))
-    received = []
+    received, done = [], threading.Event()
 
     def listen(listener: socket.socket) -> None:  # read while the replay runs: --max outpaces a socket buffer
-        try:
-            while True:
+        while True:  # until the replay has ended and nothing more is waiting
+            try:
                 received.extend(listener.recv(65536).decode("ascii").split("\r\n"))
-        except TimeoutError:
-            pass
+            except TimeoutError:
+                if done.is_set():
+                    return
 
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as listener:
         listener.bind(("127.0.0.1", port))
-        listener.settimeout(2.0)
+        listener.settimeout(0.2)
         reader = threading.Thread(target=listen, args=(listener,))
         reader.start()
-        code, _, err = replay(capsys, config, tmp_path / "out", tmp_path / "ais.log", "--mmsi", MMSI, "--max")
-        reader.join()
+        try:
+            code, _, err = replay(capsys, config, tmp_path / "out", tmp_path / "ais.log", "--mmsi", MMSI, "--max")
+        finally:
+            done.set()
+            reader.join()
     assert code == 0, err
     vdm = [s for s in received if s.startswith("!AIVDM")]
     reports = [decode(s).asdict() for s in vdm if s.split(",")[1] == "1"]

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 from rich.console import Console
 
+from bridge_node.hil.run_console import LINK_NAME as RUN_CONSOLE_LINK
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig, load_config
 from bridge_node.node.errors import UserError
@@ -225,7 +226,9 @@ def _play(cfg: NodeConfig, args: argparse.Namespace, prep: _Prepared, playback: 
             if renderers:
                 renderers.start()
             traffic = replay_traffic(prep.source, prep.seek_to, prep.model.origin, cfg)
-            with LinkHub(cfg.links, cfg.arbitration, Path(args.record) if args.record else None, traffic) as hub, \
+            # the run's software console was another process, gone now: its orders come from the record
+            links = [s for s in cfg.links if not (args.recorded and s.name == RUN_CONSOLE_LINK)]
+            with LinkHub(links, cfg.arbitration, Path(args.record) if args.record else None, traffic) as hub, \
                     session, KeyReader() as keys, ReplayProgress(console, prep.source, keys) as progress:
                 publisher.publish(snapshot(prep.model, prep.data))
                 wait_for_renderers(renderers, publisher, 300.0)
@@ -243,6 +246,7 @@ def _play(cfg: NodeConfig, args: argparse.Namespace, prep: _Prepared, playback: 
 
 
 def run(args: argparse.Namespace) -> int:
+    args.recorded = args.config is None and recorded_config(args.files) is not None
     args.config = args.config or recorded_config(args.files)  # a record's own node.toml: an exact replay
     cfg = load_config(args.config)
     _check(args)

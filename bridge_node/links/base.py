@@ -199,9 +199,9 @@ class _Opener:
             except Exception as exc:  # noqa: BLE001 (the link is closed: the log is all that is left)
                 log.warning("%s: closing a device that opened after its link closed: %s", self._name, exc)
 
-    def wait(self, timeout: float) -> bool:
-        """Whether the open has finished, waiting up to ``timeout`` s."""
-        return self._done.wait(timeout) if timeout > 0.0 else self._done.is_set()
+    def wait(self, timeout: float | None) -> bool:
+        """Whether the open has finished, waiting up to ``timeout`` s (None: until it has)."""
+        return self._done.wait(timeout) if timeout is None or timeout > 0.0 else self._done.is_set()
 
     def take(self) -> tuple[object, BaseException | None]:
         """The opened device, or None and why not (call once ``done``)."""
@@ -218,40 +218,60 @@ class _Opener:
 
 class QueuedWriter:
     """Writes on a worker thread, so the loop never waits for a far end that does not read:
-    the loop queues (``put``; a full queue refuses), the thread writes with ``write`` and
-    hands what it raises of ``errors`` back (``failures``). Closing lets queued items go and
-    does not wait: the thread calls ``finish`` (closing the device) once its write is
-    through; a ``write`` that waits should give up when ``closing`` is set."""
+    the loop gathers a tick's items (``put``; beyond ``size`` items waiting, an item is
+    refused) and hands them over at once (``flush``), so the thread wakes once a tick, not
+    once an item (every wake takes the interpreter lock from the loop). The thread writes
+    with ``write`` and hands what it raises of ``errors`` back (``failures``); anything
+    else it raises ends it and is handed back too. Closing lets queued items go and does
+    not wait: the thread calls ``finish`` (closing the device) once its write is through; a
+    ``write`` that waits should give up when ``closing`` is set."""
 
     def __init__(self, write: Callable[[object], None], finish: Callable[[], None],
                  errors: tuple[type[Exception], ...], name: str, size: int) -> None:
-        self._write, self._finish, self._errors = write, finish, errors
-        self._items: queue.Queue = queue.Queue(size)
+        self._write, self._finish, self._errors, self._size = write, finish, errors, size
+        self._batches: queue.SimpleQueue = queue.SimpleQueue()
+        self._batch: list = []
+        self._handed = self._written = 0  # items handed over (the loop counts) and written (the thread)
         self._failures: queue.SimpleQueue = queue.SimpleQueue()
         self.closing = threading.Event()
-        threading.Thread(target=self._run, name=name, daemon=True).start()
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
 
     def put(self, item: object) -> bool:
-        """Queue ``item`` for the thread; False if the queue is full (the item is dropped)."""
-        try:
-            self._items.put_nowait(item)
-        except queue.Full:
+        """Add ``item`` to the batch ``flush`` hands over; False if ``size`` items are
+        already waiting (the item is dropped)."""
+        if self._handed - self._written + len(self._batch) >= self._size:
             return False
+        self._batch.append(item)
         return True
 
+    def flush(self) -> None:
+        """Hand the gathered items to the thread."""
+        if self._batch:
+            self._handed += len(self._batch)
+            self._batches.put(self._batch)
+            self._batch = []
+
     def failures(self) -> list[Exception]:
-        """What the thread's writes raised since the last call."""
+        """What the thread's writes raised since the last call (and why it ended, if it did)."""
         out = []
         while not self._failures.empty():
             out.append(self._failures.get_nowait())
         return out
 
     def _run(self) -> None:
-        while (item := self._items.get()) is not None:
-            try:
-                self._write(item)
-            except self._errors as exc:
-                self._failures.put(exc)
+        try:
+            while (batch := self._batches.get()) is not None:
+                for item in batch:
+                    if not self.closing.is_set():
+                        try:
+                            self._write(item)
+                        except self._errors as exc:
+                            self._failures.put(exc)
+                self._written += len(batch)
+        except Exception as exc:  # noqa: BLE001 (a bug in a write: the link is told it lost the device)
+            self._failures.put(OSError(f"writer stopped: {exc!r}"))
+            self._written = -(1 << 62)  # refuse everything from now on
         try:
             self._finish()
         except self._errors:  # a device already lost; the link has let go of it
@@ -260,12 +280,8 @@ class QueuedWriter:
     def close(self) -> None:
         """Let queued items go and have the thread finish (not waited for)."""
         self.closing.set()
-        while True:
-            try:
-                self._items.get_nowait()
-            except queue.Empty:
-                break
-        self._items.put_nowait(None)
+        self._batch = []
+        self._batches.put(None)
 
 
 class RateSchedule:
@@ -313,16 +329,26 @@ class Link(ABC):
         self._failed = False  # a real failure since the link was last up
         self._down_reasons: list[str] = []  # short forms of why the device last failed
 
-    def open(self) -> None:
-        """Open the device (on the opener's thread), waiting up to ``OPEN_WAIT_S`` for it; a
-        slower device is taken up by a later poll. A peer that is not there yet is not an
-        error: the link reports itself disconnected and keeps trying. Opening an open link
-        does nothing."""
+    def open(self, wait: float | None = OPEN_WAIT_S) -> None:
+        """Open the device (on the opener's thread), waiting up to ``wait`` s for it (None:
+        until it has opened or failed); a slower device is taken up by a later poll. A peer
+        that is not there yet is not an error: the link reports itself disconnected and
+        keeps trying. Opening an open link does nothing."""
+        self.begin_open()
+        self.await_open(wait)
+
+    def begin_open(self) -> None:
+        """Start opening the device on the opener's thread (nothing if open or opening), so
+        that several links open at once."""
         if self._active:
             return
         self._active = True
         self._start_open()
-        if self._opener.wait(OPEN_WAIT_S):
+
+    def await_open(self, wait: float | None) -> None:
+        """Wait up to ``wait`` s (None: until it has opened or failed) for the device being
+        opened, and take it into use if it is there."""
+        if self._opener is not None and self._opener.wait(wait):
             self._take_device(time.monotonic())
 
     def close(self) -> None:
@@ -383,7 +409,6 @@ class Link(ABC):
 
     def publish_vessels(self, vessels: list[Vessel], now: float) -> None:
         """Send the other vessels that are due, where the protocol has a way to (default: none)."""
-
     @property
     def connected(self) -> bool:
         """Whether the device is open (or, for a link with ``up_when_open`` False, the peer answers)."""

@@ -104,6 +104,11 @@ class _Bus:
             return True
         return self._writer.put(msg)
 
+    def flush(self) -> None:
+        """Hand the queued frames to the writer (over a serial line)."""
+        if self._writer is not None:
+            self._writer.flush()
+
     def failures(self) -> list[Exception]:
         """The writer's send errors since the last call."""
         return [] if self._writer is None else self._writer.failures()
@@ -289,6 +294,7 @@ class CanLink(Link):
             for data in datas:
                 self._send(can.Message(timestamp=time.time(), arbitration_id=can_id, data=data, is_extended_id=True,
                                        is_rx=False))
+        self.device.flush()  # the frames of one call reach the writer together
 
     def _send(self, msg: can.Message) -> None:
         """Send one frame; a full transmit buffer (or writer's queue) drops it (counted), the

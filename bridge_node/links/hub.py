@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
 
 from bridge_node.links.arbiter import Decision, OrderArbiter
-from bridge_node.links.base import Alarm, ControlInput, Listener
+from bridge_node.links.base import OPEN_WAIT_S, Alarm, ControlInput, Listener
 from bridge_node.links.registry import make_link
 from bridge_node.links.session_record import SessionRecord
 from bridge_node.links.settings import ArbitrationSettings, LinkSettings
@@ -58,8 +59,11 @@ class LinkHub:
         if self.record_dir is not None and self.record is None:
             self.record = SessionRecord(self.record_dir)
             self.add_listener(self.record)
+        for link in self.links:  # all at once: each may take seconds (python-can's slcan sleeps 2 s)
+            link.begin_open()
+        deadline = time.monotonic() + OPEN_WAIT_S
         for link in self.links:
-            link.open()
+            link.await_open(max(0.0, deadline - time.monotonic()))
 
     def close(self) -> None:
         """Close every link, then stop and drop the listeners; safe to call twice."""

@@ -93,12 +93,12 @@ class NmeaLink(Link):
         self._last_refill = time.monotonic()
         self._clock_offset = 0.0  # exercise UTC minus the wall clock, s
 
-    def open(self) -> None:
+    def begin_open(self) -> None:
         if self.settings.sends_udp() and self._udp is None:
             self._udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
             if is_loopback_host(self.settings.udp_host):  # never open a port off the host
                 self._udp.bind(("127.0.0.1", 0))
-        super().open()
+        super().begin_open()
 
     def close(self) -> None:
         super().close()
@@ -162,6 +162,8 @@ class NmeaLink(Link):
                 continue
             self._report("tx", s)
             self._health.outputs += 1
+        if self.settings.port and self.device is not None:
+            self.device.writer.flush()  # the sentences of one call reach the writer together
 
     def _utc(self) -> dt.datetime:
         """The exercise clock (the outputs' UTC, which a replay takes from its log)."""

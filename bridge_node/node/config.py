@@ -18,6 +18,7 @@ from bridge_node.links.settings import ArbitrationSettings, LinkSettings
 from bridge_node.node.errors import UserError
 from bridge_node.node.paths import expand_user, writable_dir
 from bridge_node.render.settings import RenderSettings
+from bridge_node.render.warp import WarpError, read_pfm
 from bridge_node.replay.settings import ReplaySettings
 from bridge_node.stream.settings import StreamSettings
 from bridge_node.traffic.settings import TrafficSettings
@@ -148,7 +149,21 @@ def load_config(path: str | Path | None = None) -> NodeConfig:
              if link.type == "can" else link for i, link in enumerate(cfg.links)]
     console = cfg.console and cfg.console.model_copy(
         update={"script": str(_config_file(path, "console.script", cfg.console.script))})
-    return cfg.model_copy(update={"links": links, "console": console})
+    channels = [c.model_copy(update={"warp": str(_warp_file(path, f"render.channels.{i}.warp", c.warp))})
+                if c.warp is not None else c for i, c in enumerate(cfg.render.channels)]
+    render = cfg.render.model_copy(update={"channels": channels})
+    return cfg.model_copy(update={"links": links, "console": console, "render": render})
+
+
+def _warp_file(config: Path, key: str, value: str) -> Path:
+    """A channel's warp grid, resolved as ``_config_file`` does and read once to check it
+    (a clear error when the config loads, not when the channel opens)."""
+    path = _config_file(config, key, value)
+    try:
+        read_pfm(path, f"{config}: {key} = {value!r}")
+    except WarpError as exc:
+        raise ConfigError(str(exc)) from None
+    return path
 
 
 def _config_file(config: Path, key: str, value: str) -> Path:

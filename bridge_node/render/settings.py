@@ -12,12 +12,10 @@ from __future__ import annotations
 
 import math
 from datetime import datetime
-from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import AwareDatetime, Field, field_validator, model_validator
+from pydantic import AwareDatetime, Field, model_validator
 
-from bridge_node.render.warp import read_pfm
 from sim_core.params import Params, repeated
 
 
@@ -48,17 +46,11 @@ class ChannelSettings(Params):
     blend_right_deg: float = Field(0.0, ge=0.0, le=30.0)
     gamma: float = Field(2.2, ge=1.0, le=3.0, description="projector gamma for the blend ramps")
     warp: str | None = Field(None, description="PFM warp grid of the projector on a curved screen "
-                                               "(see render/warp.py); unset: flat")
+                                               "(see render/warp.py; relative to the config file, checked when "
+                                               "it loads); unset: flat")
     output: Literal["png", "window", "none"] = "png"
     monitor: int = Field(0, ge=0, le=15, description="window output: the monitor's number")
     fullscreen: bool = Field(False, description="window output: full-screen on that monitor")
-
-    @field_validator("warp")
-    @classmethod
-    def _warp_readable(cls, path: str | None) -> str | None:
-        if path is not None:
-            read_pfm(Path(path), repr(path))  # a clear error when the config loads, not when the channel opens
-        return path
 
     @model_validator(mode="after")
     def _blend_fits(self) -> "ChannelSettings":

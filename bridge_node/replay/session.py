@@ -179,8 +179,8 @@ class SessionSource:
                 self.links.append(_RecordedModbus(s))
 
     def __enter__(self) -> SessionSource:
-        for link in self.links:
-            link.open()
+        for link in self.links:  # in-process ports and buses: fed at once, so opened before the first tick
+            link.open(wait=None)
         return self
 
     def __exit__(self, *exc) -> None:

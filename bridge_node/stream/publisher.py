@@ -63,11 +63,17 @@ class StatePublisher:
                                     name="state-publisher", daemon=True)
         self._process.start()
         theirs.close()
-        kind, *detail = ours.recv() if ours.poll(START_TIMEOUT_S) else ("error", None, "did not start")
+        try:
+            kind, *detail = ours.recv() if ours.poll(START_TIMEOUT_S) else ("error", None, "did not start in time")
+        except (EOFError, OSError):  # it ended before it said anything
+            kind, detail = "error", [None, "ended at start"]
         if kind == "error":
+            if self._process.is_alive():
+                self._process.terminate()
             self._process.join(5.0)
             ours.close()
-            raise zmq.ZMQError(detail[0], detail[1])
+            raise zmq.ZMQError(detail[0], f"the publisher process: {detail[1]} (exit code {self._process.exitcode})"
+                               if detail[0] is None else detail[1])
         self._pipe = ours
         self._push = self.context.socket(zmq.PUSH)
         self._push.setsockopt(zmq.SNDHWM, HANDOVER_HWM)

@@ -403,6 +403,7 @@ class ContactSpace:
         self._leaving: list[tuple[int, TileBodies]] = []  # switched out, objects still to take out
         self._insert_budget, self._removal_work = s.swap_objects_per_step, s.swap_removal_work
         self._arbiters = 0  # contacts Chipmunk kept at the last read
+        self._moving = 0  # floes in the dynamic set at the last read
         d = np.hypot(model.outline[:, 0], model.outline[:, 1])
         self.extent = np.maximum.reduceat(d, model.outline_start[:-1]) if len(d) else np.zeros(0)  # cell radius, m
         # farthest a point of the hull and of a cell it touches can be from the hull's reference point, m
@@ -603,14 +604,17 @@ class ContactSpace:
         buf.clear()
         pb.get_space_bodies(self.space, _BODY_FIELDS, buf)
         ids = np.frombuffer(buf.int_buf(), dtype=np.uintp)
-        return _scatter_free(ids, np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ids), 6),
-                             state.status, state.resting, state.xy, state.yaw, state.vel, state.yaw_rate)
+        moving = _scatter_free(ids, np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ids), 6),
+                               state.status, state.resting, state.xy, state.yaw, state.vel, state.yaw_rate)
+        self._moving = len(moving)
+        return moving
 
     @property
     def rest_budget(self) -> int:
         """Floes a step may take out of the dynamic set: each costs Chipmunk a walk over every
-        cached contact, so by the same work budget as tile removals (a count, not a time)."""
-        return max(1, self._removal_work // max(self._arbiters, 1))
+        cached contact and a search of its dynamic bodies, so by the same work budget as
+        tile removals (a count, not a time)."""
+        return max(1, self._removal_work // max(self._arbiters + self._moving, 1))
 
     def rest(self, state: FloeState, rows: np.ndarray) -> None:
         """Take free rows out of the dynamic set: their bodies become static (no solver

@@ -101,7 +101,7 @@ class FloeState(_Table):
     cause = _Column(np.uint8)  # BreakCause
     submerged = _Column(np.bool_)  # under the hull, out of planar contact
     resting = _Column(np.bool_)  # a free floe at rest far from the hull, out of the dynamic set
-    calm = _Column(np.uint8)  # steps in a row a free floe has been at rest (saturates at 255)
+    calm = _Column(np.uint16)  # steps in a row a free floe has been at rest (saturates at 65535)
     home = _Column(np.float32, 2)  # placed centroid in the level ice, world m
     xy = _Column(np.float64, 2)  # centre of mass, world m
     yaw = _Column(np.float64)  # rad, CCW

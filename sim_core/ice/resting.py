@@ -54,7 +54,7 @@ def _calm_far(rows, vel, yaw_rate, gcell, extent, calm, speed, steps, submerged,
         if v >= speed:
             calm[i] = 0
             continue
-        if calm[i] < 255:
+        if calm[i] < 65535:
             calm[i] += 1
         if calm[i] < steps or submerged[i]:
             continue
@@ -115,7 +115,7 @@ def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.nda
     ``rest_per_step`` of them and the contact space's ``rest_budget`` (lowest rows first),
     those at rest for ``rest_after_s``, above water, settled and beyond the rest radius."""
     s, st = model.settings, data.state
-    steps = min(255, max(1, math.ceil(s.rest_after_s / dt)))
+    steps = min(65535, max(1, math.ceil(s.rest_after_s / dt)))
     far = _calm_far(moving, st.vel, st.yaw_rate, st.gcell, data.contacts.extent, st.calm, s.rest_speed, steps,
                     st.submerged, model.z_equilibrium, st.heave, st.roll, st.pitch, st.heave_rate, st.roll_rate,
                     st.pitch_rate, st.xy, np.asarray(hull_xy, dtype=np.float64), radii(model, data)[0])
@@ -127,6 +127,6 @@ def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.nda
 def warm_up(model: IceModel) -> None:
     """Load the compiled kernel."""
     none, f32 = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.float32)
-    _calm_far(none, np.zeros((0, 2), np.float32), f32, none.astype(np.int32), np.ones(1), none.astype(np.uint8),
+    _calm_far(none, np.zeros((0, 2), np.float32), f32, none.astype(np.int32), np.ones(1), none.astype(np.uint16),
               1.0, 1, none.astype(np.bool_), model.z_equilibrium, f32, f32, f32, f32, f32, f32, np.zeros((0, 2)),
               np.zeros(2), 1.0)
