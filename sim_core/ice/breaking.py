@@ -46,6 +46,7 @@ not used: it depends on the step size.
 """
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from sim_core.material import IceMaterial, characteristic_length
@@ -71,10 +72,12 @@ def ride_up_load(mass: np.ndarray, mat: IceMaterial, share: float = RIDE_UP_SHAR
     return share * np.asarray(mass) * mat.gravity
 
 
+@numba.njit(cache=True)
 def pushed_hard(impulse: np.ndarray, approach_speed: np.ndarray, striker_mass: np.ndarray,
                 k_impact: np.ndarray) -> np.ndarray:
     """The energy test: J v_n >= K, v_n = max(approach speed, J / m); impulse N s, speed
-    m/s, mass kg, K N s * m/s."""
+    m/s, mass kg, K N s * m/s (arrays or scalars; compiled, so the ice step's contact
+    kernel applies the same test)."""
     return impulse * np.maximum(approach_speed, impulse / striker_mass) >= k_impact
 
 

@@ -206,15 +206,16 @@ def _separated(p: np.ndarray, q: np.ndarray) -> bool:
 
 
 @numba.njit(cache=True)
-def _hull_overlaps(offsets, present, status, gcell, xy, yaw, outline, outline_start, extent,
+def _hull_overlaps(start, present, status, gcell, xy, yaw, outline, outline_start, extent,
                    hull, hull_xy, hull_c, hull_s, box):
-    """Offsets (into one tile's rows) of intact cells in the space whose outline overlaps
-    the hull polygon (world m). The hull's body-frame box [x0, x1, y0, y1] screens first."""
-    out = np.empty(len(offsets), np.int64)
+    """Rows of one tile's intact cells in the space (its rows from start; present: its
+    ``TileBodies.in_space``) whose outline overlaps the hull polygon (world m). The hull's
+    body-frame box [x0, x1, y0, y1] screens first."""
+    out = np.empty(len(present), np.int64)
     n_out = 0
-    for k in range(len(offsets)):
-        j = offsets[k]
-        if present[j] == 0 or status[j] != 0:
+    for k in range(len(present)):
+        j = start + k
+        if present[k] & _INTACT_IN == 0 or status[j] != 0:
             continue
         g = gcell[j]
         dx, dy = xy[j, 0] - hull_xy[0], xy[j, 1] - hull_xy[1]
@@ -356,7 +357,7 @@ def warm_up() -> None:
     _contact_rows(np.zeros((0, 3), np.uintp), np.zeros((0, 12)), none.astype(np.uint8), none.astype(np.uint8),
                   none, np.zeros((0, 2)), none, none, np.ones(1), one, one + 1, np.ones(1), np.zeros(2, np.int64),
                   none, np.zeros((0, 2)), np.zeros(2, np.int64))
-    _hull_overlaps(none, none.astype(np.uint8), none.astype(np.uint8), none.astype(np.int32),
+    _hull_overlaps(0, none.astype(np.uint8), none.astype(np.uint8), none.astype(np.int32),
                    np.zeros((0, 2)), np.zeros(0), square, np.array([0, 4]), np.ones(1),
                    square, np.zeros(2), 1.0, 0.0, np.zeros(4))
 
@@ -577,19 +578,12 @@ class ContactSpace:
         xy, angle = self._hull_pose
         c, s = math.cos(angle), math.sin(angle)
         hull = self.hull_outline @ np.array([[c, s], [-s, c]]) + xy
-        reach = self.reach
-        found = []
-        for tile, bodies in self._tiles.items():
-            start, count = int(self.tiles.row_start[tile]), int(self.tiles.row_count[tile])
-            side = m.templates[int(self.tiles.template[tile])].side
-            centre = self.tiles.corner[tile] + 0.5 * side
-            if np.hypot(*(centre - xy)) > reach + side / math.sqrt(2.0):
-                continue
-            rows = slice(start, start + count)
-            hit = _hull_overlaps(np.arange(count), bodies.in_space & _INTACT_IN, state.status[rows], state.gcell[rows],
-                                 state.xy[rows], state.yaw[rows], m.outline, m.outline_start, self.extent,
-                                 hull, xy, c, s, self._hull_box)
-            found.append(hit + start)
+        tiles = np.fromiter(self._tiles, dtype=np.int64, count=len(self._tiles))
+        lo, hi = self.tiles.corner[tiles], self.tiles.corner[tiles] + self._sides[self.tiles.template[tiles]][:, None]
+        near = tiles[np.all((lo <= hull.max(axis=0)) & (hi >= hull.min(axis=0)), axis=1)]  # a tile's cells lie in it
+        found = [_hull_overlaps(int(self.tiles.row_start[tile]), self._tiles[tile].in_space, state.status, state.gcell,
+                                state.xy, state.yaw, m.outline, m.outline_start, self.extent, hull, xy, c, s,
+                                self._hull_box) for tile in near.tolist()]
         return np.sort(np.concatenate(found)) if found else np.zeros(0, dtype=np.int64)
 
     def step(self, dt: float) -> None:

@@ -66,14 +66,61 @@ def _calm_far(rows, vel, yaw_rate, gcell, extent, calm, speed, steps, submerged,
     return out[:n]
 
 
+@numba.njit(cache=True)
+def _near(flag, xy, at, radius):
+    """Rows whose flag is set with their centre closer than radius (m) to the point at (m)."""
+    out = np.empty(len(flag), np.int64)
+    n = 0
+    for i in range(len(flag)):
+        if flag[i] and math.hypot(xy[i, 0] - at[0], xy[i, 1] - at[1]) < radius:
+            out[n] = i
+            n += 1
+    return out[:n]
+
+
+@numba.njit(cache=True)
+def _pushes_on(a, b, impulse, point, flag, xy):
+    """The push (N s, world) and its moment (N m s, CCW about the centre) that the contacts
+    (rows a, b; impulse on a, N s; point, m) put on each row whose flag is set; returns
+    those rows (ascending), pushes and moments. Each row's contacts are summed in the order
+    of the other row, not the engine's order (which follows C pointers), so that the sums
+    round the same in every rerun."""
+    n = 0
+    for rows in (a, b):
+        for k in range(len(rows)):
+            if rows[k] >= 0 and flag[rows[k]]:
+                n += 1
+    key, entry = np.empty(n, np.int64), np.empty(n, np.int64)
+    n = 0
+    for side in range(2):
+        rows, others = (a, b) if side == 0 else (b, a)
+        for k in range(len(rows)):
+            if rows[k] >= 0 and flag[rows[k]]:
+                key[n] = rows[k] * (len(flag) + 3) + others[k] + 2  # other >= -2: by row, then other
+                entry[n] = side * len(a) + k
+                n += 1
+    order = np.argsort(key, kind="mergesort")
+    rows_out, push, turn = np.empty(n, np.int64), np.zeros((n, 2)), np.zeros(n)
+    m = -1
+    for e in order:
+        k, sign = (entry[e], 1.0) if entry[e] < len(a) else (entry[e] - len(a), -1.0)
+        row = a[k] if sign > 0.0 else b[k]
+        if m < 0 or rows_out[m] != row:
+            m += 1
+            rows_out[m] = row
+        jx, jy = sign * impulse[k, 0], sign * impulse[k, 1]
+        push[m, 0] += jx
+        push[m, 1] += jy
+        turn[m] += (point[k, 0] - xy[row, 0]) * jy - (point[k, 1] - xy[row, 1]) * jx
+    return rows_out[:m + 1], push[:m + 1], turn[:m + 1]
+
+
 def wake_near_hull(model: IceModel, data: IceData, hull_xy: np.ndarray) -> None:
     """Wake the resting floes within the wake radius of the hull's reference point (m)."""
     st = data.state
-    resting = np.nonzero(st.resting)[0]
-    if len(resting):
-        near = resting[np.hypot(*(st.xy[resting] - hull_xy).T) < radii(model, data)[1]]
-        if len(near):
-            data.contacts.wake(st, near)
+    near = _near(st.resting, st.xy, np.asarray(hull_xy, dtype=np.float64), radii(model, data)[1])
+    if len(near):
+        data.contacts.wake(st, near)
 
 
 def wake_struck(model: IceModel, data: IceData, con: Contacts) -> None:
@@ -83,23 +130,7 @@ def wake_struck(model: IceModel, data: IceData, con: Contacts) -> None:
     is added to the momentum it wakes with (about its centre, the moment too), and the
     pair's momentum is kept."""
     st = data.state
-    floe, other = np.concatenate([con.a, con.b]), np.concatenate([con.b, con.a])
-    impulse = np.concatenate([con.impulse, -con.impulse])  # on a, and on b
-    point = np.concatenate([con.point, con.point])
-    keep = floe >= 0
-    keep[keep] = st.resting[floe[keep]]
-    if not keep.any():
-        return
-    # in the order of the pairs, not the engine's (which follows C pointers), so that the
-    # sums round the same in every rerun
-    order = np.nonzero(keep)[0][np.lexsort((other[keep], floe[keep]))]
-    floe, impulse, point = floe[order], impulse[order], point[order]
-    rows, index = np.unique(floe, return_inverse=True)
-    arm = point - st.xy[floe]
-    push = np.zeros((len(rows), 2))
-    np.add.at(push, index, impulse)
-    turn = np.zeros(len(rows))
-    np.add.at(turn, index, arm[:, 0] * impulse[:, 1] - arm[:, 1] * impulse[:, 0])
+    rows, push, turn = _pushes_on(con.a, con.b, con.impulse, con.point, st.resting, st.xy)
     g = st.gcell[rows]
     mass = model.mass[g]
     woken = np.hypot(push[:, 0], push[:, 1]) > model.settings.rest_speed * mass
@@ -130,3 +161,5 @@ def warm_up(model: IceModel) -> None:
     _calm_far(none, np.zeros((0, 2), np.float32), f32, none.astype(np.int32), np.ones(1), none.astype(np.uint16),
               1.0, 1, none.astype(np.bool_), model.z_equilibrium, f32, f32, f32, f32, f32, f32, np.zeros((0, 2)),
               np.zeros(2), 1.0)
+    _near(none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0)
+    _pushes_on(none, none, np.zeros((0, 2)), np.zeros((0, 2)), none.astype(np.bool_), np.zeros((0, 2)))

@@ -57,26 +57,45 @@ class IceStepReport:
     hull_moment: float  # N m
 
 
+@numba.njit(cache=True)
+def _hard_pushes(a, b, impulse, normal, status, velocity, gcell, mass, k_impact, ride_load, edge_capacity):
+    """Of contacts between a free floe (striker) and an intact cell (target): the targets
+    broken (pushed hard, ``breaking.pushed_hard``, by a striker whose ride-up load reaches
+    the edge's capacity), and the strikers pushed hard that could and could not break."""
+    broken, strong, weak = np.empty(len(a), np.int64), np.empty(len(a), np.int64), np.empty(len(a), np.int64)
+    nb = ns = nw = 0
+    for k in range(len(a)):
+        if a[k] < 0 or b[k] < 0:
+            continue
+        if status[a[k]] == 1 and status[b[k]] == 0:
+            striker, target, sign = a[k], b[k], 1.0
+        elif status[b[k]] == 1 and status[a[k]] == 0:
+            striker, target, sign = b[k], a[k], -1.0
+        else:
+            continue
+        tx, ty = sign * normal[k, 0], sign * normal[k, 1]  # unit normal from striker to target
+        j = math.sqrt(impulse[k, 0] * impulse[k, 0] + impulse[k, 1] * impulse[k, 1])
+        v_n = max(np.float64(velocity[striker, 0]) * tx + np.float64(velocity[striker, 1]) * ty, 0.0)
+        gs, gt = gcell[striker], gcell[target]
+        if not pushed_hard(j, v_n, mass[gs], k_impact[gt]):
+            continue
+        if ride_load[gs] >= edge_capacity[gt]:
+            broken[nb], strong[ns] = target, striker
+            nb, ns = nb + 1, ns + 1
+        else:
+            weak[nw] = striker
+            nw += 1
+    return broken[:nb], strong[:ns], weak[:nw]
+
+
 def _contact_breaks(model: IceModel, st: FloeState, con: Contacts,
                     velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Intact rows whose contact with a free floe broke them this step (the energy it
     brought and the load its striker can put on the edge, ``breaking.breaks``), and the free
     floes pushed hard against an edge they cannot break: jammed, they go under it."""
-    valid = (con.a >= 0) & (con.b >= 0)
-    a, b, imp, nrm = con.a[valid], con.b[valid], con.impulse[valid], con.normal[valid]
-    sa, sb = st.status[a], st.status[b]
-    a_hits_b = (sa == FloeStatus.FREE) & (sb == FloeStatus.INTACT)
-    b_hits_a = (sb == FloeStatus.FREE) & (sa == FloeStatus.INTACT)
-    target = np.concatenate([b[a_hits_b], a[b_hits_a]])
-    striker = np.concatenate([a[a_hits_b], b[b_hits_a]])
-    toward = np.concatenate([nrm[a_hits_b], -nrm[b_hits_a]])  # unit normal from striker to target
-    impulse = np.linalg.norm(np.concatenate([imp[a_hits_b], imp[b_hits_a]]), axis=1)
-    v_n = np.maximum((velocity[striker] * toward).sum(axis=1), 0.0)
-    gs, gt = st.gcell[striker], st.gcell[target]
-    hard = pushed_hard(impulse, v_n, model.mass[gs], model.k_impact[gt])
-    loads = model.ride_load[gs] >= model.edge_capacity[gt]
-    broken = np.unique(target[hard & loads])
-    return broken, np.setdiff1d(striker[hard & ~loads], striker[hard & loads])
+    broken, strong, weak = _hard_pushes(con.a, con.b, con.impulse, con.normal, st.status, velocity, st.gcell,
+                                        model.mass, model.k_impact, model.ride_load, model.edge_capacity)
+    return np.unique(broken), np.setdiff1d(weak, strong)
 
 
 def _hull_load(impulse: np.ndarray, point: np.ndarray, hull: HullMotion, dt: float) -> tuple[np.ndarray, float]:
@@ -90,22 +109,37 @@ def _hull_load(impulse: np.ndarray, point: np.ndarray, hull: HullMotion, dt: flo
     return np.array([math.fsum(force[:, 0].tolist()), math.fsum(force[:, 1].tolist())]), moment
 
 
-def hull_frame(points: np.ndarray, hull: HullMotion) -> np.ndarray:
-    """World points (n, 2) in the hull's body frame (x forward, y to port), m."""
-    c, s = math.cos(hull.angle), math.sin(hull.angle)
-    d = points - hull.xy
-    return np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]])
+@numba.njit(cache=True)
+def _going_under(struck, jammed, status, submerged, xy, hull_xy, c, s, beam_half):
+    """Free rows above water to send under: struck by the hull with their centre within
+    beam_half (m) of its centre line (heading c, s = cos, sin of its CCW angle), or jammed."""
+    rows = np.empty(len(struck) + len(jammed), np.int64)
+    n = 0
+    for i in struck:
+        if abs(-s * (xy[i, 0] - hull_xy[0]) + c * (xy[i, 1] - hull_xy[1])) < beam_half:
+            rows[n] = i
+            n += 1
+    for i in jammed:
+        rows[n] = i
+        n += 1
+    rows = np.unique(rows[:n])
+    keep = np.zeros(len(rows), np.bool_)
+    for k in range(len(rows)):
+        keep[k] = status[rows[k]] == 1 and not submerged[rows[k]]
+    return rows[keep]
 
 
 @numba.njit(cache=True)
-def _surfacing(down, xy, hull_xy, c, s, outline, reach, stem, clear_ahead):
-    """Of submerged rows, those the hull has passed: centre outside the hull's convex CCW
-    outline (body frame, m) and aft of midship, farther than reach (m) from the centre
-    line, or clear ahead of the stem (m)."""
-    out = np.zeros(len(down), np.bool_)
+def _surfacing(submerged, xy, hull_xy, c, s, outline, reach, stem, clear_ahead):
+    """Submerged rows the hull has passed: centre outside the hull's convex CCW outline
+    (body frame, m) and aft of midship, farther than reach (m) from the centre line, or
+    clear ahead of the stem (m)."""
+    out = np.empty(len(submerged), np.int64)
+    n_out = 0
     n = outline.shape[0]
-    for k in range(len(down)):
-        i = down[k]
+    for i in range(len(submerged)):
+        if not submerged[i]:
+            continue
         dx, dy = xy[i, 0] - hull_xy[0], xy[i, 1] - hull_xy[1]
         u, v = c * dx + s * dy, -s * dx + c * dy
         if not (u < 0.0 or abs(v) >= reach or u > stem + clear_ahead):
@@ -116,18 +150,22 @@ def _surfacing(down, xy, hull_xy, c, s, outline, reach, stem, clear_ahead):
             if ex * (v - outline[e, 1]) - ey * (u - outline[e, 0]) < 0.0:
                 inside = False
                 break
-        out[k] = not inside
-    return out
+        if not inside:
+            out[n_out] = i
+            n_out += 1
+    return out[:n_out]
 
 
 @numba.njit(cache=True)
-def _unsettled_free(status, submerged, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate, pitch_rate):
+def _unsettled_free(status, submerged, resting, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate,
+                    pitch_rate):
     """Free rows above water not yet at rest at their floating draft (``vertical.settled``):
-    a settled floe needs no vertical update."""
+    a settled floe needs no vertical update, and a resting one is settled (it came to rest
+    so, and nothing moves it vertically while it rests)."""
     out = np.empty(len(status), np.int64)
     n = 0
     for i in range(len(status)):
-        if status[i] != 1 or submerged[i]:
+        if status[i] != 1 or submerged[i] or resting[i]:
             continue
         if not settled(i, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate, pitch_rate):
             out[n] = i
@@ -144,11 +182,9 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
     of the stem because the ship stopped or backed), and buoyancy brings it back up and
     rights it."""
     st, space = data.state, data.contacts
-    beam_half = space.hull_half_beam
+    c, s = math.cos(hull.angle), math.sin(hull.angle)
     if len(struck) or len(jammed):
-        under = struck[np.abs(hull_frame(st.xy[struck], hull)[:, 1]) < beam_half]
-        under = np.union1d(under, jammed)
-        under = under[(st.status[under] == FloeStatus.FREE) & ~st.submerged[under]]
+        under = _going_under(struck, jammed, st.status, st.submerged, st.xy, hull.xy, c, s, space.hull_half_beam)
         st.submerged[under] = True
         space.set_submerged(st, under, True)
         g = st.gcell[under]
@@ -157,10 +193,9 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
         st.heave_rate[under] = st.roll_rate[under] = st.pitch_rate[under] = 0.0
         st.vel[under] = 0.0
         st.yaw_rate[under] = 0.0
-    down = np.nonzero(st.submerged)[0]
-    if len(down):
-        up = down[_surfacing(down, st.xy, hull.xy, math.cos(hull.angle), math.sin(hull.angle), space.hull_outline,
-                             beam_half + _BESIDE, float(space.hull_outline[:, 0].max()), _CLEAR_AHEAD)]
+    up = _surfacing(st.submerged, st.xy, hull.xy, c, s, space.hull_outline, space.hull_half_beam + _BESIDE,
+                    float(space.hull_outline[:, 0].max()), _CLEAR_AHEAD)
+    if len(up):
         st.submerged[up] = False
         space.set_submerged(st, up, False)
 
@@ -182,7 +217,7 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
     moving = space.read_free(st)
     if len(by_contact):
         break_cells(data, by_contact, BreakCause.CONTACT)
-    free = _unsettled_free(st.status, st.submerged, st.gcell, model.z_equilibrium, st.heave, st.roll, st.pitch,
+    free = _unsettled_free(st.status, st.submerged, st.resting, st.gcell, model.z_equilibrium, st.heave, st.roll, st.pitch,
                            st.heave_rate, st.roll_rate, st.pitch_rate)
     if len(free):
         mat = model.material
@@ -202,10 +237,17 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
 def warm_up(model: IceModel, data: IceData) -> None:
     """Load every compiled kernel the ice step uses, so that no step waits for a compile."""
     contact.warm_up()
+    _hard_pushes(np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2)),
+                 np.zeros(0, dtype=np.uint8), np.zeros((0, 2), np.float32), np.zeros(0, dtype=np.int32), model.mass,
+                 model.k_impact, model.ride_load, model.edge_capacity)
     resting.warm_up(model)
     none, f32 = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.float32)
-    _surfacing(none, np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hull_outline, 1.0, 1.0, 1.0)
-    _unsettled_free(none.astype(np.uint8), none.astype(np.bool_), none.astype(np.int32), model.z_equilibrium,
+    _surfacing(none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hull_outline, 1.0, 1.0,
+               1.0)
+    _going_under(none, none, none.astype(np.uint8), none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 0.0,
+                 1.0)
+    _unsettled_free(none.astype(np.uint8), none.astype(np.bool_), none.astype(np.bool_), none.astype(np.int32),
+                    model.z_equilibrium,
                     f32, f32, f32, f32, f32, f32)
     vertical.warm_up(model.tris, model.tri_start, model.mass, model.inertia, model.damping)
 
