@@ -7,6 +7,7 @@ import pytest
 from sim_core.fracture.tile_template import FractureSettings, build_tile
 from sim_core.frames.hull_contour import waterline_contour
 from sim_core.ice import resting
+from sim_core.ice.contact import Contacts
 from sim_core.ice.floes import BreakCause
 from sim_core.ice.model import IceDynamicsSettings, compile_ice_model
 from sim_core.ice.step import HullMotion, ice_step
@@ -75,3 +76,23 @@ def test_a_moving_floe_that_strikes_a_resting_one_wakes_it(rested):
     for _ in range(10):
         ice_step(model, data, FAR, DT)
     assert np.hypot(*(st.xy[target] - start)) > 0.01  # pushed away, as a floe in the dynamic set
+
+
+def test_a_steady_push_too_small_for_one_step_adds_up_until_the_floe_wakes(rested):
+    model, data, loose = rested
+    st = data.state
+    striker, target = loose[0], loose[1]
+    data.contacts.wake(st, np.array([striker]))  # a moving floe against a resting one
+    mass = model.mass[st.gcell[target]]
+    each = 0.3 * model.settings.rest_speed * mass  # N s a step: a third of what wakes it at once
+    start = st.vel[target].astype(float).copy()
+    toward = np.array([1.0, 0.0])
+    push = Contacts(np.array([striker]), np.array([target]), -each * toward[None, :],  # impulse on a; b gets +each
+                    toward[None, :], st.xy[target][None, :].copy())  # at its centre: no turn
+    steps = 0
+    while st.resting[target] and steps < 10:
+        resting.wake_struck(model, data, push)
+        steps += 1
+    assert steps > 1  # not the first push alone
+    assert not st.resting[target]  # the pushes added up and woke it
+    np.testing.assert_allclose(st.vel[target], start + steps * each / mass * toward, rtol=1e-5, atol=1e-7)

@@ -7,9 +7,9 @@ and farther from the hull than the rest radius becomes a static body
 (``ContactSpace.rest``): moving floes still strike it, but it and its resting neighbours
 cost no solver work. It wakes (``ContactSpace.wake``), with the velocity it came to rest
 with, when the hull comes within the wake radius (Chipmunk does not collide kinematic and
-static bodies, so the hull must never meet a resting floe), or when a contact's impulse
-would give it ``rest_speed``; then it also takes that impulse, which in the step it met as
-a wall.
+static bodies, so the hull must never meet a resting floe), or when the contacts' pushes
+have brought it to ``rest_speed``: in each step it met its strikers as a wall, so it takes
+their impulses into the velocity it keeps while resting, and a steady push adds up.
 
 This is Chipmunk's sleeping done floe by floe. Chipmunk sleeps and wakes whole touching
 groups, and the packed channel is one group of thousands: one touch woke them all, in steps
@@ -40,6 +40,12 @@ def radii(model: IceModel, data: IceData) -> tuple[float, float]:
 
 
 @numba.njit(cache=True)
+def _speed(i, vel, yaw_rate, gcell, extent):
+    """How fast row i moves, m/s: its centre's speed plus its rim's from turning."""
+    return math.sqrt(vel[i, 0] ** 2 + vel[i, 1] ** 2) + abs(yaw_rate[i]) * extent[gcell[i]]
+
+
+@numba.njit(cache=True)
 def _calm_far(rows, vel, yaw_rate, gcell, extent, calm, speed, steps, submerged, z_equilibrium, heave, roll,
               pitch, heave_rate, roll_rate, pitch_rate, xy, hull_xy, radius):
     """Count the moving rows' steps at rest (slower than speed, m/s: the centre's speed
@@ -50,8 +56,7 @@ def _calm_far(rows, vel, yaw_rate, gcell, extent, calm, speed, steps, submerged,
     n = 0
     for k in range(len(rows)):
         i = rows[k]
-        v = math.sqrt(vel[i, 0] ** 2 + vel[i, 1] ** 2) + abs(yaw_rate[i]) * extent[gcell[i]]
-        if v >= speed:
+        if _speed(i, vel, yaw_rate, gcell, extent) >= speed:
             calm[i] = 0
             continue
         if calm[i] < 65535:
@@ -123,22 +128,35 @@ def wake_near_hull(model: IceModel, data: IceData, hull_xy: np.ndarray) -> None:
         data.contacts.wake(st, near)
 
 
+@numba.njit(cache=True)
+def _take_pushes(rows, push, turn, mass, inertia, gcell, extent, vel, yaw_rate, speed):
+    """Add the pushes (N s) and their moments (N m s) to the velocities (m/s, rad/s) that
+    resting rows keep, and return the rows now moving at speed (m/s) or faster."""
+    out = np.empty(len(rows), np.int64)
+    n = 0
+    for k in range(len(rows)):
+        i, g = rows[k], gcell[rows[k]]
+        vel[i, 0] += np.float32(push[k, 0] / mass[g])
+        vel[i, 1] += np.float32(push[k, 1] / mass[g])
+        yaw_rate[i] += np.float32(turn[k] / inertia[g, 2])
+        if _speed(i, vel, yaw_rate, gcell, extent) >= speed:
+            out[n] = i
+            n += 1
+    return out[:n]
+
+
 def wake_struck(model: IceModel, data: IceData, con: Contacts) -> None:
-    """Wake the resting floes that the contacts of the last step pushed hard enough to give
-    them ``rest_speed``, and give them that push: in the step, a resting floe met its
-    striker as a wall (a static body takes no impulse), so the impulse it put on the striker
-    is added to the momentum it wakes with (about its centre, the moment too), and the
-    pair's momentum is kept."""
+    """Give the resting floes the pushes of the last step's contacts, and wake those they
+    bring to ``rest_speed``. In the step a resting floe met its striker as a wall (a static
+    body takes no impulse), so the impulse it put on the striker (and its moment about the
+    floe's centre) goes into the velocity it keeps while resting, and the pair's momentum
+    is kept: a steady push too small to wake a floe in one step adds up until it does."""
     st = data.state
     rows, push, turn = _pushes_on(con.a, con.b, con.impulse, con.point, st.resting, st.xy)
-    g = st.gcell[rows]
-    mass = model.mass[g]
-    woken = np.hypot(push[:, 0], push[:, 1]) > model.settings.rest_speed * mass
-    if woken.any():
-        rows, g = rows[woken], g[woken]
-        st.vel[rows] += (push[woken] / mass[woken, None]).astype(np.float32)
-        st.yaw_rate[rows] += (turn[woken] / model.inertia[g, 2]).astype(np.float32)
-        data.contacts.wake(st, rows)
+    woken = _take_pushes(rows, push, turn, model.mass, model.inertia, st.gcell, data.contacts.extent, st.vel,
+                         st.yaw_rate, model.settings.rest_speed)
+    if len(woken):
+        data.contacts.wake(st, woken)
 
 
 def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.ndarray, dt: float) -> None:
@@ -162,4 +180,6 @@ def warm_up(model: IceModel) -> None:
               1.0, 1, none.astype(np.bool_), model.z_equilibrium, f32, f32, f32, f32, f32, f32, np.zeros((0, 2)),
               np.zeros(2), 1.0)
     _near(none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0)
+    _take_pushes(none, np.zeros((0, 2)), np.zeros(0), model.mass, model.inertia, none.astype(np.int32), np.ones(1),
+                 np.zeros((0, 2), np.float32), np.zeros(0, np.float32), 1.0)
     _pushes_on(none, none, np.zeros((0, 2)), np.zeros((0, 2)), none.astype(np.bool_), np.zeros((0, 2)))
