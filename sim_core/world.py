@@ -56,6 +56,7 @@ from sim_core.ship import model as ship_model
 from sim_core.ship.model import OrderRejection, ShipData, ShipModel
 from sim_core.ship.outputs import ShipOutputs, ship_outputs
 from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
+from sim_core.ship.searchlights import SearchlightMount, SearchlightOrder, SearchlightState, order_searchlight
 
 BREAKING_MEMORY = 2.0  # s: the bow counts as in level ice this long after it last broke a cell
 _PREPARE_CHUNK = 64  # cells built between looks at the clock while preparing tiles ahead
@@ -71,6 +72,7 @@ class WorldModel:
     scene: SceneModel
     contour: np.ndarray  # (34, 2) hull waterline contour, ship frame (x forward, y starboard), m
     origin: tuple[float, float]  # latitude, longitude of the field's south-west corner, rad
+    searchlights: tuple[SearchlightMount, ...] = ()  # the own ship's, by index
 
 
 @dataclass
@@ -87,6 +89,7 @@ class WorldData:
     live_rows: np.ndarray = field(default_factory=lambda: _NO_ROWS)  # rows of the breakable tiles
     ahead: dict[int, PreparedTile] = field(default_factory=dict)  # field tile -> prepared for its switch
     late_switches: int = 0  # tiles switched in before their preparation was done
+    searchlights: list[SearchlightState] = field(default_factory=list)  # as commanded, one per mount
 
 
 @dataclass(frozen=True)
@@ -108,12 +111,13 @@ class Controls:
     """Console orders for one step; None leaves an order as it was. Rudder in rad (+ to
     starboard); engine by telegraph position name or lever percent (-100..100). With
     ``kinematic`` set the ship follows that pose instead of its model; the hull then breaks
-    the ice along it as a driven ship does."""
+    the ice along it as a driven ship does. ``searchlights``: orders, applied in turn."""
 
     rudder: float | None = None
     telegraph: str | None = None
     lever: float | None = None
     kinematic: KinematicPose | None = None
+    searchlights: tuple[SearchlightOrder, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -160,11 +164,11 @@ class WorldEvents:
     snapshot: bool = False
 
 
-def compile_world(ship: ShipModel, ice: IceModel, scene: SceneModel,
-                  origin: tuple[float, float] = (0.0, 0.0)) -> WorldModel:
+def compile_world(ship: ShipModel, ice: IceModel, scene: SceneModel, origin: tuple[float, float] = (0.0, 0.0),
+                  searchlights: tuple[SearchlightMount, ...] = ()) -> WorldModel:
     """The static world; origin: latitude and longitude (rad) of the field's corner."""
     p = ship.particulars
-    return WorldModel(ship, ice, scene, waterline_contour(p.length, p.beam), origin)
+    return WorldModel(ship, ice, scene, waterline_contour(p.length, p.beam), origin, searchlights)
 
 
 def new_world_data(model: WorldModel, north: float, east: float, heading: float, speed: float,
@@ -178,7 +182,7 @@ def new_world_data(model: WorldModel, north: float, east: float, heading: float,
         if refused:
             raise ValueError(refused.text)
     ice = new_ice_data(model.ice, model.contour, model.ship.material.hull_friction)
-    data = WorldData(ship, ice, new_scene_data(model.scene))
+    data = WorldData(ship, ice, new_scene_data(model.scene), searchlights=[m.default for m in model.searchlights])
     warm_up(model, data)
     return data
 
@@ -326,7 +330,8 @@ def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> 
     """Events with the ship's outputs, the given rows' poses and statuses, and counts."""
     st = data.ice.state
     pose = np.column_stack([st.xy[rows], st.heave[rows], st.yaw[rows], st.roll[rows], st.pitch[rows]])
-    return WorldEvents(seq=data.seq, time=data.time, ship=ship_outputs(data.ship, data.time, *model.origin, data.epoch + data.time),
+    ship = ship_outputs(data.ship, data.time, *model.origin, data.epoch + data.time, tuple(data.searchlights))
+    return WorldEvents(seq=data.seq, time=data.time, ship=ship,
                        floe_rows=rows, floe_pose=pose, floe_status=st.status[rows].copy(),
                        floes_free=st.count(FloeStatus.FREE), floes_frozen=st.count(FloeStatus.FROZEN), **fields)
 
@@ -334,6 +339,9 @@ def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> 
 def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | None = None) -> WorldEvents:
     """Advance the world by dt seconds; returns what it publishes."""
     rejected = apply_controls(model.ship, data.ship, controls) if controls is not None else []
+    for order in controls.searchlights if controls is not None else ():
+        if refused := order_searchlight(model.searchlights, data.searchlights, order):
+            rejected.append(refused)
     ship = data.ship
     contour, _ = hull_world(model, ship)
     ship.ice_h, ship.ice_condition = _ice_condition(model, data, contour[0])  # contour[0] is the stem

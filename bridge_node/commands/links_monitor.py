@@ -8,6 +8,7 @@ count), errors by kind, alarms raised, outputs sent.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import time
@@ -39,6 +40,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def _value(order) -> str:
     if order.kind == "rudder":
         return f"{math.degrees(order.value):+.1f} deg"
+    if order.kind == "searchlight":
+        v = order.value
+        aim = [f"{what} {math.degrees(a):+.1f} deg" for what, a in (("bearing", v.bearing), ("elevation", v.elevation))
+               if a is not None]
+        return ", ".join([f"light {v.index}", *([] if v.on is None else ["on" if v.on else "off"]), *aim])
     return f"{order.value:+.0f} %" if order.kind == "lever" else str(order.value)
 
 
@@ -111,7 +117,8 @@ def run(args: argparse.Namespace) -> int:
 def _summary(hub: LinkHub, data: ShipData, start: float, refusals: OrderRefusals, record: Path | None) -> dict:
     return {
         "duration_s": round(time.monotonic() - start, 2),
-        "orders": {key: {"last": o.value, "count": hub.order_counts[key]}
+        "orders": {key: {"last": dataclasses.asdict(o.value) if o.kind == "searchlight" else o.value,
+                         "count": hub.order_counts[key]}
                    for key, o in sorted(hub.last_orders.items())},
         "orders_per_source": dict(hub.arbiter.counts),
         "errors": dict(hub.errors()),

@@ -1,10 +1,10 @@
 """The software console's ends, one per link kind, each the peer of one node link.
 
-A ``ConsoleLink`` holds the latest order of each channel (rudder, engine) and sends it again
-at ``rate_hz``, as a console repeats its state; ``poll`` reads back the instrument outputs as
-``Reading`` rows (SI) and ALR alarms as ``AlarmReading`` rows. Faults (``inject``) act on the
-outgoing traffic of one end, as a faulty console or cable would: the console is the one
-sending the faulty traffic, the node is left as it is. Like the node's links, an end is a
+A ``ConsoleLink`` holds the latest order of each channel (rudder, engine, each searchlight)
+and sends it again at ``rate_hz``, as a console repeats its state; ``poll`` reads back the
+instrument outputs as ``Reading`` rows (SI) and ALR alarms as ``AlarmReading`` rows. Faults
+(``inject``) act on the outgoing traffic of one end, as a faulty console or cable would: the
+console is the one sending the faulty traffic, the node is left as it is. Like the node's links, an end is a
 context manager, and closing twice is safe.
 """
 from __future__ import annotations
@@ -19,7 +19,7 @@ import time
 from abc import ABC, abstractmethod
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import can
 import serial
@@ -28,15 +28,17 @@ from pymodbus.simulator import DataType, SimData, SimDevice
 
 from bridge_node.hil.scenario import Fault
 from bridge_node.hil.settings import CanConsoleSettings, ModbusConsoleSettings, NmeaConsoleSettings
-from bridge_node.links.base import ETL_POSITIONS, LEVER, RUDDER, TELEGRAPH
+from bridge_node.links.base import ETL_POSITIONS, LEVER, RUDDER, SEARCHLIGHT, TELEGRAPH
 from bridge_node.links.can_link import N2K_DBC, dbc_path, load_dbc
 from bridge_node.links.modbus_link import raw_register, register_value
 from bridge_node.links.n2k_frames import identifier, parse_identifier
-from bridge_node.links.nmea0183 import ETL, PRC, ROR, checksum
+from bridge_node.links.nmea0183 import ETL, PRC, ROR, SEARCHLIGHT_SENTENCE, checksum
 from bridge_node.node.errors import UserError
+from sim_core.ship.searchlights import SearchlightOrder
 
 ETL_CODES = {name: code for code, name in ETL_POSITIONS.items()}  # telegraph position -> ETL code
 OUT_OF_RANGE = {RUDDER: math.radians(120.0), LEVER: 150.0, TELEGRAPH: "99"}  # corrupt = "range" sends these
+OUT_OF_RANGE_BEARING = math.radians(200.0)  # and a searchlight order trained this far
 CHANNEL = {RUDDER: "rudder", TELEGRAPH: "engine", LEVER: "engine"}
 DEVICE_ERRORS = (OSError, can.CanError, serial.SerialException)  # a port, bus or server that failed
 
@@ -44,10 +46,23 @@ DEVICE_ERRORS = (OSError, can.CanError, serial.SerialException)  # a port, bus o
 @dataclass(frozen=True)
 class Order:
     """A console order: ``kind`` RUDDER (value rad, + starboard), TELEGRAPH (a position
-    name) or LEVER (percent)."""
+    name), LEVER (percent) or SEARCHLIGHT (a ``SearchlightOrder`` with every field given)."""
 
     kind: str
-    value: float | str
+    value: float | str | SearchlightOrder
+
+    @property
+    def channel(self) -> str:
+        """The channel whose latest order this is: rudder, engine, or one searchlight's."""
+        return f"searchlight {self.value.index}" if self.kind == SEARCHLIGHT else CHANNEL[self.kind]
+
+    def wire_value(self, corrupt: str | None) -> float | str | SearchlightOrder:
+        """The value to send: the order's, or with corrupt = "range" one out of range."""
+        if corrupt != "range":
+            return self.value
+        if self.kind == SEARCHLIGHT:
+            return replace(self.value, bearing=OUT_OF_RANGE_BEARING)
+        return OUT_OF_RANGE[self.kind]
 
 
 @dataclass(frozen=True)
@@ -142,7 +157,7 @@ class ConsoleLink(ABC):
 
     def order(self, order: Order, now: float) -> None:
         """Hold ``order`` as its channel's latest and send it now (``now``: monotonic s)."""
-        self.held[CHANNEL[order.kind]] = order
+        self.held[order.channel] = order
         self._send(order, now)
 
     def inject(self, fault: Fault, rng: random.Random) -> None:
@@ -256,7 +271,7 @@ N2K_READINGS = {127245: ("Rudder", "Position", "rudder_angle", 1.0),
                 127488: ("EngineRapid", "Speed", "shaft_speed", 1.0 / 60.0),
                 127250: ("VesselHeading", "Heading", "heading", 1.0),
                 127251: ("RateOfTurn", "Rate", "rate_of_turn", 1.0)}
-HELM_PGN, ENGINE_PGN, CONSOLE_PRIORITY = 0xFF50, 0xFF51, 6
+HELM_PGN, ENGINE_PGN, SEARCHLIGHT_PGN, CONSOLE_PRIORITY = 0xFF50, 0xFF51, 0xFF52, 6
 
 
 class CanConsole(ConsoleLink):
@@ -282,7 +297,7 @@ class CanConsole(ConsoleLink):
         bus.shutdown()
 
     def _encode(self, order: Order, corrupt: str | None) -> list[can.Message]:
-        value = OUT_OF_RANGE[order.kind] if corrupt == "range" else order.value
+        value = order.wire_value(corrupt)
         s = self.settings
         if order.kind == RUDDER and s.helm == "pgn127245":
             raw = int(round(value / 1e-4)) & 0xFFFF
@@ -293,6 +308,11 @@ class CanConsole(ConsoleLink):
             data = self.dbc.get_message_by_name("HelmOrder").encode(
                 {"RudderOrder": math.degrees(value), "Status": 1, "Counter": self._counter}, strict=False)
             can_id = identifier(CONSOLE_PRIORITY, HELM_PGN, s.source_address)
+        elif order.kind == SEARCHLIGHT:
+            data = self.dbc.get_message_by_name("SearchlightOrder").encode(
+                {"Light": value.index, "Lamp": int(value.on), "Bearing": math.degrees(value.bearing),
+                 "Elevation": math.degrees(value.elevation), "Counter": 0}, strict=False)
+            can_id = identifier(CONSOLE_PRIORITY, SEARCHLIGHT_PGN, s.source_address)
         else:
             telegraph = order.kind == TELEGRAPH
             code = (int(value) if corrupt == "range" else int(ETL_CODES[value])) if telegraph else 0
@@ -350,10 +370,14 @@ class NmeaConsole(ConsoleLink):
         port.close()
 
     def _encode(self, order: Order, corrupt: str | None) -> list[bytes]:
-        value = OUT_OF_RANGE[order.kind] if corrupt == "range" else order.value
+        value = order.wire_value(corrupt)
         talker = self.settings.talker
         if order.kind == RUDDER:
             sentence = str(ROR(talker, "ROR", (f"{math.degrees(value):.1f}", "A", "", "V", "B")))
+        elif order.kind == SEARCHLIGHT:
+            body = (f"{SEARCHLIGHT_SENTENCE},{value.index},{'A' if value.on else 'V'},"
+                    f"{math.degrees(value.bearing):.1f},{math.degrees(value.elevation):.1f}")
+            sentence = f"${body}*{checksum(body):02X}"
         elif order.kind == TELEGRAPH:
             code = value if corrupt == "range" else ETL_CODES[value]
             sentence = str(ETL(talker, "ETL", ("", "O", code, "", "B", "0")))
@@ -499,7 +523,7 @@ class ModbusConsole(ConsoleLink):
         return mangle_mbap(frame, bad[1])
 
     def supports(self, kind: str) -> bool:
-        return any(r.order == kind for r in self.settings.registers)
+        return any(r.order.split("_")[0] == kind for r in self.settings.registers)  # searchlight_on: searchlight
 
     def _open(self) -> _RegisterServer:
         s = self.settings
@@ -510,8 +534,13 @@ class ModbusConsole(ConsoleLink):
         server.stop()
 
     def _encode(self, order: Order, corrupt: str | None) -> list[tuple[int, int]]:
-        value = OUT_OF_RANGE[order.kind] if corrupt == "range" else order.value
+        value = order.wire_value(corrupt)
         out = []
+        if order.kind == SEARCHLIGHT:
+            fields = {"searchlight_on": float(value.on), "searchlight_bearing": math.degrees(value.bearing),
+                      "searchlight_elevation": math.degrees(value.elevation)}
+            return [(r.address, raw_register(fields[r.order] / r.scale, r.type)) for r in self.settings.registers
+                    if r.order in fields and r.light == value.index]
         for r in self.settings.registers:
             if r.order != order.kind:
                 continue

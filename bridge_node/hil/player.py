@@ -17,8 +17,9 @@ from dataclasses import dataclass, field
 from bridge_node.hil.console_links import AlarmReading, ConsoleLink, Order, Reading, make_console_link
 from bridge_node.hil.scenario import QUANTITIES, Expectation, Fault, Scenario
 from bridge_node.hil.settings import ConsoleConfig
-from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH
+from bridge_node.links.base import LEVER, RUDDER, SEARCHLIGHT, TELEGRAPH
 from bridge_node.node.errors import UserError
+from sim_core.ship.searchlights import SearchlightOrder
 
 TICK_S = 0.01  # the player's loop period, s
 RAMP_STEP_PCT = 0.5  # a lever ramp sends a new order when the lever has moved this much
@@ -102,7 +103,7 @@ def check_plan(scenario: Scenario, path: str, console: Console, bus_off: BusOff 
             raise UserError(f"{path}: links = {scenario.links}: the console has no {role!r} end "
                             f"(it has {sorted(ends)})")
     for i, a in enumerate(scenario.actions):
-        kind = RUDDER if a.helm_deg is not None else TELEGRAPH if a.telegraph else LEVER
+        kind = _order(a).kind
         if not ends[a.link].supports(kind):
             raise UserError(f"{path}: actions.{i}: the {a.link} end ({ends[a.link].kind}) has no {kind} register")
     for i, f in enumerate(scenario.faults):
@@ -125,6 +126,10 @@ def check_plan(scenario: Scenario, path: str, console: Console, bus_off: BusOff 
 def _order(action) -> Order:
     if action.helm_deg is not None:
         return Order(RUDDER, math.radians(action.helm_deg))
+    if action.searchlight is not None:
+        light = action.searchlight
+        return Order(SEARCHLIGHT, SearchlightOrder(light.light, light.on, math.radians(light.bearing_deg),
+                                                   math.radians(light.elevation_deg)))
     if action.telegraph is not None:
         return Order(TELEGRAPH, action.telegraph)
     return Order(LEVER, action.lever_pct)

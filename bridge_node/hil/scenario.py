@@ -29,9 +29,20 @@ CORRUPTIONS = ("format", "checksum", "dlc", "range")  # format: the link's frami
 Seconds = Annotated[float, Field(ge=0.0, le=3600.0)]
 
 
+class SearchlightAction(Params):
+    """A searchlight order: light 0..3 switched on or off and aimed, deg from the bow (+
+    starboard) and above the horizontal (- down)."""
+
+    light: int = Field(ge=0, le=3)
+    on: bool = True
+    bearing_deg: float = Field(ge=-180.0, le=180.0)
+    elevation_deg: float = Field(ge=-90.0, le=90.0)
+
+
 class Action(Params):
     """One console action at ``at_s``: a helm order (deg, + starboard), a telegraph step,
-    or a lever order (percent), ramped linearly over ``ramp_s`` from the lever's last value."""
+    a lever order (percent), ramped linearly over ``ramp_s`` from the lever's last value, or
+    a searchlight order."""
 
     at_s: Seconds
     link: Literal[ORDER_ROLES] = "primary"
@@ -39,12 +50,14 @@ class Action(Params):
     telegraph: Literal[TELEGRAPH_POSITIONS] | None = None
     lever_pct: float | None = Field(None, ge=-100.0, le=100.0)
     ramp_s: float = Field(0.0, ge=0.0, le=600.0)
+    searchlight: SearchlightAction | None = None
 
     @model_validator(mode="after")
     def _one_order(self) -> "Action":
-        given = [k for k in ("helm_deg", "telegraph", "lever_pct") if getattr(self, k) is not None]
+        orders = ("helm_deg", "telegraph", "lever_pct", "searchlight")
+        given = [k for k in orders if getattr(self, k) is not None]
         if len(given) != 1:
-            raise ValueError(f"an action gives exactly one of helm_deg, telegraph, lever_pct (got {given or 'none'})")
+            raise ValueError(f"an action gives exactly one of {', '.join(orders)} (got {given or 'none'})")
         if self.ramp_s and self.lever_pct is None:
             raise ValueError("ramp_s applies to lever_pct only")
         return self

@@ -19,8 +19,8 @@ Rate = Annotated[float, Field(gt=0.0, le=100.0, description="orders are sent aga
 
 
 class CanConsoleSettings(Params):
-    """The console on a CAN bus: HelmOrder and EngineOrder frames of the DBC (or the helm as
-    NMEA 2000 PGN 127245); reads PGNs 127245, 127488, 127250 and 127251."""
+    """The console on a CAN bus: HelmOrder, EngineOrder and SearchlightOrder frames of the
+    DBC (or the helm as NMEA 2000 PGN 127245); reads PGNs 127245, 127488, 127250 and 127251."""
 
     role: Literal[ROLES]
     type: Literal["can"]
@@ -43,8 +43,8 @@ class CanConsoleSettings(Params):
 
 
 class NmeaConsoleSettings(Params):
-    """The console on a serial NMEA 0183 line: ROR, ETL and PRC out; RSA, RPM, HDT, ROT and
-    ALR in."""
+    """The console on a serial NMEA 0183 line: ROR, ETL, PRC and PICBSL (searchlight) out;
+    RSA, RPM, HDT, ROT and ALR in."""
 
     role: Literal[ROLES]
     type: Literal["nmea0183"]

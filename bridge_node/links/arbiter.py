@@ -2,8 +2,10 @@
 configured priority list wins.
 
 Two orders are arbitrated: the rudder, and the engine (telegraph position or lever,
-whichever the winning source sent last). A source is fresh while its last order of that
-kind is younger than its link's timeout. When the winning source goes stale the next fresh
+whichever the winning source sent last). Searchlight orders are not: each one from a
+searchlight source is passed on as it comes (a light holds its last order; none goes
+stale). A source is fresh while its last order of that kind is younger than its link's
+timeout. When the winning source goes stale the next fresh
 one takes over and an alarm is raised; when every source is stale, the configured fail-safe
 applies after ``fail_safe_after_s`` (hold the last order, or midships and stop) and a
 second alarm is raised. Alarms clear when a source is fresh again. Alarm texts name at most
@@ -14,7 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, Alarm, ControlInput
+from bridge_node.links.base import LEVER, RUDDER, SEARCHLIGHT, TELEGRAPH, Alarm, ControlInput
 from bridge_node.links.settings import ArbitrationSettings
 from sim_core.world import Controls
 
@@ -52,11 +54,16 @@ class OrderArbiter:
         self.timeouts = timeouts
         self.channels = {name: _Channel(list(getattr(settings, name))) for name in CHANNELS}
         self.counts: dict[str, int] = {}
+        self.searchlight_sources = set(settings.rudder + settings.engine if settings.searchlight is None
+                                       else settings.searchlight)
+        self._searchlights: list[ControlInput] = []  # orders not yet passed on
 
     def feed(self, inputs: list[ControlInput]) -> None:
         """Count the orders, and keep each as its source's latest of its channel."""
         for order in inputs:
             self.counts[order.source] = self.counts.get(order.source, 0) + 1
+            if order.kind == SEARCHLIGHT and order.source in self.searchlight_sources:
+                self._searchlights.append(order)
             for name, kinds in CHANNELS.items():
                 ch = self.channels[name]
                 if order.kind in kinds and order.source in ch.sources:
@@ -103,6 +110,10 @@ class OrderArbiter:
         """The orders to pass on at ``now`` (monotonic s): each channel's winning source's
         latest order if not passed on yet, or the fail-safe; and the alarm changes."""
         controls, alarms, newest = Controls(), [], None
+        if self._searchlights:
+            taken, self._searchlights = sorted(self._searchlights, key=lambda o: o.time), []
+            controls.searchlights = tuple(o.value for o in taken)
+            newest = taken[-1].time
         for name, ch in self.channels.items():
             source = self._fresh(ch, now)
             if source != ch.active:

@@ -29,12 +29,14 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, ClassVar
 
 from sim_core.ship.outputs import ShipOutputs
+from sim_core.ship.searchlights import SearchlightOrder
 
 if TYPE_CHECKING:
     from bridge_node.links.settings import LinkSettings
 
 log = logging.getLogger("icebridge.links")
-RUDDER, TELEGRAPH, LEVER = "rudder", "telegraph", "lever"  # the kinds of order
+RUDDER, TELEGRAPH, LEVER, SEARCHLIGHT = "rudder", "telegraph", "lever", "searchlight"  # the kinds of order
+SEARCHLIGHTS_MAX = 4  # searchlight orders name lights 0..3
 RUDDER_ORDER_LIMIT_DEG = 90.0  # beyond this a rudder order is nonsense, not an order to clamp
 ALARM_TEXT_MAX = 52  # characters: what an ALR sentence's text field holds within NMEA 0183's 82
 OPEN_WAIT_S = 5.0  # ``Link.open`` waits this long for the device; a slower one is taken up by a later poll
@@ -46,15 +48,30 @@ ETL_POSITIONS = {
 }
 
 
+
+def searchlight_order(index: int, on: bool | None, bearing_deg: float | None,
+                      elevation_deg: float | None) -> SearchlightOrder | str:
+    """A console's searchlight order (light 0..3; bearing deg from the bow, + starboard,
+    within +-180; elevation deg, + up, within +-90; None: unchanged) in rad, or the error
+    kind it is counted as. The light's own train and tilt limits are the world's to check."""
+    angles = [(v, limit) for v, limit in ((bearing_deg, 180.0), (elevation_deg, 90.0)) if v is not None]
+    if any(not math.isfinite(v) for v, _ in angles):
+        return "bad_field"
+    if not 0 <= index < SEARCHLIGHTS_MAX or any(abs(v) > limit for v, limit in angles):
+        return "out_of_range"
+    return SearchlightOrder(index, on, *(None if v is None else math.radians(v) for v in (bearing_deg, elevation_deg)))
+
+
 @dataclass(frozen=True)
 class ControlInput:
     """One order from the console. ``value``: rudder rad (+ starboard), lever percent
-    (-100..100), or a telegraph position name. ``time`` is the node's monotonic clock, s."""
+    (-100..100), a telegraph position name, or a ``SearchlightOrder``. ``time`` is the
+    node's monotonic clock, s."""
 
     time: float
     source: str  # link name
-    kind: str  # RUDDER, TELEGRAPH or LEVER
-    value: float | str
+    kind: str  # RUDDER, TELEGRAPH, LEVER or SEARCHLIGHT
+    value: float | str | SearchlightOrder
     engine: int = 0  # 0 centre, odd starboard, even port (NMEA convention)
 
 

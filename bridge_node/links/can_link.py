@@ -20,12 +20,14 @@ from bridge_node.links.base import (
     ETL_POSITIONS,
     LEVER,
     RUDDER,
+    SEARCHLIGHT,
     TELEGRAPH,
     ControlInput,
     Link,
     QueuedWriter,
     RateSchedule,
     register_link,
+    searchlight_order,
 )
 from bridge_node.links.n2k_frames import fast_packet_frames, identifier, parse_identifier
 from bridge_node.links.n2k_network import FAST_PACKET_PGNS, GLOBAL_ADDRESS, NETWORK_PGNS, Frame, NetworkManager
@@ -240,6 +242,12 @@ class CanLink(Link):
                     return []
                 return [ControlInput(now, self.name, TELEGRAPH, ETL_POSITIONS[code], engine)]
             return [ControlInput(now, self.name, LEVER, float(values["Lever"]), engine)]
+        if spec.name == "SearchlightOrder":
+            order = searchlight_order(int(values["Light"]), values["Lamp"] == 1, values["Bearing"], values["Elevation"])
+            if isinstance(order, str):
+                self._count_error(order)
+                return []
+            return [ControlInput(now, self.name, SEARCHLIGHT, order)]
         self._count_error("unknown_frame")
         return []
 

@@ -30,11 +30,13 @@ from bridge_node.links.base import (
     LEVER,
     RUDDER,
     RUDDER_ORDER_LIMIT_DEG,
+    SEARCHLIGHT,
     TELEGRAPH,
     Backoff,
     ControlInput,
     Link,
     register_link,
+    searchlight_order,
 )
 from bridge_node.links.settings import ModbusLinkSettings, RegisterSpec, WriteSpec
 from sim_core.frames.units import KNOT
@@ -86,6 +88,13 @@ def register_order(spec: RegisterSpec, raw: int, now: float, source: str) -> Con
         if abs(value) > 100.0:
             return "out_of_range"
         return ControlInput(now, source, LEVER, float(value), spec.engine)
+    if spec.order.startswith("searchlight_"):  # one field of the light's order; the others as they were
+        if spec.order == "searchlight_on" and value not in (0.0, 1.0):
+            return "out_of_range"
+        on = bool(value) if spec.order == "searchlight_on" else None
+        angles = [value if spec.order == f"searchlight_{k}" else None for k in ("bearing", "elevation")]
+        order = searchlight_order(spec.light, on, *angles)
+        return order if isinstance(order, str) else ControlInput(now, source, SEARCHLIGHT, order)
     code = f"{int(round(value)):02d}"
     if code not in ETL_POSITIONS:
         return "out_of_range"

@@ -1,4 +1,5 @@
-"""NMEA 0183 sentences: console orders in (ROR, ETL, PRC), ship state and alarms out.
+"""NMEA 0183 sentences: console orders in (ROR, ETL, PRC and the proprietary searchlight
+order PICBSL), ship state and alarms out.
 
 pynmea2 parses and renders the standard sentences. It has no ROR, ETL, PRC or ALR, so
 those are registered here as ``pynmea2.TalkerSentence`` subclasses (parse and render both
@@ -13,9 +14,11 @@ import re
 
 import pynmea2
 
-from bridge_node.links.base import ETL_POSITIONS, LEVER, RUDDER, RUDDER_ORDER_LIMIT_DEG, TELEGRAPH, Alarm, ControlInput
+from bridge_node.links.base import (ETL_POSITIONS, LEVER, RUDDER, RUDDER_ORDER_LIMIT_DEG, SEARCHLIGHT, TELEGRAPH, Alarm,
+                                    ControlInput, searchlight_order)
 from sim_core.frames.units import KNOT
 from sim_core.ship.outputs import ShipOutputs
+from sim_core.ship.searchlights import SearchlightOrder
 
 # sentence -> default talker. Heading and rate of turn go out as IN (integrated navigation):
 # gpsd up to 3.23 (Debian 12, Ubuntu 22.04) drops the gyro's HE talker in its packet lexer,
@@ -79,6 +82,11 @@ class ALR(pynmea2.TalkerSentence):
 
 
 ORDER_SENTENCES = frozenset({"ROR", "ETL", "PRC"})  # the sentence types that carry orders
+# proprietary (P, maker mnemonic ICB, type SL): light 0..3, A on / V off, bearing deg from the
+# bow (+ starboard), elevation deg (+ up); an empty field leaves that as it was. No talker:
+# taken whatever ``allowed_talkers`` says.
+SEARCHLIGHT_SENTENCE = "PICBSL"
+_STATUS = {"A": True, "V": False, "": None}
 
 
 class SentenceError(ValueError):
@@ -133,6 +141,8 @@ def parse_order(line: str, now: float, source: str,
     if checksum(line[1:line.index("*")]) != int(frame["checksum"], 16):
         raise SentenceError("bad_checksum", "checksum does not match")
     address = frame["address"]
+    if line[0] == "$" and address == SEARCHLIGHT_SENTENCE:
+        return [ControlInput(now, source, SEARCHLIGHT, _searchlight_order(frame["fields"] or ""))]
     if line[0] != "$" or len(address) != 5 or address[2:] not in ORDER_SENTENCES:
         raise SentenceError("ignored", f"{address} is not a console order")
     if allowed_talkers is not None and address[:2] not in allowed_talkers:
@@ -155,6 +165,21 @@ def _rudder_order(msg: ROR) -> float:
     if not valid:
         raise SentenceError("invalid_status", "ROR has no valid order (status A)")
     return math.radians(sum(valid) / len(valid))
+
+
+def _searchlight_order(fields: str) -> SearchlightOrder:
+    """The searchlight order of PICBSL's fields (",light,status,bearing,elevation")."""
+    try:
+        light, status, bearing, elevation = fields.split(",")[1:]
+        if not light.isdigit():
+            raise ValueError(light)
+        order = searchlight_order(int(light), _STATUS[status], *(nmea_decimal(v) if v else None
+                                                                 for v in (bearing, elevation)))
+    except (ValueError, KeyError):
+        raise SentenceError("bad_field", f"searchlight order {fields!r}") from None
+    if isinstance(order, str):
+        raise SentenceError(order, f"searchlight order {fields!r}")
+    return order
 
 
 def _orders(msg, now: float, source: str) -> list[ControlInput]:

@@ -141,14 +141,18 @@ def sane_scale(v: float) -> float:
 
 
 class RegisterSpec(Params):
-    """One console input register: an order, its scaling and type."""
+    """One console input register: an order, its scaling and type. A searchlight's order
+    takes a register per field: on (0 off, 1 on), bearing deg (+ starboard), elevation deg
+    (+ up), each of the light ``light``."""
 
-    order: Literal["rudder", "lever", "telegraph"]
+    order: Literal["rudder", "lever", "telegraph", "searchlight_on", "searchlight_bearing", "searchlight_elevation"]
     table: Literal["holding", "input"] = "holding"
     address: int = Field(ge=0, le=65535)
     type: Literal["int16", "uint16"] = "int16"
-    scale: float = Field(1.0, description="engineering value = raw x scale (rudder deg, lever %, ETL code)")
+    scale: float = Field(1.0, description="engineering value = raw x scale (rudder deg, lever %, ETL code, "
+                         "searchlight 0/1 or deg)")
     engine: int = Field(0, ge=0, le=9)
+    light: int = Field(0, ge=0, le=3, description="the searchlight of a searchlight_* register")
 
     _scale = field_validator("scale")(lambda cls, v: sane_scale(v))
 
@@ -236,9 +240,12 @@ LinkSettings = Annotated[NmeaLinkSettings | CanLinkSettings | ModbusLinkSettings
 
 class ArbitrationSettings(Params):
     """Which link's orders win (first fresh source in each list), and what happens when
-    every source of an order has gone stale."""
+    every source of an order has gone stale. Searchlight orders are not arbitrated: every
+    one from a searchlight source is passed on, and a light holds its last order."""
 
     rudder: list[Name] = Field(default_factory=list, description="rudder order sources by priority")
     engine: list[Name] = Field(default_factory=list, description="engine order sources by priority")
+    searchlight: list[Name] | None = Field(None, description="links whose searchlight orders are taken (each order "
+                                           "as it comes; a light holds its last); unset: the rudder and engine sources")
     fail_safe: Literal["hold", "midships_stop"] = "midships_stop"
     fail_safe_after_s: float = Field(3.0, ge=0.0, le=600.0, description="after every source is stale, s")

@@ -4,7 +4,9 @@ run summary, and raised as an alarm when one order channel is refused repeatedly
 A console that sends a bad order once may have glitched; one that keeps sending orders the
 ship refuses (an unknown telegraph code, a NaN rudder) has a fault the officer must know
 about, because the ship keeps its previous order. Clamped orders (beyond the rudder or lever
-limit) are counted but raise no alarm: the ship obeys them as far as it can.
+limit) are counted but raise no alarm: the ship obeys them as far as it can. Refused
+searchlight orders (an aim outside the mount's range, a light the ship lacks) are counted and
+logged, with no alarm: the light holds its last aim, and the officer sees where it points.
 """
 from __future__ import annotations
 
@@ -37,7 +39,7 @@ class OrderRefusals:
             if r.text not in self._logged:  # each distinct reason once; the counts keep the rest
                 self._logged.add(r.text)
                 log.warning("order %s: %s", "refused" if r.refused else "clamped", r.text)
-            if r.refused:
+            if r.refused and r.order in REFUSED_ALARM:
                 self._recent[REFUSED_ALARM[r.order]].append((now, r.text))
         changes = []
         for number, recent in self._recent.items():

@@ -63,7 +63,7 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
     except ValueError as exc:
         raise UserError(f"{config_path}: scene: {exc}") from None
     origin = math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg)
-    return compile_world(ship, ice, scene, origin)
+    return compile_world(ship, ice, scene, origin, tuple(light.mount() for light in cfg.render.searchlights))
 
 
 def warm_up(model: WorldModel, cfg: NodeConfig) -> None:

@@ -45,6 +45,7 @@ from bridge_node.render.textures import relief_noise
 from bridge_node.stream.world_view import WorldView
 from sim_core.csr import gather_ranges
 from sim_core.frames.geodesy import local_to_geodetic
+from sim_core.ship.outputs import ShipOutputs
 from sim_core.world import WorldModel
 
 GL_CLIP_DISTANCE0 = 0x3000
@@ -251,7 +252,7 @@ class SceneRenderer:
         common = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "sun": sky.sun, "direct": sky.direct,
                   "ambient": sky.ambient, "zenith_colour": sky.zenith, "horizon_colour": sky.horizon,
                   "noise": NOISE_UNIT, "water_colour": WATER,
-                  "relief_reach": s.relief_reach_m, "time": view.time, **self._searchlights(north, east, psi)}
+                  "relief_reach": s.relief_reach_m, "time": view.time, **self._searchlights(view.ship)}
         ctx.clear(*sky.horizon, depth=1.0)
         self.tile_info.use(0)
         self.cell_raster.use(3)
@@ -289,19 +290,21 @@ class SceneRenderer:
         self._blend_bands(channel, blend)
         return cam
 
-    def _searchlights(self, north: float, east: float, psi: float) -> dict:
-        """The searchlights' uniforms for the ship's pose: world positions, beam axes, the
+    def _searchlights(self, ship: ShipOutputs) -> dict:
+        """The searchlights' uniforms for the published ship: world positions, beam axes, the
         cosines of half their beams, and their intensities over the illuminance the eye
-        sees as white (the daylight's, or EYE_WHITE_LUX at night)."""
+        sees as white (the daylight's, or EYE_WHITE_LUX at night); 0 for a light switched
+        off. Each is aimed as published (the console's orders), else as configured."""
         n = max(len(self.settings.searchlights), 1)  # the shaders' arrays (see shaders.with_lights), filled whole
         pos, axis, cos, power = np.zeros((n, 3)), np.zeros((n, 3)), np.ones(n), np.zeros(n)
-        to_world = ship_matrix(north, east, psi)
+        to_world = ship_matrix(ship.north, ship.east, ship.heading)
         for k, light in enumerate(self.settings.searchlights):
-            az, el = psi + math.radians(light.bearing_deg), -math.radians(light.depression_deg)
+            aim = ship.searchlights[k] if k < len(ship.searchlights) else light.mount().default
+            az, el = ship.heading + aim.bearing, aim.elevation
             pos[k] = (to_world @ np.array([*light.position, 1.0]))[:3]
             axis[k] = math.sin(az) * math.cos(el), math.cos(az) * math.cos(el), math.sin(el)
             cos[k] = math.cos(math.radians(light.beam_deg) / 2)
-            power[k] = light.intensity_cd / max(self.sky.illuminance, EYE_WHITE_LUX)
+            power[k] = light.intensity_cd / max(self.sky.illuminance, EYE_WHITE_LUX) if aim.on else 0.0
         return {"light_pos": pos, "light_axis": axis, "light_cos": cos, "light_power": power}
 
     def _blend_bands(self, channel: ChannelSettings, blend: moderngl.Texture) -> None:

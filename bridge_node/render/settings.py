@@ -17,6 +17,7 @@ from typing import Annotated, Literal
 from pydantic import AwareDatetime, Field, model_validator
 
 from sim_core.params import Params, repeated
+from sim_core.ship.searchlights import SearchlightMount, SearchlightState
 
 
 EyeName = Literal["bridge", "port_wing", "starboard_wing"]
@@ -78,7 +79,8 @@ MAX_SEARCHLIGHTS = 4
 
 
 class SearchlightSettings(Params):
-    """One of the own ship's searchlights: where it stands, where it points, its beam."""
+    """One of the own ship's searchlights: where it stands, where it points until the
+    console trains it, the limits of its mount, its beam."""
 
     position: list[float] = Field(default_factory=lambda: [20.0, 0.0, 30.0], min_length=3, max_length=3,
                                   description="ship frame, m")
@@ -86,6 +88,26 @@ class SearchlightSettings(Params):
     depression_deg: float = Field(8.0, ge=0.0, le=60.0, description="below the horizontal")
     beam_deg: float = Field(8.0, gt=0.5, le=60.0, description="full width of the beam's cone")
     intensity_cd: float = Field(2.0e6, gt=0.0, le=1.0e9, description="luminous intensity on the axis, cd")
+    on: bool = Field(True, description="switched on until the console says otherwise")
+    train_range_deg: Annotated[list[Annotated[float, Field(ge=-180.0, le=180.0)]], Field(min_length=2, max_length=2)] \
+        = Field(default_factory=lambda: [-180.0, 180.0], description="[min, max] bearing the console may order")
+    tilt_range_deg: Annotated[list[Annotated[float, Field(ge=-90.0, le=90.0)]], Field(min_length=2, max_length=2)] \
+        = Field(default_factory=lambda: [-60.0, 10.0], description="[min, max] elevation the console may order, + up")
+
+    @model_validator(mode="after")
+    def _aim_in_range(self) -> "SearchlightSettings":
+        for (lo, hi), value, what in ((self.train_range_deg, self.bearing_deg, "bearing_deg"),
+                                      (self.tilt_range_deg, -self.depression_deg, "-depression_deg")):
+            if not lo <= value <= hi:
+                raise ValueError(f"{what} = {value}: outside its range [{lo}, {hi}]")
+        return self
+
+    def mount(self) -> SearchlightMount:
+        """The light's limits and default aim for the world, rad."""
+        return SearchlightMount(SearchlightState(self.on, math.radians(self.bearing_deg),
+                                                 -math.radians(self.depression_deg)),
+                                (math.radians(self.train_range_deg[0]), math.radians(self.train_range_deg[1])),
+                                (math.radians(self.tilt_range_deg[0]), math.radians(self.tilt_range_deg[1])))
 
 
 class RenderSettings(Params):
@@ -98,7 +120,8 @@ class RenderSettings(Params):
                                      description="date and time (with its UTC offset) the exercise starts at: "
                                                  "with the position, it sets the sun and the sky")
     searchlights: list[SearchlightSettings] = Field(
-        default_factory=list, max_length=MAX_SEARCHLIGHTS, description="the own ship's searchlights, always on")
+        default_factory=list, max_length=MAX_SEARCHLIGHTS,
+        description="the own ship's searchlights, in the console's light order 0..3; the console switches and trains them")
     msaa_samples: Literal["auto", 1, 4] = Field(
         "auto", description="multisample anti-aliasing samples per pixel (Mesa llvmpipe offers 4 at most); auto: 4 "
                             "on a GPU, 1 on a software rasteriser (llvmpipe), where 4 cost a third of the frame rate")

@@ -61,7 +61,7 @@ def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
         placed = PlacedTiles(*arrays[:len(_PLACED)])
         named = dict(zip(_ARRAYS, arrays[len(_PLACED):]))
         events = WorldEvents(
-            seq=int(header["seq"]), time=float(header["time"]), ship=ShipOutputs(**header["ship"]), placed=placed,
+            seq=int(header["seq"]), time=float(header["time"]), ship=ShipOutputs.from_dict(header["ship"]), placed=placed,
             floes_free=int(header["floes_free"]), floes_frozen=int(header["floes_frozen"]),
             rejected=tuple(OrderRejection(**r) for r in header["rejected"]), snapshot=bool(header["snapshot"]),
             **{k: (v.astype(np.int64) if k in _WIRE and v.dtype.kind == "i" else v) for k, v in named.items()})

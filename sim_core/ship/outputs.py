@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass
 from sim_core.frames.geodesy import local_to_geodetic
 from sim_core.frames.ship_frame import ship_vector_to_world
 from sim_core.ship.model import ShipData
+from sim_core.ship.searchlights import SearchlightState
 
 
 @dataclass(frozen=True)
@@ -28,14 +29,21 @@ class ShipOutputs:
     shaft_rps: float  # rev/s, - astern
     ice_resistance: float  # N
     utc: float = 0.0  # the exercise clock: UTC of this state, unix s
+    searchlights: tuple[SearchlightState, ...] = ()  # every configured light as commanded, by index
 
     def as_dict(self) -> dict:
         return asdict(self)
 
+    @classmethod
+    def from_dict(cls, d: dict) -> ShipOutputs:
+        """The outputs ``as_dict`` gave (the searchlights as dicts)."""
+        return cls(**{**d, "searchlights": tuple(SearchlightState(**s) for s in d.get("searchlights", ()))})
 
-def ship_outputs(data: ShipData, time: float, lat0: float, lon0: float, utc: float = 0.0) -> ShipOutputs:
+
+def ship_outputs(data: ShipData, time: float, lat0: float, lon0: float, utc: float = 0.0,
+                 searchlights: tuple[SearchlightState, ...] = ()) -> ShipOutputs:
     """Outputs of the ship at its current state at simulated time (s) and exercise UTC
-    (unix s); origin (lat0, lon0) in radians."""
+    (unix s), with its searchlights as commanded; origin (lat0, lon0) in radians."""
     north, east, psi = float(data.eta[0]), float(data.eta[1]), float(data.eta[5])
     u, v, r = float(data.nu[0]), float(data.nu[1]), float(data.nu[5])
     ve, vn = ship_vector_to_world((u, v), psi)
@@ -46,4 +54,5 @@ def ship_outputs(data: ShipData, time: float, lat0: float, lon0: float, utc: flo
         heading=psi % two_pi, course_over_ground=math.atan2(ve, vn) % two_pi,
         speed_over_ground=math.hypot(vn, ve), speed_longitudinal=u, speed_transverse=v,
         rate_of_turn=r, rudder_angle=data.rudder, shaft_rps=data.rps, ice_resistance=data.ice_resistance, utc=utc,
+        searchlights=searchlights,
     )
