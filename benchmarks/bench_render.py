@@ -9,6 +9,10 @@ Targets: llvmpipe, 3 channels at 1280x720 with 3000 floes >= 15 FPS; GPU, 5 chan
 1920x1080 with 10000 floes >= 60 FPS.
 Run: .venv/bin/python benchmarks/bench_render.py [--frames N]
      .venv/bin/python benchmarks/bench_render.py --compare [--frames N]
+     .venv/bin/python benchmarks/bench_render.py --case 3:1280x720:3000 [--frames N]
+--case measures one setup only (channels:WIDTHxHEIGHT:floes), without the baseline.
+--compare-reflections measures the llvmpipe target's case without the floes' reflections
+in the sea (render.reflection_distance_m = 0) against the defaults, interleaved likewise.
 --compare measures only the llvmpipe target's case (3 channels at 1280x720, 3000 floes):
 the look as it was before the cheaper shading (4x MSAA, every relief octave at any
 distance, bilinear noise fetches) against the defaults (MSAA auto: 1 on llvmpipe, relief
@@ -55,9 +59,15 @@ def world_with_floes(target: int):
         break_cells(data.ice, rows[: target - st.count(FloeStatus.FREE)], BreakCause.HULL)
         north += 50.0
     data.ship.eta[0] = -80.0
+    return model, data, fresh_view(model, data)
+
+
+def fresh_view(model, data) -> WorldView:
+    """A view of the world's state for one renderer: a view hands its changes (the broken
+    floes whose triangles a renderer appends) out once."""
     view = WorldView()
     view.apply(snapshot(model, data))
-    return model, data, view
+    return view
 
 
 def channels(n: int, width: int, height: int) -> list[ChannelSettings]:
@@ -80,26 +90,32 @@ def fps(cs: ChannelSet, view: WorldView, frames: int) -> tuple[float, float]:
 
 
 BEFORE = {"msaa_samples": 4, "relief_reach_m": 1.0e7}  # the look before its cheaper shading
+NO_REFLECTIONS = {"reflection_distance_m": 0.0}  # the look before the floes' reflections
 
 
-def compare(ctx, frames: int) -> None:
-    """Frame times of the look before its cheaper shading and of the defaults, interleaved."""
-    model, _, view = world_with_floes(3000)
+def compare(ctx, frames: int, before: dict, bilinear_before: bool) -> None:
+    """Frame times of the look with the `before` settings (and bilinear noise fetches if
+    asked) and of the defaults, interleaved."""
+    model, data, _ = world_with_floes(3000)
     chans = channels(3, 1280, 720)
-    sets = {name: ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=chans, **look)), chans)
-            for name, look in (("before", BEFORE), ("after", {}))}
-    sets["before"].renderer.noise.filter = moderngl.LINEAR_MIPMAP_NEAREST, moderngl.LINEAR
-    times = {name: [] for name in sets}
-    for cs in sets.values():
+    looks = {"before": before, "after": {}}
+    sets = []
+    for name, look in looks.items():
+        view = fresh_view(model, data)
+        cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=chans, **look)), chans)
+        if bilinear_before and name == "before":
+            cs.renderer.noise.filter = moderngl.LINEAR_MIPMAP_NEAREST, moderngl.LINEAR
         cs.render(view)  # warm-up
+        sets.append((name, cs, view))
+    times = {name: [] for name in looks}
     for _ in range(frames):
-        for name, cs in sets.items():
+        for name, cs, view in sets:
             view.ship = dataclasses.replace(view.ship, heading=view.ship.heading + 1e-4)
             t0 = time.perf_counter()
             cs.render(view)
             times[name].append(time.perf_counter() - t0)
     med = {name: float(np.median(t)) * 1e3 for name, t in times.items()}
-    for name in sets:
+    for name in looks:
         print(f"  {name}: {1e3 / med[name]:5.1f} FPS (median frame {med[name]:6.1f} ms)")
     print(f"  after / before frame time: {med['after'] / med['before']:.2f} "
           f"(FPS x{med['before'] / med['after']:.2f}); {os.cpu_count()} CPUs, {frames} interleaved rounds")
@@ -109,24 +125,36 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--frames", type=int, default=20)
     ap.add_argument("--compare", action="store_true", help="before/after the cheaper shading, llvmpipe target only")
+    ap.add_argument("--compare-reflections", action="store_true",
+                    help="without/with the floes' reflections, llvmpipe target only")
+    ap.add_argument("--case", help="one setup only, CHANNELS:WIDTHxHEIGHT:FLOES (e.g. 3:1280x720:3000)")
     args = ap.parse_args()
     ctx = create_context()
     print(f"render benchmark on {ctx.info['GL_RENDERER']} ({ctx.info['GL_VERSION']})")
-    if args.compare:
-        compare(ctx, args.frames)
+    if args.compare or args.compare_reflections:
+        compare(ctx, args.frames, BEFORE if args.compare else NO_REFLECTIONS, args.compare)
+        return
+    if args.case:
+        n, size, floes = args.case.split(":")
+        width, height = (int(v) for v in size.split("x"))
+        model, _, view = world_with_floes(int(floes))
+        chans = channels(int(n), width, height)
+        f, p99 = fps(ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=chans)), chans), view, args.frames)
+        print(f"  {n} channel(s) {width}x{height}, {floes} floes: {f:6.1f} FPS (p99 frame {p99:6.1f} ms); "
+              f"{os.cpu_count()} CPUs, median of {args.frames} frames")
         return
     for target in (3000, 10000):
-        model, data, view = world_with_floes(target)
+        model, data, _ = world_with_floes(target)
         print(f"{data.ice.state.count(FloeStatus.FREE)} live floes, {data.ice.state.n} cells placed")
         for width, height in ((1280, 720), (1920, 1080)):
             for n in (1, 3, 5):
                 chans = channels(n, width, height)
                 cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=chans)), chans)
-                f, p99 = fps(cs, view, args.frames)
+                f, p99 = fps(cs, fresh_view(model, data), args.frames)
                 line = f"  {n} channel(s) {width}x{height}: {f:6.1f} FPS (p99 frame {p99:6.1f} ms)"
                 if n == 3 and width == 1280:
                     flat = RenderSettings(channels=chans, lod_distance_m=1.0e6)
-                    base, _ = fps(ChannelSet(SceneRenderer(ctx, model, flat), chans), view, args.frames)
+                    base, _ = fps(ChannelSet(SceneRenderer(ctx, model, flat), chans), fresh_view(model, data), args.frames)
                     line += f"; baseline without level of detail {base:6.1f} FPS ({f / base:4.2f}x)"
                 print(line)
     print(f"(median of {args.frames} frames per setup)")

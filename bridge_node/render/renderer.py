@@ -9,8 +9,10 @@ template and rotation; -1 for the unbreakable slab), and per tile the vertex buf
 broken floes (tops and sides apart), to which a cell's template triangles are appended
 once, when it breaks; the vertex shader places them by the pose texture. A tile's floes
 are drawn only when its box is in the channel's view, their side faces only within the
-level-of-detail distance. Level ice (unbreakable tiles and the intact cells
-of breakable ones) is drawn per pixel by the environment pass from the cell raster, so it
+level-of-detail distance; within the reflection distance their side faces are drawn once
+more, mirrored in the water plane over the sea, as their reflections. Level ice
+(unbreakable tiles and the intact cells of breakable ones) is drawn per pixel by the
+environment pass from the cell raster, so it
 costs no triangles: on a software rasteriser the vertex work of thousands of intact cells
 would dominate the frame. Per frame only the poses of tiles placed or simulated since the
 last frame are uploaded; frozen tiles cost nothing. Also static: the relief noise texture
@@ -270,11 +272,12 @@ class SceneRenderer:
         for m in ships:
             set_matrix(self.ship["ship_to_world"], m)
             self.ship_vao.render()
-        if self.tile_floes:
+        tiles = self._floe_tiles(view, cam) if self.tile_floes else None
+        if tiles:
             ctx.enable_direct(GL_CLIP_DISTANCE0)
             ctx.enable(moderngl.CULL_FACE)  # not for the ship: its matrix mirrors (starboard-handed frame)
-            self._set(self.floe, view_proj=vp, pose_a=4, pose_b=5, pose_width=POSE_WIDTH, **common)
-            self._draw_floes(view, cam)
+            self._set(self.floe, view_proj=vp, pose_a=4, pose_b=5, pose_width=POSE_WIDTH, reflected=False, **common)
+            self._draw_floes(view, tiles)
             ctx.disable(moderngl.CULL_FACE)
             ctx.disable_direct(GL_CLIP_DISTANCE0)
         tx, ty = math.tan(half), math.tan(channel.vfov() / 2)
@@ -286,6 +289,8 @@ class SceneRenderer:
                   cell_raster=3, raster_size=self.raster_size, rim_px=self.rim_px, status=7, pose_width=POSE_WIDTH,
                   field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
         self.env_vao.render()
+        if tiles:
+            self._draw_reflections(view, tiles)
         self._draw_nav_lights(ships, cam, channel.height)
         self._blend_bands(channel, blend)
         return cam
@@ -330,24 +335,52 @@ class SceneRenderer:
         self.band_vao.render(vertices=6 * len(spans))
         ctx.disable(moderngl.BLEND)
 
-    def _draw_floes(self, view: WorldView, cam: Camera) -> None:
-        """Each tile's broken floes, if its box (with a margin for drift) is in view; their
-        side faces only within the level-of-detail distance."""
+    def _floe_tiles(self, view: WorldView, cam: Camera) -> list[tuple[int, float]]:
+        """The tiles with broken floes whose box (with a margin for drift, and its mirror
+        image in the water) is in view: (placement, distance from the eye across the
+        water to the box, m)."""
         keys = list(self.tile_floes)
         corner = np.array([view.placements[k].corner for k in keys], dtype=float)
         side = self.model.scene.side
-        lo = np.column_stack([corner - FLOE_DRIFT_MARGIN, np.full(len(keys), -2.0)])
-        hi = np.column_stack([corner + side + FLOE_DRIFT_MARGIN, np.full(len(keys), 2.0)])
+        lo = np.column_stack([corner - FLOE_DRIFT_MARGIN, np.full(len(keys), -shaders.SEEN_DEPTH)])
+        hi = np.column_stack([corner + side + FLOE_DRIFT_MARGIN, np.full(len(keys), shaders.SEEN_DEPTH)])
         seen = visible_boxes(cam.view_proj, lo, hi)
         gap = np.maximum(np.maximum(lo[:, :2] - cam.eye[:2], cam.eye[:2] - hi[:, :2]), 0.0)
-        near = np.hypot(gap[:, 0], gap[:, 1]) < self.settings.lod_distance_m
-        for k, show, full in zip(keys, seen, near):
-            if show:
-                tops, sides = self.tile_floes[k]
-                self.floe["thickness"].value = self.template_thickness[view.placements[k].template]
-                tops.render()
-                if full:
-                    sides.render()
+        dist = np.hypot(gap[:, 0], gap[:, 1])
+        return [(k, float(d)) for k, show, d in zip(keys, seen, dist) if show]
+
+    def _draw_floes(self, view: WorldView, tiles: list[tuple[int, float]]) -> None:
+        """The tiles' broken floes; their side faces only within the level-of-detail distance."""
+        for k, dist in tiles:
+            tops, sides = self.tile_floes[k]
+            self.floe["thickness"].value = self.template_thickness[view.placements[k].template]
+            tops.render()
+            if dist < self.settings.lod_distance_m:
+                sides.render()
+
+    def _draw_reflections(self, view: WorldView, tiles: list[tuple[int, float]]) -> None:
+        """The floes' reflections in the sea, within the reflection distance: their side
+        faces above the water, mirrored in the water plane and blended over the sea by its
+        Fresnel share (tops, seen from below the water, are culled). Polygon offset puts a
+        mirrored freeboard before the submerged part of the same side, in whose plane it lies."""
+        near = [(k, d) for k, d in tiles if d < self.settings.reflection_distance_m]
+        if not near:
+            return
+        ctx = self.ctx
+        ctx.enable_direct(GL_CLIP_DISTANCE0)
+        ctx.enable(moderngl.CULL_FACE | moderngl.BLEND)
+        ctx.front_face = "cw"  # the mirror turns the winding
+        ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
+        ctx.polygon_offset = -1.0, -1.0
+        self.floe["reflected"].value = True
+        for k, _ in near:
+            self.floe["thickness"].value = self.template_thickness[view.placements[k].template]
+            self.tile_floes[k][1].render()
+        self.floe["reflected"].value = False
+        ctx.polygon_offset = 0.0, 0.0
+        ctx.front_face = "ccw"
+        ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
+        ctx.disable_direct(GL_CLIP_DISTANCE0)
 
     def _ship_matrices(self, view: WorldView, cam: Camera) -> list[np.ndarray]:
         """Ship frame to world of the own ship and of each other vessel in view and within the

@@ -4,9 +4,9 @@ World frame: x east, y north, z up, metres. The channel's edge blending is a las
 the blend bands only, multiplying what is there by each column's factor.
 
 Looks: level ice and floe tops are snow (or, thin, grey nilas) with relief and albedo from
-octaves of procedural noise; floe sides show the blue-green of sea ice, turquoise under
-the water and darkened at the waterline; the sea reflects the sky by Fresnel through slight
-waves; everything is lit by the sun and the sky of the moment and the own ship's
+octaves of procedural noise; floe sides show the blue-green of sea ice, darkened at the
+waterline, and ice under the water shows through it, pale blue-green, fading with depth;
+the sea reflects the sky and the floes by Fresnel through slight waves; everything is lit by the sun and the sky of the moment and the own ship's
 searchlights, and fogged by the visibility.
 """
 import math
@@ -112,14 +112,16 @@ vec3 ice_surface(vec3 snow, float h, vec3 world) {
     return lit(ice_albedo(h) * albedo, n, world);
 }
 uniform vec3 water_colour;
+// the share of the light the sea mirrors along r off a surface of normal n: Schlick's
+// Fresnel (2 % at normal incidence), which the waves' roughness (shadowing and masking)
+// keeps below 70 % at grazing angles (Lagarde 2011)
+float fresnel(vec3 r, vec3 n) { return 0.02 + 0.68 * pow(1.0 - max(dot(-r, n), 0.0), 5.0); }
 // the sea seen along r through a surface of normal n: its body (what is under it) and the
-// sky it mirrors, weighed by Schlick's Fresnel (2 % at normal incidence), which the waves'
-// roughness (shadowing and masking) keeps below 70 % at grazing angles (Lagarde 2011)
+// sky it mirrors
 vec3 through_surface(vec3 r, vec3 n, vec3 body) {
     vec3 mirror = reflect(r, n);
     mirror.z = abs(mirror.z);
-    float fresnel = 0.02 + 0.68 * pow(1.0 - max(dot(-r, n), 0.0), 5.0);
-    return mix(body, sky(mirror), fresnel);
+    return mix(body, sky(mirror), fresnel(r, n));
 }
 vec3 water_body(vec3 world) {
     return water_colour * (direct * max(sun.z, 0.0) + ambient + searchlit(world, vec3(0.0, 0.0, 1.0)));
@@ -217,16 +219,17 @@ void main() {
 }
 """
 
-FLOE_VS = """
-#version 330
+SEEN_DEPTH = 4.0  # m: floes are drawn down to this depth (deeper ice is lost in the sea)
+FLOE_VS = f"\n#version 330\nconst float SEEN_DEPTH = {SEEN_DEPTH};" + """
 uniform mat4 view_proj;
 uniform sampler2D pose_a;        // x, y, heave, yaw
 uniform sampler2D pose_b;        // roll, pitch, status, unused
 uniform int pose_width;
+uniform bool reflected;          // drawn mirrored in the water plane: the floes' reflections
 in vec3 in_pos;                  // about the cell's centroid, template frame, m
 in vec3 in_normal;
 in int in_row;                   // the floe's row in the state arrays
-out vec3 world;
+out vec3 world;                  // the point itself (also when its reflection is drawn), m
 out vec3 normal;
 out vec2 local;                  // relief coordinates that move with the floe, m
 flat out int top;
@@ -243,19 +246,27 @@ void main() {
     normal = r * in_normal;
     local = in_pos.xy + 31.7 * vec2(in_row % 61, in_row % 59);  // each floe its own patch of snow
     top = in_normal.z > 0.5 ? 1 : 0;
-    gl_ClipDistance[0] = world.z + 1.5;  // ice deeper than 1.5 m is lost in the sea
-    gl_Position = view_proj * vec4(world, 1.0);
+    // ice deeper than SEEN_DEPTH is lost in the sea; only what is above the water is mirrored
+    gl_ClipDistance[0] = reflected ? world.z : world.z + SEEN_DEPTH;
+    gl_Position = view_proj * vec4(world.xy, reflected ? -world.z : world.z, 1.0);
 }
 """
 # Floe tops are the level ice they broke from; sides show the blue-green of sea ice,
-# darkened at the waterline and turquoise, fading into the sea, below it.
+# darkened at the waterline. Under the water (floes the bow turned under) the ice is seen
+# through the surface as pale blue-green slabs, fading into the sea's body with depth.
+# Reflected (drawn mirrored, blended over the sea as premultiplied colour and alpha: the
+# Fresnel share), a floe's part above the water shows in the sea below its waterline.
 FLOE_FS = "#version 330\n" + _COMMON + """
+const vec3 UNDER_WATER = vec3(0.55, 0.88, 0.85);  // ice seen through the sea: the red absorbed first
+const float FADE_DEPTH = 1.2;    // m: depth over which submerged ice fades into the sea's body (1/e)
 uniform float thickness;         // m: the tile's level ice
+uniform bool reflected;
 in vec3 world;
 in vec3 normal;
 in vec2 local;
 flat in int top;
 out vec4 colour;
+float waterline(float z) { return mix(0.45, 1.0, smoothstep(0.0, 0.06, z)); }  // wet and dark at the water
 void main() {
     vec3 snow = snow_under(local, distance(world, eye));
     vec3 n = normalize(normal);
@@ -267,12 +278,17 @@ void main() {
     } else {
         c = lit(mix(vec3(0.42, 0.50, 0.53), vec3(0.30, 0.62, 0.64), smoothstep(0.1, 0.5, thickness)), n, world);
     }
-    vec3 r = normalize(world - eye);
+    if (reflected) {
+        vec3 image = vec3(world.xy, -world.z);
+        float share = fresnel(normalize(image - eye), vec3(0.0, 0.0, 1.0));
+        colour = vec4(share * fogged(c * waterline(world.z), image), share);
+        return;
+    }
     if (world.z < 0.0)
-        c = through_surface(r, vec3(0.0, 0.0, 1.0),
-                            mix(c * vec3(0.45, 0.85, 0.85), water_body(world), 1.0 - exp(world.z / 0.4)));
+        c = through_surface(normalize(world - eye), vec3(0.0, 0.0, 1.0),
+                            mix(water_body(world), c * UNDER_WATER, exp(world.z / FADE_DEPTH)));
     else
-        c *= mix(0.45, 1.0, smoothstep(0.0, 0.06, world.z));  // wet, dark waterline
+        c *= waterline(world.z);
     colour = opaque(fogged(c, world));
 }
 """
