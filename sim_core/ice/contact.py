@@ -154,7 +154,8 @@ class TileBodies:
             body, shape = cast("cpBody *", b), cast("cpShape *", p)
             if inside:
                 lib.cpSpaceRemoveShape(space, shape)
-                lib.cpSpaceRemoveBody(space, body)
+                if lib.cpBodyGetSpace(body) != ffi.NULL:  # a resting floe's body is not (``rest``)
+                    lib.cpSpaceRemoveBody(space, body)
             lib.cpShapeFree(shape)
             lib.cpBodyFree(body)
         self.intact[offsets] = self.floe_body[offsets] = self.floe_shape[offsets] = 0
@@ -615,12 +616,16 @@ class ContactSpace:
         work; moving floes still collide with them). Their arrays keep the pose and the
         velocity they came to rest with. Each shape leaves the space and comes back, so that
         Chipmunk forgets its contacts: it keeps contacts between static bodies for good, and
-        every step would list them again."""
+        every step would list them again. Then the body leaves the space's body lists and
+        its shape stays: Chipmunk needs a shape's body in the space only when the shape goes
+        in, and collides a static shape through the shape alone, while ``read_free`` (which
+        walks every body the space lists) no longer reads the resting floes back."""
         for b, p in zip(self._floe_bodies(state, rows), self._floe_shapes(state, rows)):
-            shape = _shape(p)
+            shape, body = _shape(p), _body(b)
             lib.cpSpaceRemoveShape(self._cp, shape)
-            lib.cpBodySetType(_body(b), lib.CP_BODY_TYPE_STATIC)
+            lib.cpBodySetType(body, lib.CP_BODY_TYPE_STATIC)
             lib.cpSpaceAddShape(self._cp, shape)
+            lib.cpSpaceRemoveBody(self._cp, body)
         state.resting[rows] = True
 
     def wake(self, state: FloeState, rows: np.ndarray) -> None:
@@ -631,7 +636,8 @@ class ContactSpace:
         for p, mass, moment, v, w in zip(self._floe_bodies(state, rows), m.mass[g].tolist(), m.inertia[g, 2].tolist(),
                                          state.vel[rows].tolist(), state.yaw_rate[rows].tolist()):
             body = _body(p)
-            lib.cpBodySetType(body, lib.CP_BODY_TYPE_DYNAMIC)  # Chipmunk sums mass from the shapes: none here
+            lib.cpSpaceAddBody(self._cp, body)  # static, with its shape in the space's static index
+            lib.cpBodySetType(body, lib.CP_BODY_TYPE_DYNAMIC)  # moves the shape to the dynamic index; no mass from it
             lib.cpBodySetMass(body, mass)
             lib.cpBodySetMoment(body, moment)
             lib.cpBodySetVelocity(body, (v[0], v[1]))
