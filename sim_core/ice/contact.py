@@ -397,6 +397,7 @@ class ContactSpace:
         verts = [lib.cpPolyShapeGetVert(hull_shape, i) for i in range(lib.cpPolyShapeGetCount(hull_shape))]
         self.hull_outline = np.array([(v.x, v.y) for v in verts])
         self.hull_half_beam = float(np.abs(self.hull_outline[:, 1]).max())
+        self.hull_stem = float(self.hull_outline[:, 0].max())  # m forward of the reference point
         self._hull_box = np.array([self.hull_outline[:, 0].min(), self.hull_outline[:, 0].max(),
                                    self.hull_outline[:, 1].min(), self.hull_outline[:, 1].max()])
         self._hull_pose = (np.zeros(2), 0.0)

@@ -61,7 +61,8 @@ class IceStepReport:
 def _hard_pushes(a, b, impulse, normal, status, velocity, gcell, mass, k_impact, ride_load, edge_capacity):
     """Of contacts between a free floe (striker) and an intact cell (target): the targets
     broken (pushed hard, ``breaking.pushed_hard``, by a striker whose ride-up load reaches
-    the edge's capacity), and the strikers pushed hard that could and could not break."""
+    the edge's capacity), and the strikers pushed hard that could break nothing; both sorted,
+    each row once."""
     broken, strong, weak = np.empty(len(a), np.int64), np.empty(len(a), np.int64), np.empty(len(a), np.int64)
     nb = ns = nw = 0
     for k in range(len(a)):
@@ -85,7 +86,14 @@ def _hard_pushes(a, b, impulse, normal, status, velocity, gcell, mass, k_impact,
         else:
             weak[nw] = striker
             nw += 1
-    return broken[:nb], strong[:ns], weak[:nw]
+    strong, weak = np.unique(strong[:ns]), np.unique(weak[:nw])
+    keep = np.ones(len(weak), np.bool_)  # weak strikers that broke nothing elsewhere: both sorted, a merge
+    j = 0
+    for k in range(len(weak)):
+        while j < len(strong) and strong[j] < weak[k]:
+            j += 1
+        keep[k] = j == len(strong) or strong[j] != weak[k]
+    return np.unique(broken[:nb]), weak[keep]
 
 
 def _contact_breaks(model: IceModel, st: FloeState, con: Contacts,
@@ -93,9 +101,8 @@ def _contact_breaks(model: IceModel, st: FloeState, con: Contacts,
     """Intact rows whose contact with a free floe broke them this step (the energy it
     brought and the load its striker can put on the edge, ``breaking.breaks``), and the free
     floes pushed hard against an edge they cannot break: jammed, they go under it."""
-    broken, strong, weak = _hard_pushes(con.a, con.b, con.impulse, con.normal, st.status, velocity, st.gcell,
-                                        model.mass, model.k_impact, model.ride_load, model.edge_capacity)
-    return np.unique(broken), np.setdiff1d(weak, strong)
+    return _hard_pushes(con.a, con.b, con.impulse, con.normal, st.status, velocity, st.gcell, model.mass,
+                        model.k_impact, model.ride_load, model.edge_capacity)
 
 
 def _hull_load(impulse: np.ndarray, point: np.ndarray, hull: HullMotion, dt: float) -> tuple[np.ndarray, float]:
@@ -194,7 +201,7 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
         st.vel[under] = 0.0
         st.yaw_rate[under] = 0.0
     up = _surfacing(st.submerged, st.xy, hull.xy, c, s, space.hull_outline, space.hull_half_beam + _BESIDE,
-                    float(space.hull_outline[:, 0].max()), _CLEAR_AHEAD)
+                    space.hull_stem, _CLEAR_AHEAD)
     if len(up):
         st.submerged[up] = False
         space.set_submerged(st, up, False)
