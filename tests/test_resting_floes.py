@@ -11,7 +11,7 @@ from sim_core.ice.contact import Contacts
 from sim_core.ice.floes import BreakCause
 from sim_core.ice.model import IceDynamicsSettings, compile_ice_model
 from sim_core.ice.step import HullMotion, ice_step
-from sim_core.ice.tiles import break_cells, new_ice_data, place_tile
+from sim_core.ice.tiles import break_cells, freeze_tile, new_ice_data, place_tile, thaw_tile
 
 DT = 1 / 30
 FAR = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
@@ -96,3 +96,25 @@ def test_a_steady_push_too_small_for_one_step_adds_up_until_the_floe_wakes(reste
     assert steps > 1  # not the first push alone
     assert not st.resting[target]  # the pushes added up and woke it
     np.testing.assert_allclose(st.vel[target], start + steps * each / mass * toward, rtol=1e-5, atol=1e-7)
+
+
+def test_a_tile_frozen_with_resting_floes_thaws_with_their_pose_and_momentum(rested):
+    model, data, loose = rested
+    st = data.state
+    assert st.resting[loose].all()
+    held = st.xy[loose].copy(), st.yaw[loose].copy(), st.vel[loose].copy(), st.yaw_rate[loose].copy()
+    tile = int(st.tile[loose[0]])
+    freeze_tile(data, tile)
+    while data.contacts.swaps_pending:  # the resting floes' objects leave the space over the steps
+        ice_step(model, data, FAR, DT)
+    assert not st.resting[loose].any() and not data.contacts.has_tile(tile)
+    for now, then in zip((st.xy[loose], st.yaw[loose], st.vel[loose], st.yaw_rate[loose]), held):
+        np.testing.assert_array_equal(now, then)  # frozen: the pose and momentum they rested with
+    thaw_tile(data, tile)
+    steps = 0
+    while data.contacts.swaps_pending:
+        ice_step(model, data, FAR, DT)
+        steps += 1
+    assert set(loose.tolist()) <= set(data.contacts.read_free(st).tolist())  # dynamic bodies again
+    drift = np.hypot(*(st.xy[loose] - held[0]).T)
+    assert drift.max() <= np.hypot(*held[2].T).max() * steps * DT + 1e-6  # moving on from where they froze
