@@ -10,7 +10,10 @@ Targets: llvmpipe, 3 channels at 1280x720 with 3000 floes >= 15 FPS; GPU, 5 chan
 Run: .venv/bin/python benchmarks/bench_render.py [--frames N]
      .venv/bin/python benchmarks/bench_render.py --compare [--frames N]
      .venv/bin/python benchmarks/bench_render.py --case 3:1280x720:3000 [--frames N]
+     .venv/bin/python benchmarks/bench_render.py --compare-rev HEAD [--frames N]
 --case measures one setup only (channels:WIDTHxHEIGHT:floes), without the baseline.
+--compare-rev REV measures the llvmpipe target's case with the render code (bridge_node/render)
+of git revision REV against the working tree's, interleaved likewise.
 --compare-reflections measures the llvmpipe target's case without the floes' reflections
 in the sea (render.reflection_distance_m = 0) against the defaults, interleaved likewise.
 --compare measures only the llvmpipe target's case (3 channels at 1280x720, 3000 floes):
@@ -23,8 +26,14 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import importlib
 import os
+import subprocess
+import sys
+import tempfile
 import time
+import types
+from pathlib import Path
 
 import moderngl
 import numpy as np
@@ -93,16 +102,43 @@ BEFORE = {"msaa_samples": 4, "relief_reach_m": 1.0e7}  # the look before its che
 NO_REFLECTIONS = {"reflection_distance_m": 0.0}  # the look before the floes' reflections
 
 
-def compare(ctx, frames: int, before: dict, bilinear_before: bool) -> None:
+def render_package(rev: str) -> types.ModuleType:
+    """bridge_node.render as it was at git revision `rev`, imported under another name."""
+    name = "render_" + "".join(c if c.isalnum() else "_" for c in rev)
+    folder = Path(tempfile.mkdtemp(prefix="bench_render_"))
+    repo = Path(__file__).resolve().parents[1]
+    for path in subprocess.run(["git", "ls-tree", "--name-only", rev, "bridge_node/render/"], cwd=repo,
+                               check=True, capture_output=True, text=True).stdout.split():
+        source = subprocess.run(["git", "show", f"{rev}:{path}"], cwd=repo, check=True, capture_output=True,
+                                text=True).stdout
+        (folder / name).mkdir(exist_ok=True)
+        (folder / name / Path(path).name).write_text(source.replace("bridge_node.render", name))
+    sys.path.insert(0, str(folder))
+    return importlib.import_module(name)
+
+
+def compare(ctx, frames: int, before: dict, bilinear_before: bool, rev: str | None = None) -> None:
     """Frame times of the look with the `before` settings (and bilinear noise fetches if
-    asked) and of the defaults, interleaved."""
+    asked; with the render code of git revision `rev` if given) and of the defaults with the
+    working tree's code, interleaved."""
     model, data, _ = world_with_floes(3000)
     chans = channels(3, 1280, 720)
     looks = {"before": before, "after": {}}
+    old = None
+    if rev is not None:
+        pkg = render_package(rev)
+        old = (importlib.import_module(f"{pkg.__name__}.channels"), importlib.import_module(f"{pkg.__name__}.renderer"),
+               importlib.import_module(f"{pkg.__name__}.settings"))
     sets = []
     for name, look in looks.items():
         view = fresh_view(model, data)
-        cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=chans, **look)), chans)
+        chan_mod, rend_mod, set_mod = old if old and name == "before" else (None, None, None)
+        if chan_mod is not None:
+            old_chans = [set_mod.ChannelSettings(**c.model_dump()) for c in chans]
+            cs = chan_mod.ChannelSet(rend_mod.SceneRenderer(ctx, model, set_mod.RenderSettings(
+                channels=old_chans, **look)), old_chans)
+        else:
+            cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=chans, **look)), chans)
         if bilinear_before and name == "before":
             cs.renderer.noise.filter = moderngl.LINEAR_MIPMAP_NEAREST, moderngl.LINEAR
         cs.render(view)  # warm-up
@@ -127,12 +163,17 @@ def main() -> None:
     ap.add_argument("--compare", action="store_true", help="before/after the cheaper shading, llvmpipe target only")
     ap.add_argument("--compare-reflections", action="store_true",
                     help="without/with the floes' reflections, llvmpipe target only")
+    ap.add_argument("--compare-rev", metavar="REV",
+                    help="the render code of git revision REV against the working tree's, llvmpipe target only")
     ap.add_argument("--case", help="one setup only, CHANNELS:WIDTHxHEIGHT:FLOES (e.g. 3:1280x720:3000)")
     args = ap.parse_args()
     ctx = create_context()
     print(f"render benchmark on {ctx.info['GL_RENDERER']} ({ctx.info['GL_VERSION']})")
     if args.compare or args.compare_reflections:
         compare(ctx, args.frames, BEFORE if args.compare else NO_REFLECTIONS, args.compare)
+        return
+    if args.compare_rev:
+        compare(ctx, args.frames, {}, False, args.compare_rev)
         return
     if args.case:
         n, size, floes = args.case.split(":")

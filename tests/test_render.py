@@ -11,7 +11,8 @@ from conftest import exercise_config, run_cli
 from bridge_node.node.config import ConfigError, load_config
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
-from bridge_node.render.renderer import SceneRenderer
+from bridge_node.render.camera import channel_camera
+from bridge_node.render.renderer import SceneRenderer, horizon_split
 from bridge_node.render.settings import ChannelSettings, RenderSettings
 from bridge_node.render.warp import WarpError, write_pfm
 from bridge_node.stream.world_view import WorldView
@@ -104,6 +105,26 @@ def test_horizon_sits_where_pitch_and_fov_put_it(ctx, exercise, pitch):
     y_ndc = -math.tan(math.radians(pitch)) / math.tan(c.vfov() / 2)
     expected = (1 - y_ndc) / 2 * H
     assert abs(first_dark - expected) <= 1.5
+
+
+def triangle_area(tris: np.ndarray) -> float:
+    """Summed area of triangles (3 m, 2+) in their first two coordinates."""
+    a, b, c = tris[0::3, :2], tris[1::3, :2], tris[2::3, :2]
+    return float(np.abs(np.cross(b - a, c - a)).sum() / 2)
+
+
+@pytest.mark.parametrize("pitch", [0.0, -10.0, 60.0, -60.0])
+def test_environment_and_sky_passes_split_the_screen_at_the_horizon(pitch):
+    c = channel(pitch_deg=pitch)
+    cam = channel_camera(c, (0.0, 0.0, 30.0), 0.0, 0.0, 0.3, 20_000.0)
+    tx, ty = math.tan(math.radians(c.hfov_deg) / 2), math.tan(c.vfov() / 2)
+    ground, sky = horizon_split(cam, tx, ty, c.width, c.height)
+    assert triangle_area(ground) + triangle_area(sky) == pytest.approx(4.0)  # the whole screen, once
+    horizon = np.clip(-math.tan(math.radians(pitch)) / ty, -1.0, 1.0)  # NDC y
+    assert triangle_area(ground) / 4.0 == pytest.approx((1.0 + horizon) / 2.0, abs=0.01)
+    band = 2.0 * ty / c.height * math.cos(math.radians(pitch))  # one pixel row's change of the ray's z
+    assert np.all(sky[:, 4] >= band - 1e-9)  # the sky pass starts above the horizon's blended pixels
+    assert np.all(ground[:, 4] <= 1.5 * band)
 
 
 def neighbours():

@@ -28,6 +28,7 @@ import moderngl
 import numpy as np
 
 from bridge_node.render import shaders
+from bridge_node.render.shaders import POSE_WIDTH
 from bridge_node.render.camera import (
     Camera,
     channel_camera,
@@ -52,13 +53,39 @@ from sim_core.world import WorldModel
 
 GL_CLIP_DISTANCE0 = 0x3000
 FLOE_DRIFT_MARGIN = 30.0  # m: broken floes may drift this far out of their tile
-POSE_WIDTH = 2048  # texels per line of the pose textures
 MAX_TILES = 4096 * 4096  # tile table of 8 bytes per tile: 134 MB of texture at most
 RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m tiles)
 WATER = (0.04, 0.09, 0.11)  # the sea's body colour (albedo of the light it sends back up)
 NOISE_UNIT, THICKNESS_UNIT = 8, 9  # texture units of the relief noise and the tile thicknesses
 NAV_LIGHT_LUX = 10.0  # lux: daylight below which navigation lights show at full strength (civil dusk)
 EYE_WHITE_LUX = 40.0  # lux a surface needs to look white to eyes adapted to the night
+
+
+def _clip(poly: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """The part of a convex polygon (n, k) where the linear function f (values at its
+    vertices) is <= 0, as a triangle fan's triangles (3 m, k)."""
+    out = []
+    for a, b, fa, fb in zip(poly, np.roll(poly, -1, 0), f, np.roll(f, -1)):
+        if fa <= 0:
+            out.append(a)
+        if (fa <= 0) != (fb <= 0):
+            out.append(a + (b - a) * (fa / (fa - fb)))
+    if len(out) < 3:
+        return np.zeros((0, poly.shape[1]))
+    return np.array([v for k in range(1, len(out) - 1) for v in (out[0], out[k], out[k + 1])])
+
+
+def horizon_split(cam: Camera, tx: float, ty: float, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """The screen split along the horizon for the environment pass (below, over the band
+    of pixels the horizon's anti-aliasing spans) and the sky pass (above): triangles of
+    (NDC x, y, view ray x, y, z), the rays linear in the screen; tx, ty: tangents of half
+    the fields of view. The split lies where the ray's z is one pixel's change of it (on
+    both axes) above 0: past the half pixel that the environment pass blends."""
+    corners = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    rays = -cam.view[2, :3] + corners[:, :1] * tx * cam.view[0, :3] + corners[:, 1:] * ty * cam.view[1, :3]
+    band = 2.0 * (abs(tx * cam.view[0, 2]) / width + abs(ty * cam.view[1, 2]) / height)
+    quad, f = np.hstack([corners, rays]), rays[:, 2] - band
+    return _clip(quad, f), _clip(quad, -f)
 
 
 class _FloeBuffer:
@@ -106,8 +133,11 @@ class SceneRenderer:
         self.band = ctx.program(vertex_shader=shaders.BAND_VS, fragment_shader=shaders.BAND_FS)
         self.band_buf = ctx.buffer(reserve=2 * 6 * 2 * 4)
         self.band_vao = ctx.vertex_array(self.band, [(self.band_buf, "2f", "in_ndc")])
-        self.env_buf = ctx.buffer(reserve=3 * 5 * 4)
+        self.sky_prog = ctx.program(vertex_shader=shaders.ENV_VS,
+                                    fragment_shader=shaders.with_lights(shaders.SKY_FS, lights))
+        self.env_buf = ctx.buffer(reserve=2 * 9 * 5 * 4)  # ground, then sky: 3 triangles each at most
         self.env_vao = ctx.vertex_array(self.env, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
+        self.sky_vao = ctx.vertex_array(self.sky_prog, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
         if scene.nx * scene.ny > MAX_TILES:
             raise ValueError(f"the renderer draws fields of up to {MAX_TILES} tiles; "
                              f"this one has {scene.nx * scene.ny}")
@@ -276,19 +306,22 @@ class SceneRenderer:
         if tiles:
             ctx.enable_direct(GL_CLIP_DISTANCE0)
             ctx.enable(moderngl.CULL_FACE)  # not for the ship: its matrix mirrors (starboard-handed frame)
-            self._set(self.floe, view_proj=vp, pose_a=4, pose_b=5, pose_width=POSE_WIDTH, reflected=False, **common)
+            self._set(self.floe, view_proj=vp, pose_a=4, pose_b=5, reflected=False, **common)
             self._draw_floes(view, tiles)
             ctx.disable(moderngl.CULL_FACE)
             ctx.disable_direct(GL_CLIP_DISTANCE0)
-        tx, ty = math.tan(half), math.tan(channel.vfov() / 2)
-        corners = np.array([[-1, -1], [3, -1], [-1, 3]], dtype=float)
-        rays = -cam.view[2, :3] + corners[:, :1] * tx * cam.view[0, :3] + corners[:, 1:] * ty * cam.view[1, :3]
-        self.env_buf.write(np.hstack([corners, rays]).astype("f4").tobytes())
+        ground, above = horizon_split(cam, math.tan(half), math.tan(channel.vfov() / 2), channel.width,
+                                      channel.height)
+        self.env_buf.write(np.vstack([ground, above]).astype("f4").tobytes())
         scene = self.model.scene
-        self._set(self.env, slab_z=self.slab_z, far=s.far_m, tile_info=0, tile_thickness=THICKNESS_UNIT,
-                  cell_raster=3, raster_size=self.raster_size, rim_px=self.rim_px, status=7, pose_width=POSE_WIDTH,
-                  field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
-        self.env_vao.render()
+        if len(ground):
+            self._set(self.env, slab_z=self.slab_z, far=s.far_m, tile_info=0, tile_thickness=THICKNESS_UNIT,
+                      cell_raster=3, raster_size=self.raster_size, rim_px=self.rim_px, status=7,
+                      field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
+            self.env_vao.render(vertices=len(ground))
+        if len(above):
+            self._set(self.sky_prog, **common)
+            self.sky_vao.render(vertices=len(above), first=len(ground))
         if tiles:
             self._draw_reflections(view, tiles)
         self._draw_nav_lights(ships, cam, channel.height)

@@ -15,6 +15,8 @@ from bridge_node.render.textures import NOISE_RANGE
 
 
 PERIODS = (23.0, 290.0, 2100.0)  # m: of the relief's three noise fetches
+POSE_WIDTH = 2048  # texels per line of the pose textures: a power of two, a constant in the shaders (on
+                   # llvmpipe, division by a uniform is done lane by lane and cost the level ice a tenth)
 
 
 def _octaves() -> str:
@@ -31,6 +33,7 @@ def _octaves() -> str:
             f"const mat2 OCTAVE[OCTAVES] = mat2[]({', '.join(r[0] for r in rows)});\n"
             f"const vec2 OCTAVE_AMP[OCTAVES] = vec2[]({', '.join(r[1] for r in rows)});\n"
             f"const vec3 NOISE_RANGE = vec3{NOISE_RANGE};\n"
+
             f"const float OCTAVE_SCALE[OCTAVES] = float[]({', '.join(f'{p / PERIODS[0]:.6g}' for p in PERIODS)});\n")
 
 
@@ -144,7 +147,15 @@ in vec3 in_ray;                  // world direction through this corner (linear 
 out vec3 ray;
 void main() { ray = in_ray; gl_Position = vec4(in_ndc, 0.9999, 1.0); }
 """
-# One full-screen pass draws sky, sea and level ice. Each pixel's view ray is intersected
+# The sky above the horizon band (see ENV_FS) is a pass of its own: on llvmpipe a branch
+# does not skip work, so within one pass every sky pixel would pay for the ground.
+SKY_FS = "#version 330\n" + _COMMON + """
+in vec3 ray;
+out vec4 colour;
+void main() { colour = opaque(sky(normalize(ray))); }
+"""
+# One pass below the horizon (and over its anti-aliased band) draws sea and level ice, and
+# the sky in the band's pixels above the horizon. Each pixel's view ray is intersected
 # with the water plane and with the ice top: on an unbreakable tile that is ice; on a
 # breakable or frozen tile the template's cell raster names the cell under the point, and
 # the cell's status (from the pose texture) says intact ice or water between broken floes.
@@ -159,12 +170,12 @@ uniform usampler2D cell_raster;  // templates stacked in y: 1 + cell index (0 in
 uniform float rim_px;
 uniform int raster_size;
 uniform usampler2D status;       // per floe row: 0 intact, 1 free, 2 frozen
-uniform int pose_width;
+const int POSE_WIDTH = """ + str(POSE_WIDTH) + """;
 uniform vec2 field_size;         // m
 uniform float tile_side;
 in vec3 ray;
 out vec4 colour;
-uint row_status(int row) { return texelFetch(status, ivec2(row % pose_width, row / pose_width), 0).r; }
+uint row_status(int row) { return texelFetch(status, ivec2(row % POSE_WIDTH, row / POSE_WIDTH), 0).r; }
 // Whether level ice lies at p, and its rim: 1 at the edge of a broken neighbour (open
 // water), falling to 0 at rim_px pixels of the raster from it.
 bool level_ice(vec2 p, ivec2 tile, out float rim) {
@@ -224,7 +235,7 @@ FLOE_VS = f"\n#version 330\nconst float SEEN_DEPTH = {SEEN_DEPTH};" + """
 uniform mat4 view_proj;
 uniform sampler2D pose_a;        // x, y, heave, yaw
 uniform sampler2D pose_b;        // roll, pitch, status, unused
-uniform int pose_width;
+const int POSE_WIDTH = """ + str(POSE_WIDTH) + """;
 uniform bool reflected;          // drawn mirrored in the water plane: the floes' reflections
 in vec3 in_pos;                  // about the cell's centroid, template frame, m
 in vec3 in_normal;
@@ -234,7 +245,7 @@ out vec3 normal;
 out vec2 local;                  // relief coordinates that move with the floe, m
 flat out int top;
 void main() {
-    ivec2 at = ivec2(in_row % pose_width, in_row / pose_width);
+    ivec2 at = ivec2(in_row % POSE_WIDTH, in_row / POSE_WIDTH);
     vec4 a = texelFetch(pose_a, at, 0);
     vec4 b = texelFetch(pose_b, at, 0);
     float cr = cos(b.x), sr = sin(b.x), cp = cos(b.y), sp = sin(b.y), cy = cos(a.w), sy = sin(a.w);
