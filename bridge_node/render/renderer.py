@@ -3,11 +3,11 @@
 GPU data mirrors the MuJoCo-style split of the simulation. Static: every template cell's
 triangles about its centroid (seen from above the water: no bottom faces), each template's
 cell raster (which cell covers each 0.1 m of the tile), the own ship's mesh. Dynamic: two
-float textures holding every floe row's pose (x, y, heave, yaw; roll, pitch, status) and a
-byte texture of each row's status, a tile table (each placed tile's first floe row,
-template and rotation; -1 for the unbreakable slab), and per tile the vertex buffers of its
+float textures holding every floe row's pose (its attitude as a quaternion, made on the
+CPU; x, y, heave) and a byte texture of each row's status, a tile table (each placed
+tile's first floe row, template and rotation; -1 for the unbreakable slab), and per tile the vertex buffers of its
 broken floes (tops and sides apart), to which a cell's template triangles are appended
-once, when it breaks; the vertex shader places them by the pose texture. A tile's floes
+once, when it breaks; the vertex shader places them by the pose textures. A tile's floes
 are drawn only when its box is in the channel's view, their side faces only within the
 level-of-detail distance; within the reflection distance their side faces are drawn once
 more, mirrored in the water plane over the sea, as their reflections. Level ice
@@ -16,7 +16,7 @@ environment pass from the cell raster, so it
 costs no triangles: on a software rasteriser the vertex work of thousands of intact cells
 would dominate the frame. Per frame only the poses of tiles placed or simulated since the
 last frame are uploaded; frozen tiles cost nothing. Also static: the relief noise texture
-(mipmapped) and each tile's level-ice thickness; per frame, the sun and sky of the
+(mipmapped) and each tile's level-ice thickness (in the tile table); per frame, the sun and sky of the
 exercise's time and the ship's place.
 """
 from __future__ import annotations
@@ -56,9 +56,21 @@ FLOE_DRIFT_MARGIN = 30.0  # m: broken floes may drift this far out of their tile
 MAX_TILES = 4096 * 4096  # tile table of 8 bytes per tile: 134 MB of texture at most
 RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m tiles)
 WATER = (0.04, 0.09, 0.11)  # the sea's body colour (albedo of the light it sends back up)
-NOISE_UNIT, THICKNESS_UNIT = 8, 9  # texture units of the relief noise and the tile thicknesses
+NOISE_UNIT = 8  # texture unit of the relief noise
+POSE_NAMES, POSE_UNITS = ("pose_q", "pose_t"), (4, 5)  # the floe pose textures and their units
 NAV_LIGHT_LUX = 10.0  # lux: daylight below which navigation lights show at full strength (civil dusk)
 EYE_WHITE_LUX = 40.0  # lux a surface needs to look white to eyes adapted to the night
+
+
+def pose_textures(pose: np.ndarray) -> np.ndarray:
+    """The pose textures' texels (2, n, 4) of poses (n, 6): x, y, heave (m), yaw, roll, pitch
+    (rad): the unit quaternion (x, y, z, w) of Rz(yaw) Ry(pitch) Rx(roll), floe to world;
+    the place (x, y, heave, 0)."""
+    x, y, z, yaw, roll, pitch = pose.T
+    cy, sy, cp, sp, cr, sr = (f(a / 2) for a in (yaw, pitch, roll) for f in (np.cos, np.sin))
+    quaternion = [cy * cp * sr - sy * sp * cr, cy * sp * cr + sy * cp * sr, sy * cp * cr - cy * sp * sr,
+                  cy * cp * cr + sy * sp * sr]
+    return np.array([np.column_stack(quaternion), np.column_stack([x, y, z, np.zeros_like(x)])])
 
 
 def _clip(poly: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -141,8 +153,12 @@ class SceneRenderer:
         if scene.nx * scene.ny > MAX_TILES:
             raise ValueError(f"the renderer draws fields of up to {MAX_TILES} tiles; "
                              f"this one has {scene.nx * scene.ny}")
-        info = np.tile(np.array([-1, 0], "i4"), scene.nx * scene.ny)
-        self.tile_info = ctx.texture((scene.nx, scene.ny), 2, info.tobytes(), dtype="i4")
+        # per tile: first floe row (-1: unbreakable), template | quarter turns << 16, level-ice
+        # thickness (m, float bits), unused (4 components: on llvmpipe, fetches of 3 cost more)
+        self.tile_thickness = scene.class_thickness[scene.tile_class].astype("f4")
+        info = np.zeros((scene.nx * scene.ny, 4), "i4")
+        info[:, 0], info[:, 2] = -1, self.tile_thickness.view("i4")
+        self.tile_info = ctx.texture((scene.nx, scene.ny), 4, info.tobytes(), dtype="i4")
         self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST
         mesh = load_ship(model.ship.particulars, model.contour, settings.freeboard_m)
         self.ship_extent = mesh.bounds  # (2, 3): lower and upper corner, ship frame, m
@@ -163,14 +179,12 @@ class SceneRenderer:
         self.cell_raster.filter = moderngl.NEAREST, moderngl.NEAREST
         self.tile_floes: dict[int, tuple[_FloeBuffer, _FloeBuffer]] = {}  # placement -> (tops, sides)
         self._drawn = np.zeros(0, dtype=bool)
-        self.pose_a = self.pose_b = self.status = None
+        self.pose: list[moderngl.Texture] = []  # each floe row's attitude (quaternion) and place
+        self.status: moderngl.Texture | None = None
         self._pose_lines = 0
         h = model.ice.thickness.mean() if len(model.ice.thickness) else 0.0
         mat = model.ice.material
         self.slab_z = float(h * (1.0 - mat.density / mat.water_density))
-        thickness = scene.class_thickness[scene.tile_class].astype("f4")
-        self.tile_thickness = ctx.texture((scene.nx, scene.ny), 1, thickness.tobytes(), dtype="f4")
-        self.tile_thickness.filter = moderngl.NEAREST, moderngl.NEAREST
         self.template_thickness = [t.thickness for t in model.ice.templates]
         noise = relief_noise()
         self.noise = ctx.texture(noise.shape[:2], 4, noise.tobytes())
@@ -198,7 +212,8 @@ class SceneRenderer:
         nx = self.model.scene.nx
         for k in placements:
             p = view.placements[k]
-            info = np.array([p.row_start, p.template | (p.quarter_turns << 16)], "i4")
+            thickness = self.tile_thickness.view("i4")[p.tile]
+            info = np.array([p.row_start, p.template | (p.quarter_turns << 16), thickness, 0], "i4")
             self.tile_info.write(info.tobytes(), viewport=(p.tile % nx, p.tile // nx, 1, 1))
 
     def _append_broken(self, view: WorldView, broken: np.ndarray) -> None:
@@ -240,13 +255,13 @@ class SceneRenderer:
         if lines <= self._pose_lines:
             return False
         lines = max(lines, 2 * self._pose_lines)
-        for name, components, dtype in (("pose_a", 4, "f4"), ("pose_b", 4, "f4"), ("status", 1, "u1")):
-            old = getattr(self, name)
+        for old in [*self.pose, self.status]:
             if old is not None:
                 old.release()
-            tex = self.ctx.texture((POSE_WIDTH, lines), components, dtype=dtype)
+        self.pose = [self.ctx.texture((POSE_WIDTH, lines), 4, dtype="f4") for _ in POSE_UNITS]
+        self.status = self.ctx.texture((POSE_WIDTH, lines), 1, dtype="u1")
+        for tex in [*self.pose, self.status]:
             tex.filter = moderngl.NEAREST, moderngl.NEAREST
-            setattr(self, name, tex)
         self._pose_lines = lines
         return True
 
@@ -258,14 +273,11 @@ class SceneRenderer:
             return
         lines = math.ceil((r1 - r0) / POSE_WIDTH)
         n = min(lines * POSE_WIDTH, view.rows - r0)
-        a = np.zeros((lines * POSE_WIDTH, 4), dtype="f4")
-        b = np.zeros_like(a)
-        a[:n] = view.pose[r0:r0 + n, :4]  # x, y, heave, yaw
-        b[:n, :2] = view.pose[r0:r0 + n, 4:6]  # roll, pitch
-        b[:n, 2] = view.status[r0:r0 + n]
+        texels = np.zeros((len(self.pose), lines * POSE_WIDTH, 4), dtype="f4")
+        texels[:, :n] = pose_textures(view.pose[r0:r0 + n])
         viewport = (0, line0, POSE_WIDTH, lines)
-        self.pose_a.write(a.tobytes(), viewport=viewport)
-        self.pose_b.write(b.tobytes(), viewport=viewport)
+        for tex, line in zip(self.pose, texels):
+            tex.write(line.tobytes(), viewport=viewport)
         status = np.zeros(lines * POSE_WIDTH, dtype=np.uint8)
         status[:n] = view.status[r0:r0 + n]
         self.status.write(status.tobytes(), viewport=viewport)
@@ -289,10 +301,9 @@ class SceneRenderer:
         self.tile_info.use(0)
         self.cell_raster.use(3)
         self.noise.use(NOISE_UNIT)
-        self.tile_thickness.use(THICKNESS_UNIT)
-        if self.pose_b is not None:
-            self.pose_a.use(4)
-            self.pose_b.use(5)
+        for tex, unit in zip(self.pose, POSE_UNITS):
+            tex.use(unit)
+        if self.status is not None:
             self.status.use(7)
         # near to far: ship, floes, then the environment behind them, so that the depth test
         # spares the full-screen pass every pixel already covered
@@ -306,7 +317,7 @@ class SceneRenderer:
         if tiles:
             ctx.enable_direct(GL_CLIP_DISTANCE0)
             ctx.enable(moderngl.CULL_FACE)  # not for the ship: its matrix mirrors (starboard-handed frame)
-            self._set(self.floe, view_proj=vp, pose_a=4, pose_b=5, reflected=False, **common)
+            self._set(self.floe, view_proj=vp, **dict(zip(POSE_NAMES, POSE_UNITS)), reflected=False, **common)
             self._draw_floes(view, tiles)
             ctx.disable(moderngl.CULL_FACE)
             ctx.disable_direct(GL_CLIP_DISTANCE0)
@@ -315,7 +326,7 @@ class SceneRenderer:
         self.env_buf.write(np.vstack([ground, above]).astype("f4").tobytes())
         scene = self.model.scene
         if len(ground):
-            self._set(self.env, slab_z=self.slab_z, far=s.far_m, tile_info=0, tile_thickness=THICKNESS_UNIT,
+            self._set(self.env, slab_z=self.slab_z, far=s.far_m, tile_info=0,
                       cell_raster=3, raster_size=self.raster_size, rim_px=self.rim_px, status=7,
                       field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
             self.env_vao.render(vertices=len(ground))

@@ -163,8 +163,8 @@ void main() { colour = opaque(sky(normalize(ray))); }
 ENV_FS = "#version 330\n" + _COMMON + """
 uniform float slab_z;
 uniform float far;               // m: level ice is looked up this far
-uniform isampler2D tile_info;    // per tile: first floe row (-1: unbreakable), template | quarter turns << 16
-uniform sampler2D tile_thickness;  // per tile: level-ice thickness, m
+uniform isampler2D tile_info;    // per tile: first floe row (-1: unbreakable), template | quarter turns << 16,
+                                 // level-ice thickness (m, float bits), unused: one fetch for all three
 uniform usampler2D cell_raster;  // templates stacked in y: 1 + cell index (0 in a crack), 1 + the nearest
                                  // other cell's within rim_px (0: none), distance to it (1/256 px)
 uniform float rim_px;
@@ -178,9 +178,8 @@ out vec4 colour;
 uint row_status(int row) { return texelFetch(status, ivec2(row % POSE_WIDTH, row / POSE_WIDTH), 0).r; }
 // Whether level ice lies at p, and its rim: 1 at the edge of a broken neighbour (open
 // water), falling to 0 at rim_px pixels of the raster from it.
-bool level_ice(vec2 p, ivec2 tile, out float rim) {
+bool level_ice(vec2 p, ivec2 tile, ivec2 info, out float rim) {
     rim = 0.0;
-    ivec2 info = texelFetch(tile_info, tile, 0).rg;
     if (info.x < 0) return true;                                        // the unbreakable slab
     vec2 local = p - vec2(tile) * tile_side - 0.5 * tile_side;          // about the tile centre
     int k = info.y >> 16;                                               // undo the quarter turns
@@ -219,8 +218,9 @@ void main() {
     bool on_field = t < far && p.x >= 0.0 && p.y >= 0.0 && p.x < field_size.x && p.y < field_size.y;
     vec3 ground;
     float rim;
-    if (on_field && level_ice(p, tile, rim)) {
-        vec3 ice = ice_surface(snow, texelFetch(tile_thickness, tile, 0).r, vec3(p, slab_z));
+    ivec4 info = texelFetch(tile_info, tile, 0);
+    if (on_field && level_ice(p, tile, info.xy, rim)) {
+        vec3 ice = ice_surface(snow, intBitsToFloat(info.z), vec3(p, slab_z));
         ground = fogged(mix(ice, ice * WET, rim), vec3(p, slab_z));   // wet, darker along open water
     } else {  // the sea, out to the horizon
         vec3 at = eye - g * eye.z / g.z;
@@ -233,8 +233,9 @@ void main() {
 SEEN_DEPTH = 4.0  # m: floes are drawn down to this depth (deeper ice is lost in the sea)
 FLOE_VS = f"\n#version 330\nconst float SEEN_DEPTH = {SEEN_DEPTH};" + """
 uniform mat4 view_proj;
-uniform sampler2D pose_a;        // x, y, heave, yaw
-uniform sampler2D pose_b;        // roll, pitch, status, unused
+uniform sampler2D pose_q;        // per floe row: its attitude as a unit quaternion (x, y, z, w), and
+uniform sampler2D pose_t;        // its place (x, y, heave, m); made on the CPU from the yaw, roll and
+                                 // pitch, sparing each vertex six sines and cosines
 const int POSE_WIDTH = """ + str(POSE_WIDTH) + """;
 uniform bool reflected;          // drawn mirrored in the water plane: the floes' reflections
 in vec3 in_pos;                  // about the cell's centroid, template frame, m
@@ -246,14 +247,14 @@ out vec2 local;                  // relief coordinates that move with the floe, 
 flat out int top;
 void main() {
     ivec2 at = ivec2(in_row % POSE_WIDTH, in_row / POSE_WIDTH);
-    vec4 a = texelFetch(pose_a, at, 0);
-    vec4 b = texelFetch(pose_b, at, 0);
-    float cr = cos(b.x), sr = sin(b.x), cp = cos(b.y), sp = sin(b.y), cy = cos(a.w), sy = sin(a.w);
-    mat3 rx = mat3(1, 0, 0,  0, cr, sr,  0, -sr, cr);     // columns
-    mat3 ry = mat3(cp, 0, -sp,  0, 1, 0,  sp, 0, cp);
-    mat3 rz = mat3(cy, sy, 0,  -sy, cy, 0,  0, 0, 1);
-    mat3 r = rz * ry * rx;
-    world = r * in_pos + vec3(a.x, a.y, a.z);
+    vec4 q = texelFetch(pose_q, at, 0);
+    vec3 t = texelFetch(pose_t, at, 0).xyz;
+    vec3 q2 = 2.0 * q.xyz, wq = q.w * q2, xq = q.x * q2, yq = q.y * q2;
+    float zz = q.z * q2.z;
+    mat3 r = mat3(1.0 - yq.y - zz, xq.y + wq.z, xq.z - wq.y,       // columns
+                  xq.y - wq.z, 1.0 - xq.x - zz, yq.z + wq.x,
+                  xq.z + wq.y, yq.z - wq.x, 1.0 - xq.x - yq.y);
+    world = r * in_pos + t;
     normal = r * in_normal;
     local = in_pos.xy + 31.7 * vec2(in_row % 61, in_row % 59);  // each floe its own patch of snow
     top = in_normal.z > 0.5 ? 1 : 0;
