@@ -12,7 +12,7 @@ from bridge_node.node.config import ConfigError, load_config
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
 from bridge_node.render.camera import channel_camera
-from bridge_node.render.renderer import SceneRenderer, horizon_split
+from bridge_node.render.renderer import SceneRenderer, _FloeBuffer, horizon_split
 from bridge_node.render.settings import ChannelSettings, RenderSettings
 from bridge_node.render.warp import WarpError, write_pfm
 from bridge_node.stream.world_view import WorldView
@@ -125,6 +125,21 @@ def test_environment_and_sky_passes_split_the_screen_at_the_horizon(pitch):
     band = 2.0 * ty / c.height * math.cos(math.radians(pitch))  # one pixel row's change of the ray's z
     assert np.all(sky[:, 4] >= band - 1e-9)  # the sky pass starts above the horizon's blended pixels
     assert np.all(ground[:, 4] <= 1.5 * band)
+
+
+def test_floe_buffers_keep_each_vertex_once_and_every_triangle(ctx, exercise):
+    model, _ = exercise
+    renderer = SceneRenderer(ctx, model, RenderSettings(channels=[channel()]))
+    start = renderer.cell_vert_start[:401]  # the first 400 cells, each its floe row
+    verts, rows = renderer.cell_verts[:start[-1]], np.repeat(np.arange(400), np.diff(start))
+    buf = _FloeBuffer(ctx, renderer.floe)
+    for a, b in zip(start[:-1:40], start[40::40]):  # appended in parts, as cells break, over the storages' growth
+        buf.append(verts[a:b], rows[a:b])
+    stored = np.frombuffer(buf.vbo.read(size=buf.vertices * _FloeBuffer.STRIDE), dtype=[("v", "f4", 6), ("row", "i4")])
+    index = np.frombuffer(buf.ibo.read(size=buf.indices * 4), dtype="i4")
+    assert buf.vertices < 0.8 * len(verts) and buf.indices == len(verts)
+    np.testing.assert_array_equal(stored["v"][index], verts)
+    np.testing.assert_array_equal(stored["row"][index], rows)
 
 
 def neighbours():

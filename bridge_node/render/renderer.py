@@ -100,34 +100,53 @@ def horizon_split(cam: Camera, tx: float, ty: float, width: int, height: int) ->
     return _clip(quad, f), _clip(quad, -f)
 
 
+def _grown(ctx: moderngl.Context, buf: moderngl.Buffer | None, used: int, size: int) -> moderngl.Buffer:
+    """`buf` if it holds `size` bytes, else a buffer of at least twice its size holding its
+    first `used` bytes (`buf` released)."""
+    if buf is not None and size <= buf.size:
+        return buf
+    new = ctx.buffer(reserve=max(size, 2 * (buf.size if buf else 0), 1 << 16))
+    if buf is not None:
+        ctx.copy_buffer(new, buf, used)
+        buf.release()
+    return new
+
+
 class _FloeBuffer:
-    """Triangles of one tile's broken floes (tops or sides), appended to as cells break;
-    the storage doubles when full."""
+    """Triangles of one tile's broken floes (tops or sides), appended to as cells break:
+    each distinct vertex once, and the triangles' indices (on llvmpipe, vertices shared by
+    triangles are shaded once); the storages double when full."""
 
     STRIDE = 28  # bytes: position 3f, normal 3f, floe row i4
 
     def __init__(self, ctx: moderngl.Context, program: moderngl.Program) -> None:
         self.ctx, self.program = ctx, program
-        self.vbo = self.vao = None
-        self.vertices = 0
+        self.vbo = self.ibo = self.vao = None
+        self.vertices = self.indices = 0
 
     def append(self, verts: np.ndarray, rows: np.ndarray) -> None:
+        """Append triangles: their corners' (position, normal) rows (3 n, 6) and floe rows."""
         data = np.zeros(len(verts), dtype=[("v", "f4", 6), ("row", "i4")])
         data["v"], data["row"] = verts, rows
-        size = (self.vertices + len(verts)) * self.STRIDE
-        if self.vbo is None or size > self.vbo.size:
-            old = self.vbo
-            self.vbo = self.ctx.buffer(reserve=max(size, 2 * (old.size if old else 0), 1 << 16))
-            if old is not None:
-                self.ctx.copy_buffer(self.vbo, old, self.vertices * self.STRIDE)
-                old.release()
-            self.vao = self.ctx.vertex_array(self.program, [(self.vbo, "3f 3f i", "in_pos", "in_normal", "in_row")])
-        self.vbo.write(data.tobytes(), offset=self.vertices * self.STRIDE)
-        self.vertices += len(verts)
+        _, first, inverse = np.unique(data.view(f"V{self.STRIDE}"), return_index=True, return_inverse=True)
+        order = np.argsort(first)  # distinct vertices in the order they first occur
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        index = (rank[inverse.ravel()] + self.vertices).astype("i4")
+        vbo = _grown(self.ctx, self.vbo, self.vertices * self.STRIDE, (self.vertices + len(order)) * self.STRIDE)
+        ibo = _grown(self.ctx, self.ibo, self.indices * 4, (self.indices + len(index)) * 4)
+        if vbo is not self.vbo or ibo is not self.ibo:
+            self.vbo, self.ibo = vbo, ibo
+            self.vao = self.ctx.vertex_array(self.program, [(vbo, "3f 3f i", "in_pos", "in_normal", "in_row")], ibo,
+                                             index_element_size=4)
+        self.vbo.write(data[first[order]].tobytes(), offset=self.vertices * self.STRIDE)
+        self.ibo.write(index.tobytes(), offset=self.indices * 4)
+        self.vertices += len(order)
+        self.indices += len(index)
 
     def render(self) -> None:
-        if self.vertices:
-            self.vao.render(vertices=self.vertices)
+        if self.indices:
+            self.vao.render(vertices=self.indices)
 
 
 class SceneRenderer:
