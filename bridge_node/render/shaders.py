@@ -85,13 +85,16 @@ vec3 lit(vec3 albedo, vec3 n, vec3 world) {
 // times its period over the finest's; beyond it, the mip level is the features' mean, 0, so
 // it fades to 0 over the last 30 % and is not fetched). The branch is smooth on the screen,
 // so the derivatives that pick the mip levels stay those of neighbours on the same side.
+// The caller fetches the finest octave's texel (`finest`): the environment pass shares it
+// with the sea's waves.
 uniform float relief_reach;      // m: how far the finest octave is fetched
-vec3 snow_under(vec2 p, float dist) {
+vec3 snow_under(vec2 p, float dist, vec3 finest) {
     vec3 sum = vec3(0.0);        // slope x, y; albedo
     for (int k = 0; k < OCTAVES; k++) {
         float reach = relief_reach * OCTAVE_SCALE[k];
         if (dist < reach) {
-            vec3 h = (texture(noise, OCTAVE[k] * p).xyz - 0.5) * NOISE_RANGE * (1.0 - smoothstep(0.7 * reach, reach, dist));
+            vec3 texel = k == 0 ? finest : texture(noise, OCTAVE[k] * p).xyz;
+            vec3 h = (texel - 0.5) * NOISE_RANGE * (1.0 - smoothstep(0.7 * reach, reach, dist));
             sum += vec3(OCTAVE_AMP[k].x * (h.yz * OCTAVE[k]), OCTAVE_AMP[k].y * h.x);  // chain rule: d/dp = (d/duv) M
         }
     }
@@ -200,10 +203,10 @@ const vec3 WET = vec3(0.55, 0.62, 0.68);  // wet snow and slush against the dry
 const float WAVE_SLOPE = 0.04;
 const vec2 WAVE_DRIFT = vec2(0.6, 0.35);  // m/s: ripples travelling before a light air
 uniform float time;                       // s: the exercise's clock
-vec3 sea(vec3 r, vec3 world) {
-    // the finest relief octave as slight waves, moving with the time
-    vec2 uv = OCTAVE[0] * (world.xy - WAVE_DRIFT * time);
-    vec2 slope = WAVE_SLOPE / length(OCTAVE[0][0]) * ((texture(noise, uv).yz - 0.5) * NOISE_RANGE.yz * OCTAVE[0]);
+// the sea at `world` seen along r; `wave`: the finest relief octave's derivatives (its
+// texel's .yz) under the place moving with the waves, which are slight
+vec3 sea(vec3 r, vec3 world, vec2 wave) {
+    vec2 slope = WAVE_SLOPE / length(OCTAVE[0][0]) * ((wave - 0.5) * NOISE_RANGE.yz * OCTAVE[0]);
     return through_surface(r, normalize(vec3(-slope, 1.0)), water_body(world));
 }
 void main() {
@@ -217,17 +220,23 @@ void main() {
     vec3 g = normalize(vec3(r.xy, min(r.z, 0.5 * (r.z - 0.5 * fw))));
     float t = (slab_z - eye.z) / g.z;
     vec2 p = eye.xy + g.xy * t;
-    vec3 snow = snow_under(p, t);
     ivec2 tile = ivec2(floor(p / tile_side));
     bool on_field = t < far && p.x >= 0.0 && p.y >= 0.0 && p.x < field_size.x && p.y < field_size.y;
-    vec3 ground;
     float rim;
     ivec4 info = texelFetch(tile_info, tile, 0);
-    if (on_field && level_ice(p, tile, info.xy, rim)) {
-        vec3 ice = ice_surface(snow, intBitsToFloat(info.z), vec3(p, slab_z));
-        ground = mix(ice, ice * WET, rim);   // wet, darker along open water
+    bool ice = on_field && level_ice(p, tile, info.xy, rim);
+    vec3 at = eye - g * eye.z / g.z;  // on the water
+    // one fetch of the finest octave, under the snow on ice, under the moving waves on the sea
+    // (on llvmpipe, both branches cost every pixel); its mip level from the snow's coordinates
+    vec2 u = OCTAVE[0] * p;
+    vec3 finest = textureGrad(noise, ice ? u : OCTAVE[0] * (at.xy - WAVE_DRIFT * time), dFdx(u), dFdy(u)).xyz;
+    vec3 snow = snow_under(p, t, finest);
+    vec3 ground;
+    if (ice) {
+        vec3 surface = ice_surface(snow, intBitsToFloat(info.z), vec3(p, slab_z));
+        ground = mix(surface, surface * WET, rim);   // wet, darker along open water
     } else {  // the sea, out to the horizon
-        ground = sea(g, eye - g * eye.z / g.z);
+        ground = sea(g, at, finest.yz);
     }
     colour = opaque(mix(above, fogged(ground, vec3(p, slab_z)), below));  // fogged once: ice and sea alike
 }
@@ -283,7 +292,7 @@ flat in int top;
 out vec4 colour;
 float waterline(float z) { return mix(0.45, 1.0, smoothstep(0.0, 0.06, z)); }  // wet and dark at the water
 void main() {
-    vec3 snow = snow_under(local, distance(world, eye));
+    vec3 snow = snow_under(local, distance(world, eye), texture(noise, OCTAVE[0] * local).xyz);
     vec3 n = normalize(normal);
     vec3 c;
     if (top == 1) {
