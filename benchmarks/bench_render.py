@@ -38,6 +38,9 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
+import bridge_node.render.channels as channels_module
+import bridge_node.render.renderer as renderer_module
+import bridge_node.render.settings as settings_module
 from bridge_node.node.config import load_config
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, create_context
@@ -117,28 +120,27 @@ def render_package(rev: str) -> types.ModuleType:
     return importlib.import_module(name)
 
 
+def channel_set(ctx, model, look: dict, package: types.ModuleType | None = None):
+    """The llvmpipe target's 3 channels at 1280x720 with the `look` settings, drawn by the
+    working tree's render code or by that of `package` (see render_package)."""
+    names = ("channels", "renderer", "settings")
+    chan, rend, sets = ((importlib.import_module(f"{package.__name__}.{m}") for m in names) if package
+                        else (channels_module, renderer_module, settings_module))
+    chans = [sets.ChannelSettings(**c.model_dump()) for c in channels(3, 1280, 720)]
+    return chan.ChannelSet(rend.SceneRenderer(ctx, model, sets.RenderSettings(channels=chans, **look)), chans)
+
+
 def compare(ctx, frames: int, before: dict, bilinear_before: bool, rev: str | None = None) -> None:
     """Frame times of the look with the `before` settings (and bilinear noise fetches if
     asked; with the render code of git revision `rev` if given) and of the defaults with the
     working tree's code, interleaved."""
     model, data, _ = world_with_floes(3000)
-    chans = channels(3, 1280, 720)
     looks = {"before": before, "after": {}}
-    old = None
-    if rev is not None:
-        pkg = render_package(rev)
-        old = (importlib.import_module(f"{pkg.__name__}.channels"), importlib.import_module(f"{pkg.__name__}.renderer"),
-               importlib.import_module(f"{pkg.__name__}.settings"))
+    old = render_package(rev) if rev is not None else None
     sets = []
     for name, look in looks.items():
         view = fresh_view(model, data)
-        chan_mod, rend_mod, set_mod = old if old and name == "before" else (None, None, None)
-        if chan_mod is not None:
-            old_chans = [set_mod.ChannelSettings(**c.model_dump()) for c in chans]
-            cs = chan_mod.ChannelSet(rend_mod.SceneRenderer(ctx, model, set_mod.RenderSettings(
-                channels=old_chans, **look)), old_chans)
-        else:
-            cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=chans, **look)), chans)
+        cs = channel_set(ctx, model, look, old if name == "before" else None)
         if bilinear_before and name == "before":
             cs.renderer.noise.filter = moderngl.LINEAR_MIPMAP_NEAREST, moderngl.LINEAR
         cs.render(view)  # warm-up

@@ -10,8 +10,8 @@ from conftest import exercise_config, run_cli
 
 from bridge_node.node.config import ConfigError, load_config
 from bridge_node.node.world_setup import build_world, start_world
-from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
 from bridge_node.render.camera import channel_camera
+from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
 from bridge_node.render.renderer import SceneRenderer, _FloeBuffer, horizon_split
 from bridge_node.render.settings import ChannelSettings, RenderSettings
 from bridge_node.render.warp import WarpError, write_pfm

@@ -28,7 +28,6 @@ import moderngl
 import numpy as np
 
 from bridge_node.render import shaders
-from bridge_node.render.shaders import POSE_WIDTH
 from bridge_node.render.camera import (
     Camera,
     channel_camera,
@@ -42,6 +41,7 @@ from bridge_node.render.settings import (
     RenderSettings,
     eye_point,
 )
+from bridge_node.render.shaders import POSE_WIDTH
 from bridge_node.render.ship_mesh import load_ship, nav_lights, ship_triangles
 from bridge_node.render.sky import Sky, sky_for
 from bridge_node.render.textures import relief_noise
