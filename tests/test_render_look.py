@@ -188,7 +188,7 @@ def test_waves_move_with_time(ctx, world):
     assert np.abs(now[near] - later[near]).mean() > 0.5  # the ripples have moved
     assert np.abs(now[near] - later[near]).mean() < 0.1 * now[near].mean()  # and are slight
     sky = slice(0, row_at(stern, -0.05))
-    assert np.abs(now[sky] - later[sky]).max() <= 1.0  # the sky stays (the sun moves 2 s worth)
+    assert np.abs(now[sky] - later[sky]).max() <= 1.0 + 1e-9  # the sky stays within a level (the sun moves 2 s)
 
 
 def test_fog_lowers_contrast_with_distance_as_the_visibility_says(ctx, world):
