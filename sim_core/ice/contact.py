@@ -78,11 +78,27 @@ class Contacts:
 
     def with_hull(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Contacts with the hull: the other body's row, the impulse on the hull (N s) and
-        the contact point (m)."""
-        on_a, on_b = self.a == HULL_ROW, self.b == HULL_ROW
-        other = np.concatenate([self.b[on_a], self.a[on_b]])
-        impulse = np.concatenate([self.impulse[on_a], -self.impulse[on_b]])
-        return other, impulse, np.concatenate([self.point[on_a], self.point[on_b]])
+        the contact point (m); those with the hull as body a first."""
+        return _with_hull(self.a, self.b, self.impulse, self.point)
+
+
+@numba.njit(cache=True)
+def _with_hull(a, b, impulse, point):
+    """``Contacts.with_hull`` of the contacts' rows a, b (k,), impulses on a and points (k, 2)."""
+    n = 0
+    for k in range(len(a)):
+        n += (a[k] == HULL_ROW) + (b[k] == HULL_ROW)
+    other, on_hull, at = np.empty(n, np.int64), np.empty((n, 2)), np.empty((n, 2))
+    n = 0
+    for side in range(2):
+        for k in range(len(a)):
+            if (a[k] if side == 0 else b[k]) == HULL_ROW:
+                sign = 1.0 if side == 0 else -1.0
+                other[n] = b[k] if side == 0 else a[k]
+                on_hull[n, 0], on_hull[n, 1] = sign * impulse[k, 0], sign * impulse[k, 1]
+                at[n, 0], at[n, 1] = point[k, 0], point[k, 1]
+                n += 1
+    return other, on_hull, at
 
 
 def _ptr(cdata) -> int:
@@ -207,32 +223,36 @@ def _separated(p: np.ndarray, q: np.ndarray) -> bool:
 
 
 @numba.njit(cache=True)
-def _hull_overlaps(start, present, status, gcell, xy, yaw, outline, outline_start, extent,
+def _hull_overlaps(starts, counts, present, status, gcell, xy, yaw, outline, outline_start, extent,
                    hull, hull_xy, hull_c, hull_s, box):
-    """Rows of one tile's intact cells in the space (its rows from start; present: its
-    ``TileBodies.in_space``) whose outline overlaps the hull polygon (world m). The hull's
-    body-frame box [x0, x1, y0, y1] screens first."""
+    """Rows of tiles' intact cells in the space whose outline overlaps the hull polygon
+    (world m), ascending per tile. Tile t has counts[t] rows from starts[t]; present holds
+    the tiles' ``TileBodies.in_space`` one after another. The hull's body-frame box
+    [x0, x1, y0, y1] screens first."""
     out = np.empty(len(present), np.int64)
     n_out = 0
-    for k in range(len(present)):
-        j = start + k
-        if present[k] & _INTACT_IN == 0 or status[j] != 0:
-            continue
-        g = gcell[j]
-        dx, dy = xy[j, 0] - hull_xy[0], xy[j, 1] - hull_xy[1]
-        u, v, e = hull_c * dx + hull_s * dy, -hull_s * dx + hull_c * dy, extent[g]
-        if u < box[0] - e or u > box[1] + e or v < box[2] - e or v > box[3] + e:
-            continue
-        a, b = outline_start[g], outline_start[g + 1]
-        c, s = math.cos(yaw[j]), math.sin(yaw[j])
-        cell = np.empty((b - a, 2))
-        for i in range(b - a):
-            ox, oy = outline[a + i, 0], outline[a + i, 1]
-            cell[i, 0] = xy[j, 0] + c * ox - s * oy
-            cell[i, 1] = xy[j, 1] + s * ox + c * oy
-        if not _separated(hull, cell) and not _separated(cell, hull):
-            out[n_out] = j
-            n_out += 1
+    offset = 0
+    for t in range(len(starts)):
+        for k in range(counts[t]):
+            j = starts[t] + k
+            if present[offset + k] & _INTACT_IN == 0 or status[j] != 0:
+                continue
+            g = gcell[j]
+            dx, dy = xy[j, 0] - hull_xy[0], xy[j, 1] - hull_xy[1]
+            u, v, e = hull_c * dx + hull_s * dy, -hull_s * dx + hull_c * dy, extent[g]
+            if u < box[0] - e or u > box[1] + e or v < box[2] - e or v > box[3] + e:
+                continue
+            a, b = outline_start[g], outline_start[g + 1]
+            c, s = math.cos(yaw[j]), math.sin(yaw[j])
+            cell = np.empty((b - a, 2))
+            for i in range(b - a):
+                ox, oy = outline[a + i, 0], outline[a + i, 1]
+                cell[i, 0] = xy[j, 0] + c * ox - s * oy
+                cell[i, 1] = xy[j, 1] + s * ox + c * oy
+            if not _separated(hull, cell) and not _separated(cell, hull):
+                out[n_out] = j
+                n_out += 1
+        offset += counts[t]
     return out[:n_out]
 
 
@@ -358,7 +378,8 @@ def warm_up() -> None:
     _contact_rows(np.zeros((0, 3), np.uintp), np.zeros((0, 12)), none.astype(np.uint8), none.astype(np.uint8),
                   none, np.zeros((0, 2)), none, none, np.ones(1), one, one + 1, np.ones(1), np.zeros(2, np.int64),
                   none, np.zeros((0, 2)), np.zeros(2, np.int64))
-    _hull_overlaps(0, none.astype(np.uint8), none.astype(np.uint8), none.astype(np.int32),
+    _with_hull(none, none, np.zeros((0, 2)), np.zeros((0, 2)))
+    _hull_overlaps(none, none, none.astype(np.uint8), none.astype(np.uint8), none.astype(np.int32),
                    np.zeros((0, 2)), np.zeros(0), square, np.array([0, 4]), np.ones(1),
                    square, np.zeros(2), 1.0, 0.0, np.zeros(4))
 
@@ -583,10 +604,13 @@ class ContactSpace:
         tiles = np.fromiter(self._tiles, dtype=np.int64, count=len(self._tiles))
         lo, hi = self.tiles.corner[tiles], self.tiles.corner[tiles] + self._sides[self.tiles.template[tiles]][:, None]
         near = tiles[np.all((lo <= hull.max(axis=0)) & (hi >= hull.min(axis=0)), axis=1)]  # a tile's cells lie in it
-        found = [_hull_overlaps(int(self.tiles.row_start[tile]), self._tiles[tile].in_space, state.status, state.gcell,
-                                state.xy, state.yaw, m.outline, m.outline_start, self.extent, hull, xy, c, s,
-                                self._hull_box) for tile in near.tolist()]
-        return np.sort(np.concatenate(found)) if found else np.zeros(0, dtype=np.int64)
+        if not len(near):
+            return np.zeros(0, dtype=np.int64)
+        found = _hull_overlaps(self.tiles.row_start[near], self.tiles.row_count[near],
+                               np.concatenate([self._tiles[k].in_space for k in near.tolist()]), state.status,
+                               state.gcell, state.xy, state.yaw, m.outline, m.outline_start, self.extent, hull, xy,
+                               c, s, self._hull_box)
+        return np.sort(found)
 
     def step(self, dt: float) -> None:
         """Switch the step's share of tile objects in or out, then step the engine by dt (s)."""

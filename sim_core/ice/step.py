@@ -164,15 +164,16 @@ def _surfacing(submerged, xy, hull_xy, c, s, outline, reach, stem, clear_ahead):
 
 
 @numba.njit(cache=True)
-def _unsettled_free(status, submerged, resting, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate,
-                    pitch_rate):
-    """Free rows above water not yet at rest at their floating draft (``vertical.settled``):
-    a settled floe needs no vertical update, and a resting one is settled (it came to rest
-    so, and nothing moves it vertically while it rests)."""
-    out = np.empty(len(status), np.int64)
+def _unsettled(rows, submerged, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate, pitch_rate):
+    """Of free rows in the dynamic set, those above water not yet at rest at their floating
+    draft (``vertical.settled``): a settled floe needs no vertical update. (Floes outside
+    the dynamic set need none: a resting one came to rest settled and nothing moves it
+    vertically, a cell broken by contact this step lay settled in the level ice, and a
+    thawed floe waits for its body to enter the space.)"""
+    out = np.empty(len(rows), np.int64)
     n = 0
-    for i in range(len(status)):
-        if status[i] != 1 or submerged[i] or resting[i]:
+    for i in rows:
+        if submerged[i]:
             continue
         if not settled(i, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate, pitch_rate):
             out[n] = i
@@ -224,8 +225,8 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
     moving = space.read_free(st)
     if len(by_contact):
         break_cells(data, by_contact, BreakCause.CONTACT)
-    free = _unsettled_free(st.status, st.submerged, st.resting, st.gcell, model.z_equilibrium, st.heave, st.roll, st.pitch,
-                           st.heave_rate, st.roll_rate, st.pitch_rate)
+    free = _unsettled(moving, st.submerged, st.gcell, model.z_equilibrium, st.heave, st.roll, st.pitch,
+                      st.heave_rate, st.roll_rate, st.pitch_rate)
     if len(free):
         mat = model.material
         vertical_step(free, st.gcell, model.tris, model.tri_start, model.mass, model.inertia, model.damping,
@@ -253,8 +254,6 @@ def warm_up(model: IceModel, data: IceData) -> None:
                1.0)
     _going_under(none, none, none.astype(np.uint8), none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 0.0,
                  1.0)
-    _unsettled_free(none.astype(np.uint8), none.astype(np.bool_), none.astype(np.bool_), none.astype(np.int32),
-                    model.z_equilibrium,
-                    f32, f32, f32, f32, f32, f32)
+    _unsettled(none, none.astype(np.bool_), none.astype(np.int32), model.z_equilibrium, f32, f32, f32, f32, f32, f32)
     vertical.warm_up(model.tris, model.tri_start, model.mass, model.inertia, model.damping)
 
