@@ -3,6 +3,8 @@ ice world, and the instruments see the result. Asserts what the loop guarantees 
 catch-up, simulated time = ticks x period, orders arrive and are obeyed), never how many
 ticks a wall-clock window holds on a loaded machine."""
 import math
+import os
+import signal
 import threading
 
 import can
@@ -108,3 +110,29 @@ def test_the_loop_ticks_on_while_a_lost_slcan_adapter_reopens(tmp_path):
     opening = sum(1 for s in states if s == (True, False))
     assert opening > 1  # several ticks ran while the adapter opened (one tick would be a loop held up)
     assert stats.ticks == len(states)
+
+
+def test_sigterm_ends_the_loop_after_the_tick_in_hand(tmp_path):
+    """SIGTERM (as Ctrl-C) in the middle of a tick does not cut the tick: the loop ends after
+    it, with every tick counted and published, and the process's handlers back as they were
+    (a signal raised inside a link's poll used to leave recorded frames uncounted)."""
+    base = load_config()
+    cfg = base.model_copy(update={
+        "ice_field": base.ice_field.model_copy(update={"width": 400.0, "height": 400.0}),
+        "links": [], "paths": base.paths.model_copy(update={"cache_dir": str(tmp_path / "tiles")})})
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    seen = []
+
+    def on_events(events, _) -> None:
+        seen.append(events)
+        if len(seen) == 5:
+            os.kill(os.getpid(), signal.SIGTERM)  # delivered now, inside the tick
+            seen.append("after the signal")  # the tick goes on: nothing was raised
+
+    before = signal.getsignal(signal.SIGTERM)
+    with LinkHub(cfg.links, cfg.arbitration) as hub:
+        stats = run_realtime(model, data, hub, 30.0, None, on_events)
+    assert seen[5] == "after the signal" and len(seen) == 6  # ended after that tick, not in it
+    assert stats.ticks == 5 and data.time == pytest.approx(5 / 30.0)
+    assert signal.getsignal(signal.SIGTERM) is before

@@ -16,8 +16,11 @@ from __future__ import annotations
 
 import gc
 import os
+import signal
+import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -98,11 +101,39 @@ def _tick(model: WorldModel, data: WorldData, hub: LinkHub, period: float, stats
     return events, decision.input_time
 
 
+@dataclass
+class _StopRequest:
+    """Set by Ctrl-C or SIGTERM; the loop looks at it between ticks."""
+
+    requested: bool = False
+
+
+@contextmanager
+def _stop_between_ticks() -> Iterator[_StopRequest]:
+    """Ctrl-C and SIGTERM, while inside, set a flag the loop checks between ticks rather
+    than raise where the tick happens to be: a tick cut in the middle of a link's poll would
+    leave frames in the session record that the link's counts never took in. (A flag, not
+    a lock-based event: a handler runs in the main thread, which may hold the lock.) Outside
+    the main thread, where Python delivers no signals, the handlers stay as they are."""
+    stop = _StopRequest()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+    before = {sig: signal.signal(sig, lambda *_: setattr(stop, "requested", True))
+              for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield stop
+    finally:
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
+
+
 def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float, duration: float | None,
                  on_events: Callable[[WorldEvents, float | None], None] | None = None,
                  should_stop: Callable[[], bool] = lambda: False) -> LoopStats:
     """Run at ``rate_hz`` until ``duration`` wall seconds have passed (None: until
-    should_stop() or Ctrl-C); ``on_events`` gets every step's events and input time."""
+    should_stop(), Ctrl-C or SIGTERM, which end the loop after the tick in hand);
+    ``on_events`` gets every step's events and input time."""
     period = 1.0 / rate_hz
     stats = LoopStats()
     ticks = None
@@ -116,8 +147,8 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
     gc.freeze()
     start = time.monotonic()
     next_tick = start
-    try:
-        while (duration is None or time.monotonic() - start < duration) and not should_stop():
+    with _stop_between_ticks() as stop:
+        while (duration is None or time.monotonic() - start < duration) and not should_stop() and not stop.requested:
             t0 = time.monotonic()
             events, input_time = _tick(model, data, hub, period, stats, ticks)
             if on_events:
@@ -137,7 +168,5 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
                     next_tick = now  # fell behind: restart the schedule rather than burst
             else:
                 time.sleep(next_tick - now)
-    except KeyboardInterrupt:
-        pass
     stats.wall_s = time.monotonic() - start
     return stats
