@@ -48,7 +48,6 @@ ETL_POSITIONS = {
 }
 
 
-
 def searchlight_order(index: int, on: bool | None, bearing_deg: float | None,
                       elevation_deg: float | None) -> SearchlightOrder | str:
     """A console's searchlight order (light 0..3; bearing deg from the bow, + starboard,

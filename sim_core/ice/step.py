@@ -26,7 +26,7 @@ from sim_core.ice import contact, resting
 from sim_core.ice import vertical
 from sim_core.ice.breaking import pushed_hard
 from sim_core.ice.contact import Contacts
-from sim_core.ice.floes import BreakCause, FloeState, FloeStatus
+from sim_core.ice.floes import BreakCause, FloeState
 from sim_core.ice.model import IceModel, vertical_substeps
 from sim_core.ice.tiles import IceData, break_cells
 from sim_core.ice.vertical import settled, vertical_step
