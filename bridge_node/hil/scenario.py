@@ -17,6 +17,7 @@ from pydantic import Field, model_validator
 from bridge_node.hil.toml_file import load_toml_model
 from sim_core.params import Params
 from sim_core.ship.particulars import TELEGRAPH_POSITIONS
+from sim_core.ship.searchlights import MAX_SEARCHLIGHTS
 
 ROLES = ("primary", "backup", "panel")
 ORDER_ROLES = ("primary", "backup")
@@ -33,7 +34,7 @@ class SearchlightAction(Params):
     """A searchlight order: light 0..3 switched on or off and aimed, deg from the bow (+
     starboard) and above the horizontal (- down)."""
 
-    light: int = Field(ge=0, le=3)
+    light: int = Field(ge=0, le=MAX_SEARCHLIGHTS - 1)
     on: bool = True
     bearing_deg: float = Field(ge=-180.0, le=180.0)
     elevation_deg: float = Field(ge=-90.0, le=90.0)

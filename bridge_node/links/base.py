@@ -29,14 +29,14 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, ClassVar
 
 from sim_core.ship.outputs import ShipOutputs
-from sim_core.ship.searchlights import SearchlightOrder
+# SEARCHLIGHT is a kind of order, as RUDDER: the links take it from here
+from sim_core.ship.searchlights import MAX_SEARCHLIGHTS, SEARCHLIGHT, SearchlightOrder  # noqa: F401
 
 if TYPE_CHECKING:
     from bridge_node.links.settings import LinkSettings
 
 log = logging.getLogger("icebridge.links")
-RUDDER, TELEGRAPH, LEVER, SEARCHLIGHT = "rudder", "telegraph", "lever", "searchlight"  # the kinds of order
-SEARCHLIGHTS_MAX = 4  # searchlight orders name lights 0..3
+RUDDER, TELEGRAPH, LEVER = "rudder", "telegraph", "lever"  # the kinds of order, with SEARCHLIGHT
 RUDDER_ORDER_LIMIT_DEG = 90.0  # beyond this a rudder order is nonsense, not an order to clamp
 ALARM_TEXT_MAX = 52  # characters: what an ALR sentence's text field holds within NMEA 0183's 82
 OPEN_WAIT_S = 5.0  # ``Link.open`` waits this long for the device; a slower one is taken up by a later poll
@@ -56,7 +56,7 @@ def searchlight_order(index: int, on: bool | None, bearing_deg: float | None,
     angles = [(v, limit) for v, limit in ((bearing_deg, 180.0), (elevation_deg, 90.0)) if v is not None]
     if any(not math.isfinite(v) for v, _ in angles):
         return "bad_field"
-    if not 0 <= index < SEARCHLIGHTS_MAX or any(abs(v) > limit for v, limit in angles):
+    if not 0 <= index < MAX_SEARCHLIGHTS or any(abs(v) > limit for v, limit in angles):
         return "out_of_range"
     return SearchlightOrder(index, on, *(None if v is None else math.radians(v) for v in (bearing_deg, elevation_deg)))
 

@@ -13,6 +13,7 @@ from bridge_node.links.n2k_network import N2kName, N2kProduct
 from bridge_node.links.nmea0183 import COMMON_ORDER_TALKERS, DEFAULT_RATES, DEFAULT_TALKERS, TYPICAL_LENGTH
 from bridge_node.node.network import NETWORK_CAN_INTERFACES, loopback_unless, serial_port_unless
 from sim_core.params import Params
+from sim_core.ship.searchlights import MAX_SEARCHLIGHTS
 
 NAME_MAX = 24  # characters: every alarm text naming a link then fits an ALR sentence
 Name = Annotated[str, Field(min_length=1, max_length=NAME_MAX, pattern=r"^[A-Za-z0-9_\-]+$")]
@@ -152,7 +153,7 @@ class RegisterSpec(Params):
     scale: float = Field(1.0, description="engineering value = raw x scale (rudder deg, lever %, ETL code, "
                          "searchlight 0/1 or deg)")
     engine: int = Field(0, ge=0, le=9)
-    light: int = Field(0, ge=0, le=3, description="the searchlight of a searchlight_* register")
+    light: int = Field(0, ge=0, le=MAX_SEARCHLIGHTS - 1, description="the searchlight of a searchlight_* register")
 
     _scale = field_validator("scale")(lambda cls, v: sane_scale(v))
 

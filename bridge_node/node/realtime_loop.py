@@ -113,14 +113,19 @@ def _stop_between_ticks() -> Iterator[_StopRequest]:
     """Ctrl-C and SIGTERM, while inside, set a flag the loop checks between ticks rather
     than raise where the tick happens to be: a tick cut in the middle of a link's poll would
     leave frames in the session record that the link's counts never took in. (A flag, not
-    a lock-based event: a handler runs in the main thread, which may hold the lock.) Outside
-    the main thread, where Python delivers no signals, the handlers stay as they are."""
+    a lock-based event: a handler runs in the main thread, which may hold the lock.) A
+    second signal raises KeyboardInterrupt at once, so a hung tick can still be left.
+    Outside the main thread, where Python delivers no signals, the handlers stay as they are."""
     stop = _StopRequest()
     if threading.current_thread() is not threading.main_thread():
         yield stop
         return
-    before = {sig: signal.signal(sig, lambda *_: setattr(stop, "requested", True))
-              for sig in (signal.SIGINT, signal.SIGTERM)}
+
+    def request(*_) -> None:
+        if stop.requested:  # asked again: a tick that hangs (a blocked device) is left at once
+            raise KeyboardInterrupt
+        stop.requested = True
+    before = {sig: signal.signal(sig, request) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         yield stop
     finally:

@@ -137,6 +137,8 @@ class _FloeBuffer:
         ibo = _grown(self.ctx, self.ibo, self.indices * 4, (self.indices + len(index)) * 4)
         if vbo is not self.vbo or ibo is not self.ibo:
             self.vbo, self.ibo = vbo, ibo
+            if self.vao is not None:
+                self.vao.release()
             self.vao = self.ctx.vertex_array(self.program, [(vbo, "3f 3f i", "in_pos", "in_normal", "in_row")], ibo,
                                              index_element_size=4)
         self.vbo.write(data[first[order]].tobytes(), offset=self.vertices * self.STRIDE)
@@ -154,6 +156,7 @@ class SceneRenderer:
 
     def __init__(self, ctx: moderngl.Context, model: WorldModel, settings: RenderSettings) -> None:
         self.ctx, self.model, self.settings = ctx, model, settings
+        self._configured_aims = [light.mount().default for light in settings.searchlights]  # before any order
         scene = model.scene
         lights = len(settings.searchlights)
         self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=shaders.with_lights(shaders.ENV_FS, lights))
@@ -367,7 +370,7 @@ class SceneRenderer:
         pos, axis, cos, power = np.zeros((n, 3)), np.zeros((n, 3)), np.ones(n), np.zeros(n)
         to_world = ship_matrix(ship.north, ship.east, ship.heading)
         for k, light in enumerate(self.settings.searchlights):
-            aim = ship.searchlights[k] if k < len(ship.searchlights) else light.mount().default
+            aim = ship.searchlights[k] if k < len(ship.searchlights) else self._configured_aims[k]
             az, el = ship.heading + aim.bearing, aim.elevation
             pos[k] = (to_world @ np.array([*light.position, 1.0]))[:3]
             axis[k] = math.sin(az) * math.cos(el), math.cos(az) * math.cos(el), math.sin(el)

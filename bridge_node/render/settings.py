@@ -17,7 +17,7 @@ from typing import Annotated, Literal
 from pydantic import AwareDatetime, Field, model_validator
 
 from sim_core.params import Params, repeated
-from sim_core.ship.searchlights import SearchlightMount, SearchlightState
+from sim_core.ship.searchlights import MAX_SEARCHLIGHTS, SearchlightMount, SearchlightState
 
 
 EyeName = Literal["bridge", "port_wing", "starboard_wing"]
@@ -75,7 +75,6 @@ def _front_channels() -> list[ChannelSettings]:
             ChannelSettings(name="astern", yaw_deg=180.0, eye=[-60.0, 0.0, 25.0])]
 
 
-MAX_SEARCHLIGHTS = 4
 
 
 class SearchlightSettings(Params):

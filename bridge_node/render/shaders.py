@@ -223,7 +223,8 @@ void main() {
     ivec2 tile = ivec2(floor(p / tile_side));
     bool on_field = t < far && p.x >= 0.0 && p.y >= 0.0 && p.x < field_size.x && p.y < field_size.y;
     float rim;
-    ivec4 info = texelFetch(tile_info, tile, 0);
+    // clamped: off the field the fetch is unused, and one outside the texture is undefined
+    ivec4 info = texelFetch(tile_info, clamp(tile, ivec2(0), textureSize(tile_info, 0) - 1), 0);
     bool ice = on_field && level_ice(p, tile, info.xy, rim);
     vec3 at = eye - g * eye.z / g.z;  // on the water
     // one fetch of the finest octave, under the snow on ice, under the moving waves on the sea
@@ -292,10 +293,10 @@ flat in int top;
 out vec4 colour;
 float waterline(float z) { return mix(0.45, 1.0, smoothstep(0.0, 0.06, z)); }  // wet and dark at the water
 void main() {
-    vec3 snow = snow_under(local, distance(world, eye), texture(noise, OCTAVE[0] * local).xyz);
     vec3 n = normalize(normal);
     vec3 c;
-    if (top == 1) {
+    if (top == 1) {  // the snow only on tops (side faces and their reflections need none)
+        vec3 snow = snow_under(local, distance(world, eye), texture(noise, OCTAVE[0] * local).xyz);
         float albedo;
         vec3 bump = relief(snow, snow_depth(thickness), albedo);
         c = lit(ice_albedo(thickness) * albedo, normalize(n + vec3(bump.xy, 0.0)), world);

@@ -12,7 +12,8 @@ from dataclasses import dataclass, replace
 
 from sim_core.ship.model import OrderRejection
 
-SEARCHLIGHT = "searchlight"  # the order's name in ``OrderRejection``
+SEARCHLIGHT = "searchlight"  # the order's name (``OrderRejection``, the links' order kinds)
+MAX_SEARCHLIGHTS = 4  # lights 0..3: what the console's orders can name
 
 
 @dataclass(frozen=True)
