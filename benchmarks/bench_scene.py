@@ -107,11 +107,11 @@ def swap_cost(world, repeats: int = 12) -> dict:
         freeze_tile(data, index)
         out["freeze"].append(time.perf_counter() - t0)
         _steps_until_swapped(data, out["freeze_step"])
-        prepared = prepare_thaw(data, index)
+        prepared = prepare_thaw(world.ice, data, index)
         while not prepared.done:
             advance(data, prepared, 64)
         t0 = time.perf_counter()
-        thaw_tile(data, index, prepared)
+        thaw_tile(world.ice, data, index, prepared)
         out["thaw"].append(time.perf_counter() - t0)
         _steps_until_swapped(data, out["thaw_step"])
     return {k: np.array(v) * 1e3 for k, v in out.items()}
@@ -155,11 +155,14 @@ def main() -> None:
           f"p99 {s['step_ms_p99']} ms, max {s['step_ms_max']} ms ({os.cpu_count()} cores); late switches "
           f"{data.late_switches}; live fragments max {s['max_live']}, plateau "
           f"{s['plateau_live_min']}..{s['plateau_live_max']}, frozen {s['final_frozen']}")
-    rss_end, frozen = resident_mib(), data.ice.state.count(FloeStatus.FROZEN)
-    if rss_start is not None and frozen:
+    st, frozen = data.ice.state, data.ice.frozen
+    rss_end = resident_mib()
+    if rss_start is not None and frozen.count:
         print(f"resident memory {rss_start:.0f} -> {rss_end:.0f} MiB over the transit, "
-              f"{(rss_end - rss_start) / frozen * 1000:.2f} MiB per 1000 frozen floes (live floes included, an upper "
-              f"bound); a floe row is {data.ice.state.nbytes_per_row()} bytes")
+              f"{(rss_end - rss_start) / frozen.count * 1000:.2f} MiB per 1000 frozen floes (live floes and start-up "
+              f"included, an upper bound); {frozen.count} frozen floes keep {frozen.nbytes() / frozen.count:.0f} "
+              f"bytes each; {st.n} floe rows of {st.nbytes_per_row()} bytes for the live tiles "
+              f"({st.count(FloeStatus.VACANT)} vacant)")
     plot = Path(args.out) / "bench_transit.png"
     plot_series(series, True, plot)
     print(f"plot: {plot}")

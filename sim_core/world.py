@@ -38,6 +38,7 @@ from sim_core.ice.tiles import (
     place_tile,
     prepare_place,
     prepare_thaw,
+    reclaim_rows,
     thaw_tile,
 )
 from sim_core.scene.quadtree import tile_under, tiles_near
@@ -61,6 +62,11 @@ from sim_core.ship.searchlights import SearchlightMount, SearchlightOrder, Searc
 BREAKING_MEMORY = 2.0  # s: the bow counts as in level ice this long after it last broke a cell
 _PREPARE_CHUNK = 64  # cells built between looks at the clock while preparing tiles ahead
 _NO_ROWS = np.zeros(0, dtype=np.int64)
+# A frozen tile's broken cell as published: placement, offset in the tile, what broke it
+# (BreakCause), and its pose (x, y, heave, yaw, roll, pitch; world m and rad) in float32,
+# as floe poses travel on the stream. 33 bytes.
+FROZEN_FLOE_EVENT = np.dtype([("placement", np.int32), ("cell", np.uint32), ("cause", np.uint8),
+                              ("pose", np.float32, 6)])
 
 
 @dataclass(frozen=True)
@@ -124,7 +130,7 @@ class Controls:
 class PlacedTiles:
     """Tiles laid in the ice world, one entry each: flat index in the field, placement index
     in the ice world, template, quarter turns (CCW), south-west corner (m), first floe row
-    and row count (rows of one tile are contiguous)."""
+    and row count (rows of one tile are contiguous; a frozen tile has none)."""
 
     tile: np.ndarray
     placement: np.ndarray
@@ -139,11 +145,15 @@ class PlacedTiles:
 class WorldEvents:
     """What the world publishes after a step (or, with ``snapshot`` set, the whole state).
 
-    Floe rows are only ever appended (``sim_core.ice.floes``), so consumers can keep them
-    by number. ``floe_rows`` are the rows whose pose or status may have changed: the free
-    floes of the live tiles, and every row of a tile placed, thawed or frozen in this step
-    (a frozen tile's final pose); in a snapshot, every row. Poses are (x, y, heave, yaw,
-    roll, pitch) in world m and rad.
+    A live tile's floe rows keep their numbers (``sim_core.ice.floes``), so consumers can
+    keep live floes by row. A tile ``placed`` is given rows, as is a tile thawed (listed in
+    both ``placed``, with its new rows, and ``thawed``). A tile ``frozen`` gives its rows up
+    (a later placement may be given them), and its broken cells travel as
+    ``frozen_floes`` (``FROZEN_FLOE_EVENT`` records): all others of its cells are intact.
+    ``floe_rows`` are the rows whose pose or status may have changed: the free floes of the
+    live tiles, and every row of a tile placed or thawed in this step; in a snapshot, every
+    row of the live tiles, with ``frozen`` and ``frozen_floes`` naming every frozen tile and
+    its floes. Poses are (x, y, heave, yaw, roll, pitch) in world m and rad.
     """
 
     seq: int
@@ -161,6 +171,7 @@ class WorldEvents:
     floes_frozen: int
     ice_load: np.ndarray  # X, Y N (ship frame); N N m (+ to starboard)
     rejected: tuple[OrderRejection, ...]
+    frozen_floes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=FROZEN_FLOE_EVENT))
     snapshot: bool = False
 
 
@@ -244,6 +255,7 @@ def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate) -> tupl
     """Carry out a scene update in the ice world: place, thaw and freeze tiles. Returns the
     tiles placed and the placement indices thawed and frozen."""
     scene, placement = model.scene, data.scene.placement
+    reclaim_rows(data.ice)
     new = []
     for tile in update.place.tolist():
         template, turns = tile_layout(scene, tile)
@@ -253,19 +265,19 @@ def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate) -> tupl
     thawed = [placement[tile] for tile in update.thaw.tolist()]
     frozen = [placement[tile] for tile in update.freeze.tolist()]
     for tile, k in zip(update.thaw.tolist(), thawed):
-        thaw_tile(data.ice, k, _take_prepared(model, data, tile))
+        thaw_tile(model.ice, data.ice, k, _take_prepared(model, data, tile))
     for k in frozen:
         freeze_tile(data.ice, k)
     if new or thawed or frozen:
         data.live_rows = _tile_rows(data.ice.tiles, [placement[t] for t in data.scene.live.tolist()])
-    return (_placed_tiles(data.ice.tiles, update.place.tolist(), new),
+    return (_placed_tiles(data.ice.tiles, update.place.tolist() + update.thaw.tolist(), new + thawed),
             np.array(thawed, dtype=np.int64), np.array(frozen, dtype=np.int64))
 
 
 def _prepare(model: WorldModel, data: WorldData, tile: int) -> PreparedTile:
     """Start preparing a field tile's switch: a new placement, or the thaw of its frozen one."""
     if data.scene.tile_state[tile] == TileState.FROZEN:
-        return prepare_thaw(data.ice, data.scene.placement[tile])
+        return prepare_thaw(model.ice, data.ice, data.scene.placement[tile])
     template, turns = tile_layout(model.scene, tile)
     return prepare_place(model.ice, template, tile_corner(model.scene, tile), turns)
 
@@ -303,15 +315,27 @@ def prepare_ahead(model: WorldModel, data: WorldData, contour: np.ndarray, budge
             return
 
 
-def _moved_rows(data: WorldData, placed: PlacedTiles, thawed: np.ndarray, frozen: np.ndarray) -> np.ndarray:
+def _moved_rows(data: WorldData, placed: PlacedTiles) -> np.ndarray:
     """Rows whose pose or status may have changed in a step: the free floes of the live
-    tiles (broken cells included), and every row of the tiles placed, thawed or frozen in
-    it. Intact cells of live tiles do not move, and frozen tiles cost nothing."""
-    st, tiles = data.ice.state, data.ice.tiles
+    tiles (broken cells included), and every row of the tiles placed or thawed in it.
+    Intact cells of live tiles do not move, and frozen tiles have no rows."""
+    st = data.ice.state
     live = data.live_rows
-    swapped = [*placed.placement.tolist(), *thawed.tolist(), *frozen.tolist()]
     moving = live[st.status[live] == FloeStatus.FREE]
-    return np.union1d(moving, _tile_rows(tiles, swapped)) if swapped else moving
+    return np.union1d(moving, _tile_rows(data.ice.tiles, placed.placement.tolist())) if len(placed.placement) \
+        else moving
+
+
+def _frozen_floes(ice: IceData, placements: list[int]) -> np.ndarray:
+    """The published records (``FROZEN_FLOE_EVENT``) of frozen placements' floes."""
+    records = [ice.frozen[k] for k in placements]
+    out = np.zeros(sum(len(r) for r in records), dtype=FROZEN_FLOE_EVENT)
+    out["placement"] = np.repeat(placements, [len(r) for r in records])
+    if len(out):
+        floes = np.concatenate(records)
+        out["cell"], out["cause"] = floes["cell"], floes["cause"]
+        out["pose"] = np.column_stack([floes["xy"], floes["heave"], floes["yaw"], floes["roll"], floes["pitch"]])
+    return out
 
 
 def _ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple[float, int]:
@@ -333,7 +357,7 @@ def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> 
     ship = ship_outputs(data.ship, data.time, *model.origin, data.epoch + data.time, tuple(data.searchlights))
     return WorldEvents(seq=data.seq, time=data.time, ship=ship,
                        floe_rows=rows, floe_pose=pose, floe_status=st.status[rows].copy(),
-                       floes_free=st.count(FloeStatus.FREE), floes_frozen=st.count(FloeStatus.FROZEN), **fields)
+                       floes_free=st.count(FloeStatus.FREE), floes_frozen=data.ice.frozen.count, **fields)
 
 
 def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | None = None) -> WorldEvents:
@@ -361,22 +385,24 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
     data.seq += 1
     if len(report.broken_by_hull):
         data.last_hull_break = data.time
-    rows = _moved_rows(data, placed, thawed, frozen)
+    rows = _moved_rows(data, placed)
     return _publish(model, data, rows, placed=placed, thawed=thawed, frozen=frozen,
-                    broken_by_hull=report.broken_by_hull, broken_by_contact=report.broken_by_contact,
+                    frozen_floes=_frozen_floes(data.ice, frozen.tolist()), broken_by_hull=report.broken_by_hull, broken_by_contact=report.broken_by_contact,
                     ice_load=load, rejected=tuple(rejected))
 
 
 def snapshot(model: WorldModel, data: WorldData) -> WorldEvents:
     """The whole published state now, as events with ``snapshot`` set: every placed tile,
-    every floe row (frozen channel included), every broken cell, the frozen placements."""
+    every row of the live tiles, every broken cell, the frozen placements and their floes."""
     tiles, st = data.ice.tiles, data.ice.state
     by_tile = sorted(data.scene.placement.items(), key=lambda kv: kv[1])
     frozen = [k for t, k in by_tile if data.scene.tile_state[t] == TileState.FROZEN]
-    broken = st.status != FloeStatus.INTACT
+    rows = data.live_rows
+    broken = rows[st.status[rows] == FloeStatus.FREE]
     placed = _placed_tiles(tiles, [t for t, _ in by_tile], [k for _, k in by_tile])
-    return _publish(model, data, np.arange(st.n), placed=placed,
+    return _publish(model, data, rows, placed=placed,
                     thawed=_NO_ROWS, frozen=np.array(frozen, dtype=np.int64),
-                    broken_by_hull=np.nonzero(broken & (st.cause == BreakCause.HULL))[0],
-                    broken_by_contact=np.nonzero(broken & (st.cause == BreakCause.CONTACT))[0],
+                    frozen_floes=_frozen_floes(data.ice, frozen),
+                    broken_by_hull=broken[st.cause[broken] == BreakCause.HULL],
+                    broken_by_contact=broken[st.cause[broken] == BreakCause.CONTACT],
                     ice_load=data.ship.external.copy(), rejected=(), snapshot=True)

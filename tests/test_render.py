@@ -12,6 +12,7 @@ from bridge_node.node.config import ConfigError, load_config
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.camera import channel_camera
 from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
+from bridge_node.render.meshes import cell_vertices, template_meshes
 from bridge_node.render.renderer import SceneRenderer, _FloeBuffer, horizon_split
 from bridge_node.render.settings import ChannelSettings, RenderSettings
 from bridge_node.render.warp import WarpError, write_pfm
@@ -127,19 +128,35 @@ def test_environment_and_sky_passes_split_the_screen_at_the_horizon(pitch):
     assert np.all(ground[:, 4] <= 1.5 * band)
 
 
-def test_floe_buffers_keep_each_vertex_once_and_every_triangle(ctx, exercise):
+def test_template_meshes_keep_each_vertex_once_and_every_triangle(ctx, exercise):
+    model, _ = exercise
+    corners, start, side_start = cell_vertices(model)
+    for k, mesh in enumerate(template_meshes(model)):
+        g0, g1 = model.ice.template_start[k], model.ice.template_start[k + 1]
+        mine = corners[start[g0]:start[g1]]
+        assert len(mesh.vertices) < 0.8 * len(mine) and len(mesh.index) == len(mine)
+        np.testing.assert_array_equal(mesh.vertices["pos"][mesh.index], mine[:, :3])
+        np.testing.assert_array_equal(mesh.vertices["normal"][mesh.index], mine[:, 3:])
+        cells = np.arange(g1 - g0)
+        tops, sides = mesh.corners(cells, sides=False), mesh.corners(cells, sides=True)
+        assert len(tops) + len(sides) == len(mine)
+        assert np.all(mesh.vertices["normal"][tops][:, 2] > 0.5) and np.all(mesh.vertices["normal"][sides][:, 2] <= 0.5)
+        owner = np.repeat(cells, np.diff(start[g0:g1 + 1]))
+        np.testing.assert_array_equal(mesh.vertices["cell"][mesh.index], owner)
+
+
+def test_a_tiles_floe_buffer_keeps_every_index_over_its_growth(ctx, exercise):
     model, _ = exercise
     renderer = SceneRenderer(ctx, model, RenderSettings(channels=[channel()]))
-    start = renderer.cell_vert_start[:401]  # the first 400 cells, each its floe row
-    verts, rows = renderer.cell_verts[:start[-1]], np.repeat(np.arange(400), np.diff(start))
-    buf = _FloeBuffer(ctx, renderer.floe)
-    for a, b in zip(start[:-1:40], start[40::40]):  # appended in parts, as cells break, over the storages' growth
-        buf.append(verts[a:b], rows[a:b])
-    stored = np.frombuffer(buf.vbo.read(size=buf.vertices * _FloeBuffer.STRIDE), dtype=[("v", "f4", 6), ("row", "i4")])
-    index = np.frombuffer(buf.ibo.read(size=buf.indices * 4), dtype="i4")
-    assert buf.vertices < 0.8 * len(verts) and buf.indices == len(verts)
-    np.testing.assert_array_equal(stored["v"][index], verts)
-    np.testing.assert_array_equal(stored["row"][index], rows)
+    mesh = renderer.meshes[0]
+    buf = _FloeBuffer(ctx, renderer.floe, renderer.mesh_vbos[0], mesh.index.dtype)
+    cells = np.array_split(np.arange(len(mesh.start) - 1), 12)
+    parts = [mesh.corners(c, sides=s) for _ in range(3) for c in cells for s in (False, True)]
+    for part in parts:  # appended in parts, as cells break, over the storage's growth
+        buf.append(part)
+    stored = np.frombuffer(buf.ibo.read(size=buf.indices * mesh.index.itemsize), dtype=mesh.index.dtype)
+    np.testing.assert_array_equal(stored, np.concatenate(parts))
+    assert buf.nbytes > 1 << 16  # it grew past its first storage
 
 
 def neighbours():

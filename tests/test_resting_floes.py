@@ -104,17 +104,23 @@ def test_a_tile_frozen_with_resting_floes_thaws_with_their_pose_and_momentum(res
     assert st.resting[loose].all()
     held = st.xy[loose].copy(), st.yaw[loose].copy(), st.vel[loose].copy(), st.yaw_rate[loose].copy()
     tile = int(st.tile[loose[0]])
+    cells = loose - data.tiles.rows(tile)[0]
     freeze_tile(data, tile)
     while data.contacts.swaps_pending:  # the resting floes' objects leave the space over the steps
         ice_step(model, data, FAR, DT)
-    assert not st.resting[loose].any() and not data.contacts.has_tile(tile)
-    for now, then in zip((st.xy[loose], st.yaw[loose], st.vel[loose], st.yaw_rate[loose]), held):
+    assert not data.contacts.has_tile(tile)
+    record = data.frozen[tile][np.searchsorted(data.frozen[tile]["cell"], cells)]
+    for now, then in zip((record["xy"], record["yaw"], record["vel"], record["yaw_rate"]), held):
         np.testing.assert_array_equal(now, then)  # frozen: the pose and momentum they rested with
-    thaw_tile(data, tile)
+    thaw_tile(model, data, tile)
+    back = data.tiles.rows(tile)[cells]
+    assert not st.resting[back].any()
+    for now, then in zip((st.xy[back], st.yaw[back], st.vel[back], st.yaw_rate[back]), held):
+        np.testing.assert_array_equal(now, then)
     steps = 0
     while data.contacts.swaps_pending:
         ice_step(model, data, FAR, DT)
         steps += 1
-    assert set(loose.tolist()) <= set(data.contacts.read_free(st).tolist())  # dynamic bodies again
-    drift = np.hypot(*(st.xy[loose] - held[0]).T)
+    assert set(back.tolist()) <= set(data.contacts.read_free(st).tolist())  # dynamic bodies again
+    drift = np.hypot(*(st.xy[back] - held[0]).T)
     assert drift.max() <= np.hypot(*held[2].T).max() * steps * DT + 1e-6  # moving on from where they froze

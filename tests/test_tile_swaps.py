@@ -11,7 +11,7 @@ from sim_core.frames.hull_contour import waterline_contour
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.model import compile_ice_model
 from sim_core.ice.step import HullMotion, ice_step
-from sim_core.ice.tiles import break_cells, freeze_tile, new_ice_data, place_tile, thaw_tile
+from sim_core.ice.tiles import break_cells, freeze_tile, new_ice_data, place_tile, reclaim_rows, thaw_tile
 from sim_core.world import step
 
 
@@ -67,13 +67,17 @@ def test_floes_that_leave_and_reenter_keep_pose_and_momentum(settle):
     if settle:  # the tile's bodies leave the engine over the following steps
         while data.contacts.swaps_pending:
             ice_step(model, data, far, 1 / 30)
-    np.testing.assert_array_equal(st.xy[loose], pose[0])  # frozen floes do not move
-    thaw_tile(data, 0)
-    assert np.all(st.status[loose] == FloeStatus.FREE)
+        reclaim_rows(data)
+        assert np.all(st.status[rows] == FloeStatus.VACANT)  # the tile's rows are given back
+    else:
+        np.testing.assert_array_equal(st.xy[loose], pose[0])  # frozen floes do not move
+    thaw_tile(model, data, 0)
+    back = data.tiles.rows(0)[loose - rows[0]]  # the same cells, in the tile's rows now
+    assert np.all(st.status[back] == FloeStatus.FREE)
     while data.contacts.swaps_pending:
         data.contacts.step(1e-9)  # back into the engine, time all but still
     data.contacts.read_free(st)
-    np.testing.assert_allclose(st.xy[loose], pose[0], atol=1e-9)
-    np.testing.assert_allclose(st.yaw[loose], pose[1], atol=1e-9)
-    np.testing.assert_allclose(st.vel[loose], momentum[0], rtol=1e-6)
-    np.testing.assert_allclose(st.yaw_rate[loose], momentum[1], rtol=1e-6)
+    np.testing.assert_allclose(st.xy[back], pose[0], atol=1e-9)
+    np.testing.assert_allclose(st.yaw[back], pose[1], atol=1e-9)
+    np.testing.assert_allclose(st.vel[back], momentum[0], rtol=1e-6)
+    np.testing.assert_allclose(st.yaw_rate[back], momentum[1], rtol=1e-6)

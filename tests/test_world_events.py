@@ -1,6 +1,6 @@
-"""The world's published contract: events and snapshots agree, rows keep their numbers, a
-thawed tile's floes come back where they froze, and refused orders are counted and raise an
-alarm."""
+"""The world's published contract: events and snapshots agree, live rows keep their numbers
+and a frozen tile's rows go to the next tile, a thawed tile's floes come back where they
+froze, and refused orders are counted and raise an alarm."""
 import math
 
 import numpy as np
@@ -15,7 +15,7 @@ from sim_core.frames.hull_contour import waterline_contour
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.model import compile_ice_model
 from sim_core.ice.step import HullMotion, ice_step
-from sim_core.ice.tiles import break_cells, freeze_tile, new_ice_data, place_tile, thaw_tile
+from sim_core.ice.tiles import break_cells, freeze_tile, new_ice_data, place_tile, reclaim_rows, thaw_tile
 from sim_core.ship.model import OrderRejection
 from sim_core.world import Controls, snapshot, step
 
@@ -28,43 +28,69 @@ def small_world(tmp_path_factory):
     return build_world(cfg, None), cfg
 
 
+def _assert_same_state(late: WorldView, view: WorldView) -> None:
+    assert late.placements == view.placements and late.frozen == view.frozen
+    rows = view.live_rows()
+    np.testing.assert_array_equal(late.live_rows(), rows)
+    np.testing.assert_array_equal(late.status[rows], view.status[rows])
+    np.testing.assert_allclose(late.pose[rows], view.pose[rows])
+    np.testing.assert_array_equal(late.cause[rows], view.cause[rows])
+    assert late.frozen_floes.keys() == view.frozen_floes.keys() == view.frozen
+    for k, floes in view.frozen_floes.items():
+        np.testing.assert_array_equal(late.frozen_floes[k], floes)
+
+
 def test_events_applied_step_by_step_equal_a_snapshot(small_world):
     model, cfg = small_world
     data = start_world(model, cfg)
     view = WorldView()
     view.apply(snapshot(model, data))
-    frozen_seen = 0
-    for _ in range(2500):  # 250 s: tiles placed, cells broken, tiles frozen astern
+    frozen_seen, placed_cells = 0, 0
+    for n in range(1, 2501):  # 250 s: tiles placed, cells broken, tiles frozen astern, the field left
         events = step(model, data, 0.1)
         frozen_seen += len(events.frozen)
+        placed_cells += int(events.placed.row_count.sum())
         view.apply(events)
+        if n in (1500, 2500):  # with the ship in the field, and after it has left
+            late = WorldView()  # a consumer joining now
+            late.apply(snapshot(model, data))
+            _assert_same_state(late, view)
+            st = data.ice.state
+            live = data.live_rows
+            assert late.take_changes().broken.size == np.count_nonzero(st.status[live] == FloeStatus.FREE)
+            assert events.floes_frozen == data.ice.frozen.count == sum(len(f) for f in view.frozen_floes.values())
     assert frozen_seen > 0 and events.floes_frozen > 0 and events.seq == 2500
-    late = WorldView()  # a consumer joining now
-    late.apply(snapshot(model, data))
-    assert late.rows == view.rows == data.ice.state.n
-    np.testing.assert_array_equal(late.status, view.status)
-    np.testing.assert_allclose(late.pose, view.pose)
-    assert late.placements == view.placements
     assert view.ship.time == pytest.approx(data.time) and view.ship.north == data.ship.eta[0]
-    st = data.ice.state
-    assert late.take_changes().broken.size == np.count_nonzero(st.status != FloeStatus.INTACT)
+    assert data.ice.state.n < placed_cells  # frozen tiles' rows went to later tiles
 
 
-def test_rows_are_only_appended_and_keep_their_cells():
+def test_live_rows_keep_their_cells_and_frozen_rows_go_to_the_next_tile():
     tile = build_tile(0.5, 3, FractureSettings(tile_side=40.0, colliders="sphere"))
     model = compile_ice_model([tile])
     data = new_ice_data(model, waterline_contour(150.0, 24.0), 0.1)
+    n = tile.n_cells
     first = place_tile(model, data, 0, (0.0, 0.0))
     second = place_tile(model, data, 0, (40.0, 0.0), 1)
     assert (first, second) == (0, 1)
-    rows = data.tiles.rows(first)
-    gcell = data.state.gcell.copy()
+    kept = data.tiles.rows(second)
+    gcell = data.state.gcell[kept].copy()
     freeze_tile(data, first)
-    thaw_tile(data, first)
+    assert len(data.tiles.rows(first)) == 0 and data.frozen.count == 0  # nothing broken: no record
     third = place_tile(model, data, 0, (80.0, 0.0))
-    assert data.tiles.rows(third)[0] == 2 * tile.n_cells  # appended after the others
-    np.testing.assert_array_equal(data.state.gcell[: 2 * tile.n_cells], gcell)
-    assert np.all(data.state.tile[rows] == first)
+    assert data.tiles.rows(third)[0] == 2 * n  # the first's rows are not given while its bodies leave
+    far = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
+    while data.contacts.swaps_pending:
+        ice_step(model, data, far, 1 / 30)
+    reclaim_rows(data)
+    assert data.state.count(FloeStatus.VACANT) == n
+    fourth = place_tile(model, data, 0, (120.0, 0.0))
+    assert data.tiles.rows(fourth)[0] == 0 and data.state.n == 3 * n  # the first's rows, reused
+    thaw_tile(model, data, first)
+    assert data.tiles.rows(first)[0] == 3 * n and data.state.n == 4 * n
+    np.testing.assert_array_equal(data.state.gcell[data.tiles.rows(first)], np.arange(n))
+    np.testing.assert_array_equal(data.state.tile[data.tiles.rows(fourth)], fourth)
+    np.testing.assert_array_equal(data.state.gcell[kept], gcell)  # a live tile's rows never moved
+    np.testing.assert_array_equal(data.state.tile[kept], second)
 
 
 def test_thawed_floes_come_back_to_life_where_they_froze():
@@ -81,18 +107,22 @@ def test_thawed_floes_come_back_to_life_where_they_froze():
         ice_step(model, data, far, 1 / 30)
     moved = st.xy[loose].copy()
     assert np.abs(moved - st.home[loose]).max() > 0.05  # they drifted before freezing
-    freeze_tile(data, 0)
-    assert np.all(st.status[loose] == FloeStatus.FROZEN) and st.count(FloeStatus.FROZEN) == len(loose)
     yaw = st.yaw[loose].copy()
-    thaw_tile(data, 0)
-    assert np.all(st.status[loose] == FloeStatus.FREE) and st.count(FloeStatus.FROZEN) == 0
-    np.testing.assert_array_equal(st.xy[loose], moved)  # at the poses they froze with
-    np.testing.assert_array_equal(st.yaw[loose], yaw)
+    freeze_tile(data, 0)
+    assert np.all(st.status[loose] == FloeStatus.FROZEN) and data.frozen.count == len(loose)
+    assert st.count(FloeStatus.FREE) == 0
+    np.testing.assert_array_equal(np.sort(data.frozen[0]["cell"]), loose - rows[0])
+    thaw_tile(model, data, 0)
+    back = data.tiles.rows(0)[loose - rows[0]]  # the same cells, in the tile's new rows
+    assert np.all(st.status[back] == FloeStatus.FREE) and data.frozen.count == 0
+    np.testing.assert_array_equal(st.xy[back], moved)  # at the poses they froze with
+    np.testing.assert_array_equal(st.yaw[back], yaw)
+    np.testing.assert_array_equal(st.cause[back], BreakCause.HULL)
     assert st.count(FloeStatus.FREE) == len(loose)
     # and alive again: the contact space moves them
-    data.contacts.set_velocity(data.state, loose, np.tile([0.0, 0.3], (len(loose), 1)), np.zeros(len(loose)))
+    data.contacts.set_velocity(data.state, back, np.tile([0.0, 0.3], (len(back), 1)), np.zeros(len(back)))
     ice_step(model, data, far, 1 / 30)
-    assert np.abs(st.xy[loose] - moved).max() > 1e-3
+    assert np.abs(st.xy[back] - moved).max() > 1e-3
 
 
 def test_rejected_orders_are_published_counted_and_alarmed(small_world):

@@ -177,7 +177,8 @@ def run(args: argparse.Namespace) -> int:
             summary |= _render_loop(sub, channels, outputs, args, stop)
         finally:
             summary |= outputs.close() | {"resyncs": sub.resyncs, "lost": sub.lost, "last_seq": sub.view.seq,
-                                          "sim_time": round(sub.view.time, 3)}
+                                          "sim_time": round(sub.view.time, 3),
+                                          "floe_memory": channels.renderer.floe_memory(sub.view)}
             _write_summary(summary, args.summary)
     print(json.dumps(summary))
     return 0

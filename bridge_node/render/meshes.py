@@ -2,10 +2,13 @@
 ships' mesh is in ``ship_mesh``)."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from PIL import Image, ImageDraw
 from scipy import ndimage
 
+from sim_core.csr import gather_ranges
 from sim_core.world import WorldModel
 
 
@@ -34,6 +37,50 @@ def cell_vertices(model: WorldModel) -> tuple[np.ndarray, np.ndarray, np.ndarray
     start = np.concatenate([[0], np.cumsum(3 * np.bincount(owner, minlength=cells))])
     side_start = start[:-1] + 3 * np.bincount(owner[~side], minlength=cells)
     return out, start, side_start
+
+
+# A vertex of a template's cells: position about the cell's centroid (m), outward normal,
+# and the cell's index in the template (28 bytes).
+CELL_VERTEX = np.dtype([("pos", "f4", 3), ("normal", "f4", 3), ("cell", "i4")])
+
+
+@dataclass(frozen=True)
+class TemplateMesh:
+    """One template's cells as indexed triangles, made once and shared by every tile laid
+    with it: distinct vertices (``CELL_VERTEX``; a vertex shared by a cell's triangles is
+    kept once, so that llvmpipe shades it once), and the corners of each cell's triangles as
+    vertex indices (uint16 where the vertices allow, else uint32): cell c's tops are
+    ``index[start[c]:side_start[c]]``, its sides ``index[side_start[c]:start[c + 1]]``."""
+
+    vertices: np.ndarray
+    index: np.ndarray
+    start: np.ndarray  # (n_cells + 1,)
+    side_start: np.ndarray  # (n_cells,)
+
+    def corners(self, cells: np.ndarray, sides: bool) -> np.ndarray:
+        """Vertex indices of the tops (or the sides) of the given cells, in order."""
+        a = self.side_start[cells] if sides else self.start[cells]
+        b = self.start[cells + 1] if sides else self.side_start[cells]
+        return self.index[gather_ranges(a, b)]
+
+
+def template_meshes(model: WorldModel) -> list[TemplateMesh]:
+    """Each template's ``TemplateMesh``, from ``cell_vertices``."""
+    corners, start, side_start = cell_vertices(model)
+    out = []
+    for k, t in enumerate(model.ice.templates):
+        g0, g1 = int(model.ice.template_start[k]), int(model.ice.template_start[k + 1])
+        a = int(start[g0])
+        data = np.zeros(int(start[g1]) - a, dtype=CELL_VERTEX)
+        data["pos"], data["normal"] = corners[a:start[g1], :3], corners[a:start[g1], 3:]
+        data["cell"] = np.repeat(np.arange(g1 - g0), np.diff(start[g0:g1 + 1]))
+        _, first, inverse = np.unique(data.view(f"V{CELL_VERTEX.itemsize}"), return_index=True, return_inverse=True)
+        order = np.argsort(first)  # distinct vertices in the order they first occur
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        index = rank[inverse.ravel()].astype(np.uint16 if len(order) <= 1 << 16 else np.uint32)
+        out.append(TemplateMesh(data[first[order]], index, start[g0:g1 + 1] - a, side_start[g0:g1] - a))
+    return out
 
 
 def cell_rasters(model: WorldModel, size: int) -> np.ndarray:

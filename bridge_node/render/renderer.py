@@ -1,23 +1,29 @@
 """Draw the world state to the projector channels with moderngl.
 
-GPU data mirrors the MuJoCo-style split of the simulation. Static: every template cell's
-triangles about its centroid (seen from above the water: no bottom faces), each template's
-cell raster (which cell covers each 0.1 m of the tile), the own ship's mesh. Dynamic: two
-float textures holding every floe row's pose (its attitude as a quaternion, made on the
-CPU; x, y, heave) and a byte texture of each row's status, a tile table (each placed
-tile's first floe row, template and rotation; -1 for the unbreakable slab), and per tile the vertex buffers of its
-broken floes (tops and sides apart), to which a cell's template triangles are appended
-once, when it breaks; the vertex shader places them by the pose textures. A tile's floes
-are drawn only when its box is in the channel's view, their side faces only within the
+GPU data mirrors the MuJoCo-style split of the simulation. Static: each template's cells as
+indexed triangles about their centroids (seen from above the water: no bottom faces; each
+vertex names its cell), shared by every tile laid with the template; each template's cell
+raster (which cell covers each 0.1 m of the tile); the own ship's mesh. Dynamic: two float
+textures holding every floe row's pose (its attitude as a quaternion, made on the CPU; x,
+y, heave) and a texture of each row's status, a tile table (each placed tile's first
+status entry, template and rotation, and whether it is breakable), and per tile the index
+buffers of its broken floes (tops and sides apart), to which a cell's triangles are
+appended once, when it breaks: a floe costs its indices, not its vertices. The vertex
+shader finds each vertex's floe from the tile's first row and the vertex's cell, and
+places it by the pose textures. A frozen tile gives its rows up (they go to other tiles):
+its floes get pose entries of their own, and its cells status entries that name each
+broken cell's floe, numbered from the last texture line down while live rows fill from the
+first line up; its floes' side faces are indexed only when first needed. A tile's floes are
+drawn only when its box is in the channel's view, their side faces only within the
 level-of-detail distance; within the reflection distance their side faces are drawn once
 more, mirrored in the water plane over the sea, as their reflections. Level ice
 (unbreakable tiles and the intact cells of breakable ones) is drawn per pixel by the
-environment pass from the cell raster, so it
-costs no triangles: on a software rasteriser the vertex work of thousands of intact cells
-would dominate the frame. Per frame only the poses of tiles placed or simulated since the
-last frame are uploaded; frozen tiles cost nothing. Also static: the relief noise texture
-(mipmapped) and each tile's level-ice thickness (in the tile table); per frame, the sun and sky of the
-exercise's time and the ship's place.
+environment pass from the cell raster, so it costs no triangles: on a software rasteriser
+the vertex work of thousands of intact cells would dominate the frame. Per frame only the
+poses of tiles placed or simulated since the last frame are uploaded; a frozen tile's
+once, when it freezes. Also static: the relief noise texture (mipmapped) and each tile's
+level-ice thickness (in the tile table); per frame, the sun and sky of the exercise's time
+and the ship's place.
 """
 from __future__ import annotations
 
@@ -35,7 +41,7 @@ from bridge_node.render.camera import (
     ship_matrix,
     visible_boxes,
 )
-from bridge_node.render.meshes import cell_rasters, cell_vertices, rim_rasters
+from bridge_node.render.meshes import cell_rasters, rim_rasters, template_meshes
 from bridge_node.render.settings import (
     ChannelSettings,
     RenderSettings,
@@ -45,9 +51,9 @@ from bridge_node.render.shaders import POSE_WIDTH
 from bridge_node.render.ship_mesh import load_ship, nav_lights, ship_triangles
 from bridge_node.render.sky import Sky, sky_for
 from bridge_node.render.textures import relief_noise
-from bridge_node.stream.world_view import WorldView
-from sim_core.csr import gather_ranges
+from bridge_node.stream.world_view import Placement, WorldView
 from sim_core.frames.geodesy import local_to_geodetic
+from sim_core.ice.floes import FloeStatus
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.world import WorldModel
 
@@ -58,6 +64,8 @@ RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m 
 WATER = (0.04, 0.09, 0.11)  # the sea's body colour (albedo of the light it sends back up)
 NOISE_UNIT = 8  # texture unit of the relief noise
 POSE_NAMES, POSE_UNITS = ("pose_q", "pose_t"), (4, 5)  # the floe pose textures and their units
+STATUS_UNIT = 7  # texture unit of the status texture
+PATCHES = 61 * 59  # snow patches the floes' tops are given (the floe shader's grid of them)
 NAV_LIGHT_LUX = 10.0  # lux: daylight below which navigation lights show at full strength (civil dusk)
 EYE_WHITE_LUX = 40.0  # lux a surface needs to look white to eyes adapted to the night
 
@@ -100,12 +108,23 @@ def horizon_split(cam: Camera, tx: float, ty: float, width: int, height: int) ->
     return _clip(quad, f), _clip(quad, -f)
 
 
-def _grown(ctx: moderngl.Context, buf: moderngl.Buffer | None, used: int, size: int) -> moderngl.Buffer:
-    """`buf` if it holds `size` bytes, else a buffer of at least twice its size holding its
-    first `used` bytes (`buf` released)."""
+def _write_entries(tex: moderngl.Texture, lines: int, first: int, values: np.ndarray) -> None:
+    """Write values (n, ...) to a texture's frozen entries first .. first + n - 1, which run
+    along its lines from the last line down (``shaders.entry_texel``)."""
+    end = first + len(values)
+    for line in range(first // POSE_WIDTH, (end - 1) // POSE_WIDTH + 1):
+        a, b = max(first, line * POSE_WIDTH), min(end, (line + 1) * POSE_WIDTH)
+        tex.write(np.ascontiguousarray(values[a - first:b - first]).tobytes(),
+                  viewport=(a % POSE_WIDTH, lines - 1 - line, b - a, 1))
+
+
+def _grown(ctx: moderngl.Context, buf: moderngl.Buffer | None, used: int, size: int,
+           least: int = 1 << 16) -> moderngl.Buffer:
+    """`buf` if it holds `size` bytes, else a buffer of at least twice its size (and `least`
+    bytes) holding its first `used` bytes (`buf` released)."""
     if buf is not None and size <= buf.size:
         return buf
-    new = ctx.buffer(reserve=max(size, 2 * (buf.size if buf else 0), 1 << 16))
+    new = ctx.buffer(reserve=max(size, 2 * (buf.size if buf else 0), least))
     if buf is not None:
         ctx.copy_buffer(new, buf, used)
         buf.release()
@@ -113,42 +132,48 @@ def _grown(ctx: moderngl.Context, buf: moderngl.Buffer | None, used: int, size: 
 
 
 class _FloeBuffer:
-    """Triangles of one tile's broken floes (tops or sides), appended to as cells break:
-    each distinct vertex once, and the triangles' indices (on llvmpipe, vertices shared by
-    triangles are shaded once); the storages double when full."""
+    """Triangles of one tile's broken floes (tops or sides): indices into the vertices its
+    template shares with every tile laid with it (``meshes.TemplateMesh``), appended to as
+    cells break; the storage doubles when full, from ``least`` bytes (0: a buffer that is
+    written once, a frozen tile's, holds just what it is given). Only indices are kept per
+    floe."""
 
-    STRIDE = 28  # bytes: position 3f, normal 3f, floe row i4
+    def __init__(self, ctx: moderngl.Context, program: moderngl.Program, vbo: moderngl.Buffer,
+                 index_type: np.dtype, least: int = 1 << 16) -> None:
+        self.ctx, self.program, self.vbo, self.index_type = ctx, program, vbo, np.dtype(index_type)
+        self.least = least
+        self.ibo = self.vao = None
+        self.indices = 0
 
-    def __init__(self, ctx: moderngl.Context, program: moderngl.Program) -> None:
-        self.ctx, self.program = ctx, program
-        self.vbo = self.ibo = self.vao = None
-        self.vertices = self.indices = 0
-
-    def append(self, verts: np.ndarray, rows: np.ndarray) -> None:
-        """Append triangles: their corners' (position, normal) rows (3 n, 6) and floe rows."""
-        data = np.zeros(len(verts), dtype=[("v", "f4", 6), ("row", "i4")])
-        data["v"], data["row"] = verts, rows
-        _, first, inverse = np.unique(data.view(f"V{self.STRIDE}"), return_index=True, return_inverse=True)
-        order = np.argsort(first)  # distinct vertices in the order they first occur
-        rank = np.empty_like(order)
-        rank[order] = np.arange(len(order))
-        index = (rank[inverse.ravel()] + self.vertices).astype("i4")
-        vbo = _grown(self.ctx, self.vbo, self.vertices * self.STRIDE, (self.vertices + len(order)) * self.STRIDE)
-        ibo = _grown(self.ctx, self.ibo, self.indices * 4, (self.indices + len(index)) * 4)
-        if vbo is not self.vbo or ibo is not self.ibo:
-            self.vbo, self.ibo = vbo, ibo
+    def append(self, index: np.ndarray) -> None:
+        """Append triangles, as their corners' indices into the template's vertices."""
+        size = self.index_type.itemsize
+        ibo = _grown(self.ctx, self.ibo, self.indices * size, (self.indices + len(index)) * size, self.least)
+        if ibo is not self.ibo:
+            self.ibo = ibo
             if self.vao is not None:
                 self.vao.release()
-            self.vao = self.ctx.vertex_array(self.program, [(vbo, "3f 3f i", "in_pos", "in_normal", "in_row")], ibo,
-                                             index_element_size=4)
-        self.vbo.write(data[first[order]].tobytes(), offset=self.vertices * self.STRIDE)
-        self.ibo.write(index.tobytes(), offset=self.indices * 4)
-        self.vertices += len(order)
+            self.vao = self.ctx.vertex_array(self.program, [(self.vbo, "3f 3f i", "in_pos", "in_normal", "in_cell")],
+                                             ibo, index_element_size=size)
+        self.ibo.write(index.astype(self.index_type).tobytes(), offset=self.indices * size)
         self.indices += len(index)
 
     def render(self) -> None:
         if self.indices:
             self.vao.render(vertices=self.indices)
+
+    def release(self) -> None:
+        """Free the index storage (the template's vertices stay, shared)."""
+        for obj in (self.vao, self.ibo):
+            if obj is not None:
+                obj.release()
+        self.ibo = self.vao = None
+        self.indices = 0
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of index storage held."""
+        return self.ibo.size if self.ibo is not None else 0
 
 
 class SceneRenderer:
@@ -175,11 +200,11 @@ class SceneRenderer:
         if scene.nx * scene.ny > MAX_TILES:
             raise ValueError(f"the renderer draws fields of up to {MAX_TILES} tiles; "
                              f"this one has {scene.nx * scene.ny}")
-        # per tile: first floe row (-1: unbreakable), template | quarter turns << 16, level-ice
-        # thickness (m, float bits), unused (4 components: on llvmpipe, fetches of 3 cost more)
+        # per tile: first status entry (its first row, or a frozen tile's first cell entry),
+        # template | quarter turns << 16, level-ice thickness (m, float bits), 1 if breakable
         self.tile_thickness = scene.class_thickness[scene.tile_class].astype("f4")
         info = np.zeros((scene.nx * scene.ny, 4), "i4")
-        info[:, 0], info[:, 2] = -1, self.tile_thickness.view("i4")
+        info[:, 2] = self.tile_thickness.view("i4")
         self.tile_info = ctx.texture((scene.nx, scene.ny), 4, info.tobytes(), dtype="i4")
         self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST
         mesh = load_ship(model.ship.particulars, model.contour, settings.freeboard_m)
@@ -191,7 +216,8 @@ class SceneRenderer:
         points = nav_lights(model.ship.particulars, mesh.bounds)
         self.nav_vao = ctx.vertex_array(self.nav, [(ctx.buffer(points.tobytes()), "3f 3f 2f", "in_pos", "in_colour",
                                                     "in_sector")])
-        self.cell_verts, self.cell_vert_start, self.cell_side_start = cell_vertices(model)
+        self.meshes = template_meshes(model)
+        self.mesh_vbos = [ctx.buffer(m.vertices.tobytes()) for m in self.meshes]
         self.raster_size = RASTER_SIZE if len(model.ice.templates) <= 4 else RASTER_SIZE // 2
         cells = cell_rasters(model, self.raster_size)
         self.rim_px = settings.wet_rim_m / scene.side * self.raster_size
@@ -200,10 +226,14 @@ class SceneRenderer:
         self.cell_raster = ctx.texture((self.raster_size, raster.shape[0]), 4, raster.tobytes(), dtype="u2")
         self.cell_raster.filter = moderngl.NEAREST, moderngl.NEAREST
         self.tile_floes: dict[int, tuple[_FloeBuffer, _FloeBuffer]] = {}  # placement -> (tops, sides)
-        self._drawn = np.zeros(0, dtype=bool)
-        self.pose: list[moderngl.Texture] = []  # each floe row's attitude (quaternion) and place
-        self.status: moderngl.Texture | None = None
-        self._pose_lines = 0
+        self._tile_draw: dict[int, dict] = {}  # placement -> the floe program's uniforms for its tile
+        self._sides_due: set[int] = set()  # frozen placements whose side faces are made when first needed
+        self._drawn = np.zeros(0, dtype=bool)  # by row: its triangles are in its tile's buffers
+        self.pose: list[moderngl.Texture] = []  # each floe row's (and frozen floe's) attitude and place
+        self.status: moderngl.Texture | None = None  # each floe row's status, each frozen tile's cell's floe
+        self._pose_lines = self._status_lines = 0
+        self._frozen: dict[int, tuple[int, int]] = {}  # frozen placement -> its first floe and first cell entry
+        self._frozen_floes = self._frozen_cells = 0  # entries given to frozen tiles so far
         h = model.ice.thickness.mean() if len(model.ice.thickness) else 0.0
         mat = model.ice.material
         self.slab_z = float(h * (1.0 - mat.density / mat.water_density))
@@ -219,75 +249,138 @@ class SceneRenderer:
 
     # -- per frame uploads ----------------------------------------------------------------
     def update(self, view: WorldView) -> None:
-        """Upload what changed in the view since the last call: new placements, the
-        triangles of newly broken floes, and the poses of the rows that changed; and take
-        the sky of the view's time and place."""
+        """Upload what changed in the view since the last call: tiles given rows (new or
+        thawed) and tiles frozen, the triangles of newly broken floes, and the poses of the
+        rows that changed; and take the sky of the view's time and place."""
         changes = view.take_changes()
         lat, lon = local_to_geodetic(view.ship.north, view.ship.east, *self.model.origin)
         self.sky = sky_for(self.settings.start_utc + timedelta(seconds=view.time), lat, lon)
-        full = self._ensure_pose_capacity(view.rows)
-        self._upload_placements(view, list(view.placements) if full else changes.placements)
+        for k in changes.frozen:
+            self._freeze(view, k)
+        for k in changes.placements:
+            self._place(view, k)
+        if self._ensure_capacity(view.rows):
+            self._upload_rows(view, 0, view.rows)
+            for k in self._frozen:
+                self._upload_frozen(view, k)
+        else:
+            self._upload_rows(view, changes.rows_from, changes.rows_to)
+            for k in changes.frozen:
+                if k in self._frozen:
+                    self._upload_frozen(view, k)
         self._append_broken(view, changes.broken)
-        self._upload_poses(view, 0 if full else changes.rows_from, view.rows if full else changes.rows_to)
 
-    def _upload_placements(self, view: WorldView, placements: list[int]) -> None:
+    def _write_tile_info(self, p: Placement, first_entry: int, breakable: bool) -> None:
         nx = self.model.scene.nx
-        for k in placements:
-            p = view.placements[k]
-            thickness = self.tile_thickness.view("i4")[p.tile]
-            info = np.array([p.row_start, p.template | (p.quarter_turns << 16), thickness, 0], "i4")
-            self.tile_info.write(info.tobytes(), viewport=(p.tile % nx, p.tile // nx, 1, 1))
+        thickness = self.tile_thickness.view("i4")[p.tile]
+        info = np.array([first_entry, p.template | (p.quarter_turns << 16), thickness, int(breakable)], "i4")
+        self.tile_info.write(info.tobytes(), viewport=(p.tile % nx, p.tile // nx, 1, 1))
+
+    def _drop_floes(self, k: int) -> None:
+        for buf in self.tile_floes.pop(k, ()):
+            buf.release()
+        self._tile_draw.pop(k, None)
+        self._sides_due.discard(k)
+
+    def _new_floes(self, k: int, p: Placement, first: int, first_floe: int = 0) -> None:
+        """Empty triangle buffers for tile k, and its uniforms: its first row (or, frozen,
+        its first status entry, first_floe its first floe's pose entry), its snow patches
+        (each floe its own, by field tile and cell) and its ice thickness."""
+        vbo, index_type = self.mesh_vbos[p.template], self.meshes[p.template].index.dtype
+        least = 0 if first < 0 else 1 << 16  # a frozen tile's triangles are written once
+        self.tile_floes[k] = (_FloeBuffer(self.ctx, self.floe, vbo, index_type, least),
+                              _FloeBuffer(self.ctx, self.floe, vbo, index_type, least))
+        self._tile_draw[k] = {"first": first, "first_floe": first_floe, "frozen": first < 0,
+                              "patch_base": p.tile * 7919 % PATCHES, "thickness": self.template_thickness[p.template]}
+
+    def _place(self, view: WorldView, k: int) -> None:
+        """A tile given rows (laid, or thawed): its cells by row; its floes drawn anew as
+        their rows break (a thawed tile's all come as broken)."""
+        p = view.placements[k]
+        self._drop_floes(k)
+        self._frozen.pop(k, None)
+        self._grow_drawn(view.rows)
+        self._drawn[p.row_start:p.row_start + p.row_count] = False
+        self._write_tile_info(p, p.row_start, True)
+        self._new_floes(k, p, p.row_start)
+
+    def _freeze(self, view: WorldView, k: int) -> None:
+        """A tile frozen: its floes get pose entries of their own, and its cells status
+        entries that name each broken cell's floe (numbered from the top of the textures
+        down; its rows go to other tiles); its floes' tops are drawn from these, their sides
+        made when first needed. A frozen tile without floes is level ice like the
+        unbreakable slab."""
+        p, floes = view.placements[k], view.frozen_floes[k]
+        self._drop_floes(k)
+        if not len(floes):
+            self._frozen.pop(k, None)
+            self._write_tile_info(p, 0, False)
+            return
+        first = self._frozen_floes, self._frozen_cells
+        self._frozen[k] = first
+        self._frozen_floes += len(floes)
+        self._frozen_cells += self.model.ice.templates[p.template].n_cells
+        self._write_tile_info(p, -1 - first[1], True)
+        self._new_floes(k, p, -1 - first[1], first[0])
+        self.tile_floes[k][0].append(self.meshes[p.template].corners(floes["cell"].astype(np.int64), sides=False))
+        self._sides_due.add(k)
+
+    def _sides(self, view: WorldView, k: int) -> _FloeBuffer:
+        """Tile k's side faces, made now for a frozen tile that has not needed them yet."""
+        if k in self._sides_due:
+            self._sides_due.discard(k)
+            cells = view.frozen_floes[k]["cell"].astype(np.int64)
+            self.tile_floes[k][1].append(self.meshes[view.placements[k].template].corners(cells, sides=True))
+        return self.tile_floes[k][1]
+
+    def _grow_drawn(self, rows: int) -> None:
+        if len(self._drawn) < rows:
+            self._drawn = np.concatenate([self._drawn, np.zeros(rows - len(self._drawn), bool)])
 
     def _append_broken(self, view: WorldView, broken: np.ndarray) -> None:
-        """Append the template triangles of newly broken cells to their tile's buffers (tops
-        and sides apart, for the level of detail)."""
-        if len(self._drawn) < view.rows:
-            self._drawn = np.concatenate([self._drawn, np.zeros(view.rows - len(self._drawn), bool)])
+        """Append the triangles of newly broken cells (still broken, in a live tile) to their
+        tile's buffers."""
+        self._grow_drawn(view.rows)
         new = np.unique(broken)
-        new = new[~self._drawn[new]]
+        new = new[(view.status[new] == FloeStatus.FREE) & ~self._drawn[new]]
         self._drawn[new] = True
-        tile = self._row_tile(view, new)
+        tile, start = self._row_tile(view, new)
         for k in np.unique(tile).tolist():
-            rows = new[tile == k]
-            g = self._row_gcell(view, rows)
-            if k not in self.tile_floes:
-                self.tile_floes[k] = (_FloeBuffer(self.ctx, self.floe), _FloeBuffer(self.ctx, self.floe))
-            for buf, a, b in zip(self.tile_floes[k], (self.cell_vert_start[g], self.cell_side_start[g]),
-                                 (self.cell_side_start[g], self.cell_vert_start[g + 1])):
-                buf.append(self.cell_verts[gather_ranges(a, b)], np.repeat(rows, b - a))
+            cells = new[tile == k] - start[tile == k][0]
+            mesh = self.meshes[view.placements[k].template]
+            for buf, sides in zip(self.tile_floes[k], (False, True)):
+                buf.append(mesh.corners(cells, sides))
 
     @staticmethod
-    def _row_tile(view: WorldView, rows: np.ndarray) -> np.ndarray:
-        """Placement index of each row (rows of a placement are contiguous)."""
-        keys = sorted(view.placements, key=lambda k: view.placements[k].row_start)
-        starts = np.array([view.placements[k].row_start for k in keys], dtype=np.int64)
-        return np.array(keys, dtype=np.int64)[np.searchsorted(starts, rows, side="right") - 1]
+    def _row_tile(view: WorldView, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Live placement of each row, and that placement's first row (a placement's rows
+        are contiguous)."""
+        live = sorted((p.row_start, k) for k, p in view.placements.items() if k not in view.frozen and p.row_count)
+        starts = np.array([a for a, _ in live], dtype=np.int64)
+        at = np.searchsorted(starts, rows, side="right") - 1
+        return np.array([k for _, k in live], dtype=np.int64)[at], starts[at]
 
-    def _row_gcell(self, view: WorldView, rows: np.ndarray) -> np.ndarray:
-        """Global template cell of each row: its template's first cell plus its place in the tile."""
-        tile = self._row_tile(view, rows)
-        start = np.array([view.placements[k].row_start for k in tile.tolist()], dtype=np.int64)
-        template = np.array([view.placements[k].template for k in tile.tolist()], dtype=np.int64)
-        return self.model.ice.template_start[template] + rows - start
-
-    def _ensure_pose_capacity(self, rows: int) -> bool:
-        """Grow the pose textures to hold the rows; True if they were (re)made, so that
+    def _ensure_capacity(self, rows: int) -> bool:
+        """Grow the pose and status textures to hold the rows (from the first line up) and the
+        frozen tiles' entries (from the last line down); True if they were (re)made, so that
         everything must be uploaded again."""
         lines = max(1, math.ceil(rows / POSE_WIDTH))
-        if lines <= self._pose_lines:
+        pose_lines = lines + math.ceil(self._frozen_floes / POSE_WIDTH)
+        status_lines = lines + math.ceil(self._frozen_cells / POSE_WIDTH)
+        if pose_lines <= self._pose_lines and status_lines <= self._status_lines:
             return False
-        lines = max(lines, 2 * self._pose_lines)
         for old in [*self.pose, self.status]:
             if old is not None:
                 old.release()
-        self.pose = [self.ctx.texture((POSE_WIDTH, lines), 4, dtype="f4") for _ in POSE_UNITS]
-        self.status = self.ctx.texture((POSE_WIDTH, lines), 1, dtype="u1")
+        self._pose_lines = max(pose_lines, 2 * self._pose_lines)
+        self._status_lines = max(status_lines, 2 * self._status_lines)
+        self.pose = [self.ctx.texture((POSE_WIDTH, self._pose_lines), 4, dtype="f4") for _ in POSE_UNITS]
+        self.status = self.ctx.texture((POSE_WIDTH, self._status_lines), 1, dtype="u2")
         for tex in [*self.pose, self.status]:
             tex.filter = moderngl.NEAREST, moderngl.NEAREST
-        self._pose_lines = lines
         return True
 
-    def _upload_poses(self, view: WorldView, first_row: int, end_row: int) -> None:
+    def _upload_rows(self, view: WorldView, first_row: int, end_row: int) -> None:
         """Upload the poses and statuses of rows [first_row, end_row), whole texture lines."""
         line0 = first_row // POSE_WIDTH
         r0, r1 = line0 * POSE_WIDTH, end_row
@@ -300,9 +393,33 @@ class SceneRenderer:
         viewport = (0, line0, POSE_WIDTH, lines)
         for tex, line in zip(self.pose, texels):
             tex.write(line.tobytes(), viewport=viewport)
-        status = np.zeros(lines * POSE_WIDTH, dtype=np.uint8)
+        status = np.zeros(lines * POSE_WIDTH, dtype=np.uint16)
         status[:n] = view.status[r0:r0 + n]
         self.status.write(status.tobytes(), viewport=viewport)
+
+    def _upload_frozen(self, view: WorldView, k: int) -> None:
+        """Upload a frozen tile's entries: its floes' poses, and its cells' status (1 + the
+        place of the cell's floe among the tile's floes; 0 intact)."""
+        floes, (first_floe, first_cell) = view.frozen_floes[k], self._frozen[k]
+        n_cells = self.model.ice.templates[view.placements[k].template].n_cells
+        status = np.zeros(n_cells, dtype=np.uint16)
+        status[floes["cell"]] = 1 + np.arange(len(floes))
+        for tex, texels in zip(self.pose, pose_textures(floes["pose"].astype(float)).astype("f4")):
+            _write_entries(tex, self._pose_lines, first_floe, texels)
+        _write_entries(self.status, self._status_lines, first_cell, status)
+
+    def floe_memory(self, view: WorldView) -> dict:
+        """Bytes kept for the floes of the view, on the GPU and in the view: the index buffers
+        of live and of frozen tiles, the frozen tiles' texture entries (entries of tiles since
+        thawed included) and the view's frozen records; and the sum per frozen floe."""
+        frozen = sum(b.nbytes for k, bufs in self.tile_floes.items() if k in self._frozen for b in bufs)
+        live = sum(b.nbytes for k, bufs in self.tile_floes.items() if k not in self._frozen for b in bufs)
+        entries = 32 * self._frozen_floes + 2 * self._frozen_cells  # two RGBA32F pose texels; one R16UI status
+        records = sum(f.nbytes for f in view.frozen_floes.values())
+        n = sum(len(f) for f in view.frozen_floes.values())
+        return {"frozen_floes": n, "frozen_index_bytes": frozen, "frozen_entry_bytes": entries,
+                "view_frozen_bytes": records, "live_index_bytes": live,
+                "bytes_per_frozen_floe": round((frozen + entries + records) / n, 1) if n else None}
 
     # -- drawing --------------------------------------------------------------------------
     def draw(self, view: WorldView, channel: ChannelSettings, blend: moderngl.Texture) -> Camera:
@@ -326,7 +443,7 @@ class SceneRenderer:
         for tex, unit in zip(self.pose, POSE_UNITS):
             tex.use(unit)
         if self.status is not None:
-            self.status.use(7)
+            self.status.use(STATUS_UNIT)
         # near to far: ship, floes, then the environment behind them, so that the depth test
         # spares the full-screen pass every pixel already covered
         ctx.enable(moderngl.DEPTH_TEST)
@@ -339,7 +456,8 @@ class SceneRenderer:
         if tiles:
             ctx.enable_direct(GL_CLIP_DISTANCE0)
             ctx.enable(moderngl.CULL_FACE)  # not for the ship: its matrix mirrors (starboard-handed frame)
-            self._set(self.floe, view_proj=vp, **dict(zip(POSE_NAMES, POSE_UNITS)), reflected=False, **common)
+            self._set(self.floe, view_proj=vp, **dict(zip(POSE_NAMES, POSE_UNITS)), status=STATUS_UNIT, reflected=False,
+                      **common)
             self._draw_floes(view, tiles)
             ctx.disable(moderngl.CULL_FACE)
             ctx.disable_direct(GL_CLIP_DISTANCE0)
@@ -349,7 +467,7 @@ class SceneRenderer:
         scene = self.model.scene
         if len(ground):
             self._set(self.env, slab_z=self.slab_z, far=s.far_m, tile_info=0,
-                      cell_raster=3, raster_size=self.raster_size, rim_px=self.rim_px, status=7,
+                      cell_raster=3, raster_size=self.raster_size, rim_px=self.rim_px, status=STATUS_UNIT,
                       field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
             self.env_vao.render(vertices=len(ground))
         if len(above):
@@ -418,11 +536,10 @@ class SceneRenderer:
     def _draw_floes(self, view: WorldView, tiles: list[tuple[int, float]]) -> None:
         """The tiles' broken floes; their side faces only within the level-of-detail distance."""
         for k, dist in tiles:
-            tops, sides = self.tile_floes[k]
-            self.floe["thickness"].value = self.template_thickness[view.placements[k].template]
-            tops.render()
+            self._set(self.floe, **self._tile_draw[k])
+            self.tile_floes[k][0].render()
             if dist < self.settings.lod_distance_m:
-                sides.render()
+                self._sides(view, k).render()
 
     def _draw_reflections(self, view: WorldView, tiles: list[tuple[int, float]]) -> None:
         """The floes' reflections in the sea, within the reflection distance: their side
@@ -440,8 +557,8 @@ class SceneRenderer:
         ctx.polygon_offset = -1.0, -1.0
         self.floe["reflected"].value = True
         for k, _ in near:
-            self.floe["thickness"].value = self.template_thickness[view.placements[k].template]
-            self.tile_floes[k][1].render()
+            self._set(self.floe, **self._tile_draw[k])
+            self._sides(view, k).render()
         self.floe["reflected"].value = False
         ctx.polygon_offset = 0.0, 0.0
         ctx.front_face = "ccw"

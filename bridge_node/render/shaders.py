@@ -17,6 +17,16 @@ from bridge_node.render.textures import NOISE_RANGE
 PERIODS = (23.0, 290.0, 2100.0)  # m: of the relief's three noise fetches
 POSE_WIDTH = 2048  # texels per line of the pose textures: a power of two, a constant in the shaders (on
                    # llvmpipe, division by a uniform is done lane by lane and cost the level ice a tenth)
+# Where an entry of the pose and status textures lies: live rows (i >= 0) fill lines from the
+# first up, frozen tiles' entries (coded i = -1 - k) from the last down, so that either part
+# grows without moving the other's numbers. A frozen tile's k-th cell is first - k.
+_ENTRIES = "const int POSE_WIDTH = " + str(POSE_WIDTH) + """;
+ivec2 entry_texel(int i, int lines) {
+    int k = i >= 0 ? i : -1 - i;
+    return ivec2(k % POSE_WIDTH, i >= 0 ? k / POSE_WIDTH : lines - 1 - k / POSE_WIDTH);
+}
+int entry_of_cell(int first, int cell) { return first >= 0 ? first + cell : first - cell; }
+"""
 
 
 def _octaves() -> str:
@@ -165,37 +175,39 @@ void main() { colour = opaque(sky(normalize(ray))); }
 # the sky in the band's pixels above the horizon. Each pixel's view ray is intersected
 # with the water plane and with the ice top: on an unbreakable tile that is ice; on a
 # breakable or frozen tile the template's cell raster names the cell under the point, and
-# the cell's status (from the pose texture) says intact ice or water between broken floes.
+# the cell's status (from the status texture) says intact ice or water between broken floes.
 # Level ice thus costs no triangles, and far ice does not z-fight with the water.
 ENV_FS = "#version 330\n" + _COMMON + """
 uniform float slab_z;
 uniform float far;               // m: level ice is looked up this far
-uniform isampler2D tile_info;    // per tile: first floe row (-1: unbreakable), template | quarter turns << 16,
-                                 // level-ice thickness (m, float bits), unused: one fetch for all three
+uniform isampler2D tile_info;    // per tile: its first status entry, template | quarter turns << 16, level-ice
+                                 // thickness (m, float bits), 1 if breakable (0: the unbreakable slab): one fetch
 uniform usampler2D cell_raster;  // templates stacked in y: 1 + cell index (0 in a crack), 1 + the nearest
                                  // other cell's within rim_px (0: none), distance to it (1/256 px)
 uniform float rim_px;
 uniform int raster_size;
-uniform usampler2D status;       // per floe row: 0 intact, 1 free, 2 frozen
-const int POSE_WIDTH = """ + str(POSE_WIDTH) + """;
+uniform usampler2D status;       // per floe row its status, per cell of a frozen tile 1 + its floe: 0 intact
+""" + _ENTRIES + """
 uniform vec2 field_size;         // m
 uniform float tile_side;
 in vec3 ray;
 out vec4 colour;
-uint row_status(int row) { return texelFetch(status, ivec2(row % POSE_WIDTH, row / POSE_WIDTH), 0).r; }
+uint cell_status(int first, int cell) {
+    return texelFetch(status, entry_texel(entry_of_cell(first, cell), textureSize(status, 0).y), 0).r;
+}
 // Whether level ice lies at p, and its rim: 1 at the edge of a broken neighbour (open
 // water), falling to 0 at rim_px pixels of the raster from it.
-bool level_ice(vec2 p, ivec2 tile, ivec2 info, out float rim) {
+bool level_ice(vec2 p, ivec2 tile, ivec4 info, out float rim) {
     rim = 0.0;
-    if (info.x < 0) return true;                                        // the unbreakable slab
+    if (info.w == 0) return true;                                       // the unbreakable slab
     vec2 local = p - vec2(tile) * tile_side - 0.5 * tile_side;          // about the tile centre
     int k = info.y >> 16;                                               // undo the quarter turns
     float c = k == 0 ? 1.0 : (k == 2 ? -1.0 : 0.0), s = k == 1 ? 1.0 : (k == 3 ? -1.0 : 0.0);
     local = vec2(c * local.x + s * local.y, c * local.y - s * local.x);
     vec2 uv = clamp((local / tile_side + 0.5) * float(raster_size), vec2(0.0), vec2(float(raster_size) - 1.0));
     uvec3 cell = texelFetch(cell_raster, ivec2(uv) + ivec2(0, (info.y & 0xFFFF) * raster_size), 0).rgb;
-    if (cell.r == 0u || row_status(info.x + int(cell.r) - 1) != 0u) return false;
-    if (cell.g != 0u && row_status(info.x + int(cell.g) - 1) != 0u)
+    if (cell.r == 0u || cell_status(info.x, int(cell.r) - 1) != 0u) return false;
+    if (cell.g != 0u && cell_status(info.x, int(cell.g) - 1) != 0u)
         rim = 1.0 - float(cell.b) / (256.0 * rim_px);
     return true;
 }
@@ -225,7 +237,7 @@ void main() {
     float rim;
     // clamped: off the field the fetch is unused, and one outside the texture is undefined
     ivec4 info = texelFetch(tile_info, clamp(tile, ivec2(0), textureSize(tile_info, 0) - 1), 0);
-    bool ice = on_field && level_ice(p, tile, info.xy, rim);
+    bool ice = on_field && level_ice(p, tile, info, rim);
     vec3 at = eye - g * eye.z / g.z;  // on the water
     // one fetch of the finest octave, under the snow on ice, under the moving waves on the sea
     // (on llvmpipe, both branches cost every pixel); its mip level from the snow's coordinates
@@ -246,20 +258,30 @@ void main() {
 SEEN_DEPTH = 4.0  # m: floes are drawn down to this depth (deeper ice is lost in the sea)
 FLOE_VS = f"\n#version 330\nconst float SEEN_DEPTH = {SEEN_DEPTH};" + """
 uniform mat4 view_proj;
-uniform sampler2D pose_q;        // per floe row: its attitude as a unit quaternion (x, y, z, w), and
-uniform sampler2D pose_t;        // its place (x, y, heave, m); made on the CPU from the yaw, roll and
-                                 // pitch, sparing each vertex six sines and cosines
-const int POSE_WIDTH = """ + str(POSE_WIDTH) + """;
+uniform sampler2D pose_q;        // per floe row (and frozen floe): its attitude as a unit quaternion (x, y,
+uniform sampler2D pose_t;        // z, w), and its place (x, y, heave, m); made on the CPU from the yaw, roll
+                                 // and pitch, sparing each vertex six sines and cosines
+""" + _ENTRIES + """
+uniform usampler2D status;       // per floe row its status, per cell of a frozen tile 1 + its floe: 0 intact
+uniform int first;               // the tile's first row; frozen, its first status entry (negative)
+uniform int first_floe;          // frozen, the number of its first floe's pose entry
+uniform bool frozen;
+uniform int patch_base;          // the tile's first snow patch
 uniform bool reflected;          // drawn mirrored in the water plane: the floes' reflections
 in vec3 in_pos;                  // about the cell's centroid, template frame, m
 in vec3 in_normal;
-in int in_row;                   // the floe's row in the state arrays
+in int in_cell;                  // the cell's index in its template
 out vec3 world;                  // the point itself (also when its reflection is drawn), m
 out vec3 normal;
 out vec2 local;                  // relief coordinates that move with the floe, m
 flat out int top;
 void main() {
-    ivec2 at = ivec2(in_row % POSE_WIDTH, in_row / POSE_WIDTH);
+    int row = first + in_cell;   // a live tile's floe; a frozen tile's: -1 - its pose entry's number
+    if (frozen) {
+        uint floe = texelFetch(status, entry_texel(entry_of_cell(first, in_cell), textureSize(status, 0).y), 0).r;
+        row = -1 - (first_floe + int(floe) - 1);
+    }
+    ivec2 at = entry_texel(row, textureSize(pose_q, 0).y);
     vec4 q = texelFetch(pose_q, at, 0);
     vec3 t = texelFetch(pose_t, at, 0).xyz;
     vec3 q2 = 2.0 * q.xyz, wq = q.w * q2, xq = q.x * q2, yq = q.y * q2;
@@ -269,7 +291,8 @@ void main() {
                   xq.z + wq.y, yq.z - wq.x, 1.0 - xq.x - yq.y);
     world = r * in_pos + t;
     normal = r * in_normal;
-    local = in_pos.xy + 31.7 * vec2(in_row % 61, in_row % 59);  // each floe its own patch of snow
+    int snow_patch = (patch_base + in_cell) % (61 * 59);  // each floe its own patch of snow
+    local = in_pos.xy + 31.7 * vec2(snow_patch % 61, snow_patch / 61);
     top = in_normal.z > 0.5 ? 1 : 0;
     // ice deeper than SEEN_DEPTH is lost in the sea; only what is above the water is mirrored
     gl_ClipDistance[0] = reflected ? world.z : world.z + SEEN_DEPTH;

@@ -5,8 +5,9 @@ import math
 from pathlib import Path
 
 from bridge_node.reports.figures import plt, save_figure
-from bridge_node.reports.ice import draw_floes
+from bridge_node.reports.ice import draw_cells
 from sim_core.frames.units import KNOT
+from sim_core.ice.tiles import placed_cells
 from sim_core.studies.breaking import BreakingMedians, BreakingRun
 
 # summary panels: metric, axis label
@@ -21,7 +22,7 @@ def plot_breaking_run(r: BreakingRun, out: Path) -> Path:
     tile = r.model.templates[0].side
     length = len(r.data.tiles.template) * tile
     fig, ax = plt.subplots(figsize=(4.5, 1.2 + 4.5 * length / tile))
-    draw_floes(ax, r.model, r.data.state)
+    draw_cells(ax, r.model, placed_cells(r.model, r.data))
     ax.set_xlim(0, tile)
     ax.set_ylim(0, length)
     ax.set_xlabel("x, m")

@@ -10,9 +10,10 @@ from matplotlib.patches import Rectangle
 from bridge_node.replay.engine import ReplayStats
 from bridge_node.replay.track import Track
 from bridge_node.reports.figures import plt, save_figure
-from bridge_node.reports.ice import draw_floes
+from bridge_node.reports.ice import cells_where, draw_cells
 from sim_core.frames.units import KNOT
 from sim_core.ice.floes import FloeStatus
+from sim_core.ice.tiles import placed_cells
 from sim_core.world import WorldData, WorldModel
 
 MAX_DRAWN_CELLS = 60_000  # beyond this only the broken cells are drawn, on squares for the placed tiles
@@ -24,20 +25,21 @@ MIN_HEADING_SPAN = 10.0  # deg: the heading axis spans at least this
 def _plan(ax, model: WorldModel, data: WorldData, xy: np.ndarray, track_ne: np.ndarray | None) -> None:
     """Plan view (east right, north up, m): the field, the cells near the track coloured
     by what broke them, the replayed track and the logged fixes."""
-    scene, st = model.scene, data.ice.state
+    scene = model.scene
     lo, hi = xy.min(axis=0) - MARGIN, xy.max(axis=0) + MARGIN
     span = hi - lo  # at most ASPECT times as tall as wide, or as wide as tall: a straight track stays readable
     grow = np.maximum(span.max() / ASPECT - span, 0.0)
     lo, hi = lo - 0.5 * grow, hi + 0.5 * grow
     ax.add_patch(Rectangle((0.0, 0.0), scene.nx * scene.side, scene.ny * scene.side, facecolor="#e8eef3",
                            edgecolor="#7a8793", lw=0.8, zorder=0, label="ice field (level ice)"))
-    near = np.nonzero(np.all((st.xy[:st.n] >= lo) & (st.xy[:st.n] <= hi), axis=1))[0]
-    if len(near) > MAX_DRAWN_CELLS:
+    cells = placed_cells(model.ice, data.ice)
+    near = np.all((cells.xy >= lo) & (cells.xy <= hi), axis=1)
+    if np.count_nonzero(near) > MAX_DRAWN_CELLS:
         for corner in data.ice.tiles.corner:
             ax.add_patch(Rectangle(corner, scene.side, scene.side, facecolor="#f4f7fa", edgecolor="none", zorder=0))
-        near = near[st.status[near] != FloeStatus.INTACT]
-    if len(near):
-        draw_floes(ax, model.ice, st, near)
+        near &= cells.status != FloeStatus.INTACT
+    if near.any():
+        draw_cells(ax, model.ice, cells_where(cells, near))
     ax.plot(xy[:, 0], xy[:, 1], "-", color="#e07a1f", lw=1.0, label="replayed track")
     if track_ne is not None:
         ax.plot(track_ne[:, 1], track_ne[:, 0], ".", color="#222222", ms=2.5, label="logged fixes")

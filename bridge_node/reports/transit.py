@@ -6,7 +6,8 @@ from pathlib import Path
 import numpy as np
 
 from bridge_node.reports.figures import plt, save_figure
-from bridge_node.reports.ice import draw_floes
+from bridge_node.reports.ice import cells_where, draw_cells
+from sim_core.ice.tiles import placed_cells
 from sim_core.studies.transit import TransitSeries
 from sim_core.world import WorldData, WorldModel
 
@@ -37,14 +38,13 @@ def plot_series(s: TransitSeries, reverse: bool, path: Path) -> None:
 
 def plot_channel(model: WorldModel, data: WorldData, path: Path) -> None:
     """Plan view of the placed tiles: the broken channel, live and frozen."""
-    st = data.ice.state
-    broken = np.nonzero(st.cause != 0)[0]
-    if len(broken) == 0:
+    cells = placed_cells(model.ice, data.ice)
+    broken = cells.cause != 0
+    if not broken.any():
         return
-    lo, hi = st.xy[broken].min(axis=0) - 30.0, st.xy[broken].max(axis=0) + 30.0
+    lo, hi = cells.xy[broken].min(axis=0) - 30.0, cells.xy[broken].max(axis=0) + 30.0
     fig, ax = plt.subplots(figsize=(4.0, min(12.0, 1.5 + 4.0 * (hi[1] - lo[1]) / max(hi[0] - lo[0], 1.0))))
-    near = np.nonzero(np.all((st.xy >= lo) & (st.xy <= hi), axis=1))[0]
-    draw_floes(ax, model.ice, st, near)
+    draw_cells(ax, model.ice, cells_where(cells, np.all((cells.xy >= lo) & (cells.xy <= hi), axis=1)))
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_xlabel("east, m")

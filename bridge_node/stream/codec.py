@@ -3,7 +3,7 @@ each array as its raw bytes (no pickle, no JSON for bulk data).
 
 Frames: ``[TOPIC, header, array, array, ..., traffic]``. The header names each array's
 dtype and shape in frame order. Floe poses travel as float32 (what the renderer uses; 0.1 mm
-at 1 km) and row numbers as int32. ``input_time`` is the monotonic time (s) of the newest
+at 1 km) and row numbers as int32; frozen floes as ``FROZEN_FLOE_EVENT`` records. ``input_time`` is the monotonic time (s) of the newest
 console order that went into the step, or None. The last frame is the whole traffic picture
 at the step (``TRAFFIC_DTYPE`` rows; a few vessels, so every message carries all of them).
 """
@@ -17,15 +17,15 @@ import numpy as np
 from bridge_node.stream.world_view import TRAFFIC_DTYPE
 from sim_core.ship.model import OrderRejection
 from sim_core.ship.outputs import ShipOutputs
-from sim_core.world import PlacedTiles, WorldEvents
+from sim_core.world import FROZEN_FLOE_EVENT, PlacedTiles, WorldEvents
 
 TOPIC = b"w"
 HEARTBEAT = b"h"  # [HEARTBEAT, b"<seq>"]: the last sequence number published
 _PLACED = [f.name for f in dataclasses.fields(PlacedTiles)]
 _ARRAYS = ("thawed", "frozen", "broken_by_hull", "broken_by_contact", "floe_rows", "floe_pose", "floe_status",
-           "ice_load")
+           "ice_load", "frozen_floes")
 _WIRE = {"floe_pose": np.float32, "floe_rows": np.int32, "broken_by_hull": np.int32,
-         "broken_by_contact": np.int32}
+         "broken_by_contact": np.int32, "frozen_floes": FROZEN_FLOE_EVENT}
 
 
 class CodecError(ValueError):
@@ -60,6 +60,7 @@ def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
         traffic = np.frombuffer(frames[-1], dtype=TRAFFIC_DTYPE).copy()  # writable, as WorldView.traffic starts
         placed = PlacedTiles(*arrays[:len(_PLACED)])
         named = dict(zip(_ARRAYS, arrays[len(_PLACED):]))
+        named["frozen_floes"] = named["frozen_floes"].view(FROZEN_FLOE_EVENT)  # records travel as raw bytes
         events = WorldEvents(
             seq=int(header["seq"]), time=float(header["time"]), ship=ShipOutputs.from_dict(header["ship"]), placed=placed,
             floes_free=int(header["floes_free"]), floes_frozen=int(header["floes_frozen"]),

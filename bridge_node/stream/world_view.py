@@ -2,11 +2,14 @@
 
 A consumer never reads the world's internals; it applies every step's events (or a
 snapshot, to start or to resynchronise) to a ``WorldView``, which keeps the ship's state,
-every placed tile (and which are frozen), and every floe row's pose, status and break
-cause, the way a Clone-pattern client keeps its copy of a key-value store. The stream's
+every placed tile (and which are frozen), every live floe row's pose, status and break
+cause, and every frozen tile's floes (its ``FROZEN_FLOE_EVENT`` records, the only thing a
+frozen floe costs here), the way a Clone-pattern client keeps its copy of a key-value
+store. Rows a frozen tile gave up are VACANT until a placement is given them. The stream's
 snapshot service answers late joiners from a view (``to_snapshot``). Since the consumer
-last looked, the view also collects what changed: new placements, the span of rows whose
-pose changed, and the rows newly broken, so a renderer uploads only those.
+last looked, the view also collects what changed: placements given rows (new or thawed),
+placements frozen, the span of rows whose pose changed, and the rows newly broken (a thawed
+tile's floes among them), so a renderer uploads only those.
 """
 from __future__ import annotations
 
@@ -18,7 +21,7 @@ import numpy as np
 
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ship.outputs import ShipOutputs
-from sim_core.world import PlacedTiles, WorldEvents
+from sim_core.world import FROZEN_FLOE_EVENT, PlacedTiles, WorldEvents
 
 # The other vessels (AIS, DIS, scripted), one row each: MMSI; x east and y north in world m
 # (the frame of ``ship.east``/``ship.north``); true heading in rad, clockwise from north (as
@@ -41,10 +44,12 @@ class Placement:
 
 @dataclass
 class ViewChanges:
-    """What changed since the last ``take_changes``: new placement indices, the rows
-    [rows_from, rows_to) whose pose or status may have changed, and rows broken."""
+    """What changed since the last ``take_changes``: placements given rows (new or thawed)
+    and placements frozen, each only if still so; the rows [rows_from, rows_to) whose pose or
+    status may have changed; and rows broken (they may since have gone to another tile)."""
 
     placements: list[int]
+    frozen: list[int]
     rows_from: int
     rows_to: int
     broken: np.ndarray
@@ -52,8 +57,9 @@ class ViewChanges:
 
 class WorldView:
     """The last published state. ``pose`` is (rows, 6): x, y, heave, yaw, roll, pitch in
-    world m and rad; ``status`` the FloeStatus of each row; ``traffic`` the other vessels
-    as last published (``TRAFFIC_DTYPE`` rows, shape (0,) when there are none)."""
+    world m and rad; ``status`` the FloeStatus of each row; ``frozen_floes`` each frozen
+    placement's floes (``FROZEN_FLOE_EVENT`` records); ``traffic`` the other vessels as
+    last published (``TRAFFIC_DTYPE`` rows, shape (0,) when there are none)."""
 
     def __init__(self) -> None:
         self.seq = -1
@@ -61,6 +67,7 @@ class WorldView:
         self.ship: ShipOutputs | None = None
         self.placements: dict[int, Placement] = {}
         self.frozen: set[int] = set()  # frozen placements
+        self.frozen_floes: dict[int, np.ndarray] = {}
         self.pose = np.zeros((0, 6))
         self.status = np.zeros(0, dtype=np.uint8)
         self.cause = np.zeros(0, dtype=np.uint8)
@@ -68,6 +75,7 @@ class WorldView:
         self.traffic = np.zeros(0, dtype=TRAFFIC_DTYPE)
         self._blend: tuple | None = None  # (rows, pose before, pose after, ship before, ship after)
         self._new: list[int] = []
+        self._frozen_new: list[int] = []
         self._span = [np.iinfo(np.int64).max, 0]
         self._broken: list[np.ndarray] = []
 
@@ -79,32 +87,58 @@ class WorldView:
         if n > len(self.status):
             grow = n - len(self.status)
             self.pose = np.concatenate([self.pose, np.zeros((grow, 6))])
-            self.status = np.concatenate([self.status, np.zeros(grow, dtype=np.uint8)])
+            self.status = np.concatenate([self.status, np.full(grow, FloeStatus.VACANT, dtype=np.uint8)])
             self.cause = np.concatenate([self.cause, np.zeros(grow, dtype=np.uint8)])
+
+    def _give_up_rows(self, placement: Placement) -> None:
+        rows = slice(placement.row_start, placement.row_start + placement.row_count)
+        self.status[rows], self.cause[rows] = FloeStatus.VACANT, BreakCause.NONE
+        if placement.row_count:
+            self._span = [min(self._span[0], rows.start), max(self._span[1], rows.stop)]
 
     def apply(self, events: WorldEvents) -> None:
         """Bring the view up to the state after these events."""
         self._unblend()
         before_ship, known_rows = self.ship, self.rows
         self.seq, self.time, self.ship, self.ice_load = events.seq, events.time, events.ship, events.ice_load
-        self.frozen = set(events.frozen.tolist()) if events.snapshot else \
-            (self.frozen | set(events.frozen.tolist())) - set(events.thawed.tolist())
+        frozen = set(events.frozen.tolist())
+        if events.snapshot:
+            self.status[:] = FloeStatus.VACANT  # rows the snapshot does not name belong to no tile
+            self.frozen_floes = {k: v for k, v in self.frozen_floes.items() if k in frozen}
+        for k in frozen - self.frozen:
+            self._frozen_new.append(k)
+            self.frozen_floes[k] = np.zeros(0, dtype=FROZEN_FLOE_EVENT)  # no floes, unless listed
+            if k in self.placements:
+                self._give_up_rows(self.placements[k])
+                self.placements[k] = dataclasses.replace(self.placements[k], row_start=0, row_count=0)
+        self.frozen = frozen if events.snapshot else (self.frozen | frozen) - set(events.thawed.tolist())
+        f = events.frozen_floes
+        order = np.argsort(f["placement"], kind="stable")
+        keys, starts = np.unique(f["placement"][order], return_index=True)
+        for k, floes in zip(keys.tolist(), np.split(f[order], starts[1:])):
+            self.frozen_floes[k] = floes.copy()  # its own memory, not the message's
         p = events.placed
         for i in range(len(p.placement)):
             k = int(p.placement[i])
-            if k not in self.placements:
+            placement = Placement(int(p.tile[i]), int(p.template[i]), int(p.quarter_turns[i]),
+                                  (float(p.corner[i, 0]), float(p.corner[i, 1])),
+                                  int(p.row_start[i]), int(p.row_count[i]))
+            if k not in self.frozen and self.placements.get(k) != placement:
                 self._new.append(k)
-            self.placements[k] = Placement(int(p.tile[i]), int(p.template[i]), int(p.quarter_turns[i]),
-                                           (float(p.corner[i, 0]), float(p.corner[i, 1])),
-                                           int(p.row_start[i]), int(p.row_count[i]))
+            self.placements[k] = placement
         if len(p.placement):
             self._ensure_rows(int((p.row_start + p.row_count).max()))
+        for k in events.thawed.tolist():
+            self._thaw(k)
         rows = events.floe_rows
         if len(rows):
             self._ensure_rows(int(rows.max()) + 1)
             before = self.pose[rows]
             self.pose[rows] = events.floe_pose
-            new = rows >= known_rows  # rows first seen now start where they are
+            # rows first seen now, or just given to a tile, start where they are
+            new = rows >= known_rows
+            for a, n in zip(p.row_start.tolist(), p.row_count.tolist()):
+                new |= (rows >= a) & (rows < a + n)
             before[new] = self.pose[rows[new]]
             if not events.snapshot:
                 self._blend = (rows, before, self.pose[rows], before_ship or events.ship, events.ship)
@@ -114,13 +148,30 @@ class WorldView:
         self.cause[events.broken_by_contact] = BreakCause.CONTACT
         self._broken += [events.broken_by_hull, events.broken_by_contact]
 
+    def _thaw(self, placement: int) -> None:
+        """A thawed tile's floes take back their causes in its new rows, and count as broken."""
+        floes = self.frozen_floes.pop(placement, None)
+        if floes is not None:
+            rows = self.placements[placement].row_start + floes["cell"].astype(np.int64)
+            self.cause[rows] = floes["cause"]
+            self._broken.append(rows)
+
     def take_changes(self) -> ViewChanges:
         """What changed since the last call (and forget it)."""
         lo, hi = self._span
-        changes = ViewChanges(self._new, min(lo, hi), hi, np.concatenate(self._broken) if self._broken
+        changes = ViewChanges(list(dict.fromkeys(k for k in self._new if k not in self.frozen)),
+                              list(dict.fromkeys(k for k in self._frozen_new if k in self.frozen)),
+                              min(lo, hi), hi, np.concatenate(self._broken) if self._broken
                               else np.zeros(0, dtype=np.int64))
-        self._new, self._span, self._broken = [], [np.iinfo(np.int64).max, 0], []
+        self._new, self._frozen_new, self._span, self._broken = [], [], [np.iinfo(np.int64).max, 0], []
         return changes
+
+    def live_rows(self) -> np.ndarray:
+        """Rows of the placements that are not frozen."""
+        spans = [(p.row_start, p.row_count) for k, p in self.placements.items() if k not in self.frozen]
+        if not spans:
+            return np.zeros(0, dtype=np.int64)
+        return np.concatenate([np.arange(a, a + n) for a, n in spans])
 
     def to_snapshot(self) -> WorldEvents:
         """The whole state of the view as snapshot events (for a consumer joining late)."""
@@ -132,15 +183,18 @@ class WorldView:
                              np.array([p.corner for p in ps], dtype=float).reshape(-1, 2),
                              np.array([p.row_start for p in ps], dtype=np.int64),
                              np.array([p.row_count for p in ps], dtype=np.int64))
-        broken = self.status != FloeStatus.INTACT
+        rows = self.live_rows()
+        broken = rows[self.status[rows] == FloeStatus.FREE]
+        frozen = sorted(self.frozen)
+        floes = [self.frozen_floes[k] for k in frozen if k in self.frozen_floes]
         return WorldEvents(
             seq=self.seq, time=self.time, ship=self.ship, placed=placed, thawed=np.zeros(0, dtype=np.int64),
-            frozen=np.array(sorted(self.frozen), dtype=np.int64),
-            broken_by_hull=np.nonzero(broken & (self.cause == BreakCause.HULL))[0],
-            broken_by_contact=np.nonzero(broken & (self.cause == BreakCause.CONTACT))[0],
-            floe_rows=np.arange(self.rows), floe_pose=self.pose.copy(), floe_status=self.status.copy(),
-            floes_free=int(np.count_nonzero(self.status == FloeStatus.FREE)),
-            floes_frozen=int(np.count_nonzero(self.status == FloeStatus.FROZEN)),
+            frozen=np.array(frozen, dtype=np.int64),
+            frozen_floes=np.concatenate(floes) if floes else np.zeros(0, dtype=FROZEN_FLOE_EVENT),
+            broken_by_hull=broken[self.cause[broken] == BreakCause.HULL],
+            broken_by_contact=broken[self.cause[broken] == BreakCause.CONTACT],
+            floe_rows=rows, floe_pose=self.pose[rows], floe_status=self.status[rows],
+            floes_free=len(broken), floes_frozen=sum(len(f) for f in floes),
             ice_load=self.ice_load.copy(), rejected=(), snapshot=True)
 
     def blend(self, alpha: float) -> None:

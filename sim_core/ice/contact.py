@@ -454,11 +454,11 @@ class ContactSpace:
                                                m.is_sphere[g].tolist()):
             bodies.intact[j] = _new_shape(body, ring, float(m.radius[gi]), tuple(centre), sphere, friction)
 
-    def build_floes(self, bodies: TileBodies, state: FloeState, rows: np.ndarray) -> None:
-        """Make, outside the space, dynamic bodies for rows of a tile at their current pose
-        and velocity; ``insert_tile`` or ``TileBodies.insert`` switch them in."""
+    def build_floes(self, bodies: TileBodies, state: FloeState, rows: np.ndarray, start: int) -> None:
+        """Make, outside the space, dynamic bodies for rows of a tile (whose rows start at
+        ``start``) at their current pose and velocity; ``insert_tile`` or
+        ``TileBodies.insert`` switch them in."""
         m = self.model
-        start = int(self.tiles.row_start[state.tile[rows[0]]]) if len(rows) else 0
         g = state.gcell[rows]
         rings = self._rings(g, np.zeros((len(rows), 2)), np.zeros(len(rows)))
         friction = m.settings.ice_friction
@@ -538,7 +538,7 @@ class ContactSpace:
             mine = rows[state.tile[rows] == tile]
             j = mine - start
             bodies.remove(self._cp, j)
-            self.build_floes(bodies, state, mine)
+            self.build_floes(bodies, state, mine, start)
             bodies.insert(self._cp, j)
 
     def remove(self, state: FloeState, rows: np.ndarray) -> None:
@@ -551,6 +551,10 @@ class ContactSpace:
     def discard(self, bodies: TileBodies) -> None:
         """Free a built tile that was never switched in."""
         bodies.release(self._cp)
+
+    def is_leaving(self, placement: int) -> bool:
+        """Whether objects of the placement's last switch-out are still in the space."""
+        return any(k == placement for k, _ in self._leaving)
 
     def has_tile(self, placement: int) -> bool:
         """Whether the placement's bodies are in the space."""

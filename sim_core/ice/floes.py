@@ -1,11 +1,15 @@
-"""Per-step state of the ice (like MuJoCo's mjData): one row per cell of every placed tile.
+"""Per-step state of the ice (like MuJoCo's mjData): one row per cell of every live tile.
 
-Rows of one tile are contiguous and are only ever appended: a row keeps its number for the
-whole exercise (a frozen or thawed tile keeps its rows), so a row number is a stable name
-for a floe that consumers (renderers, recorders) may keep.
+Rows of one tile are contiguous, and a row keeps its number for as long as its tile is live
+(placed or thawed, not frozen), so consumers (renderers, recorders) may keep live floes by
+row number. A frozen tile gives its rows back and keeps only its broken cells, in
+``FrozenFloes`` (one small record each, no row): behind the ship tiles freeze by the
+hundred, and a row for each of their intact cells would grow memory for as long as the ship
+steams. Vacant rows are handed to the next tile placed or thawed.
 
 A row is ``FloeStatus.INTACT`` (part of the level ice, at rest), ``FREE`` (a floating floe,
-simulated) or ``FROZEN`` (left behind the ship: keeps its last pose, costs no physics).
+simulated), ``FROZEN`` (a broken cell of a tile just frozen, whose engine objects are still
+leaving the space; the row is given back once they have) or ``VACANT`` (held by no tile).
 Only ``sim_core.ice.tiles`` changes a row's status, through ``FloeState.set_status``, which
 keeps the per-status counts. Positions are world metres (x east, y north, z up; z is the
 centre of mass height above the water plane); yaw is counter-clockwise from the template's
@@ -29,6 +33,7 @@ class FloeStatus(IntEnum):
     INTACT = 0
     FREE = 1
     FROZEN = 2
+    VACANT = 3
 
 
 class BreakCause(IntEnum):
@@ -85,15 +90,20 @@ class _Table:
         self.n += count
         return rows
 
+    def _zero(self, rows: slice) -> None:
+        """Zero rows in use, in every column."""
+        for column in self._columns:
+            getattr(self, column.name)[rows] = 0
+
     def nbytes_per_row(self) -> int:
         """Bytes one row takes in the columns."""
         return sum(np.dtype(c.dtype).itemsize * (c.width or 1) for c in self._columns)
 
 
 class FloeState(_Table):
-    """One row per floe; only rows ``[0, n)`` are in use. A frozen floe costs its row and
-    nothing else (``nbytes_per_row`` bytes); rates and small angles are kept in float32,
-    positions in float64 (metre-level fields span kilometres)."""
+    """One row per cell of the live tiles; rows ``[0, n)`` exist, some of them vacant. Rates
+    and small angles are kept in float32, positions in float64 (metre-level fields span
+    kilometres)."""
 
     gcell = _Column(np.int32)  # global template cell of the row
     tile = _Column(np.int32)  # placement index of the row's tile
@@ -117,13 +127,34 @@ class FloeState(_Table):
     def __init__(self, capacity: int = 1024) -> None:
         super().__init__(capacity)
         self._counts = np.zeros(len(FloeStatus), dtype=np.int64)
+        self._vacant: list[list[int]] = []  # [start, stop) runs of vacant rows, by start, none adjacent
 
     def add_rows(self, count: int, status: FloeStatus) -> slice:
-        """Append ``count`` zeroed rows with the given status; returns their slice."""
-        rows = self._append(count)
+        """``count`` contiguous zeroed rows with the given status: the first vacant run long
+        enough, else new rows at the end; returns their slice."""
+        run = next((r for r in self._vacant if r[1] - r[0] >= count), None)
+        if run is None:
+            rows = self._append(count)
+        else:
+            rows = slice(run[0], run[0] + count)
+            run[0] += count
+            if run[0] == run[1]:
+                self._vacant.remove(run)
+            self._zero(rows)
+            self._counts[FloeStatus.VACANT] -= count
         self._status[rows] = status
         self._counts[status] += count
         return rows
+
+    def release_rows(self, rows: slice) -> None:
+        """Make rows vacant, for a later ``add_rows``."""
+        self.set_status(np.arange(rows.start, rows.stop), FloeStatus.VACANT)
+        k = next((i for i, r in enumerate(self._vacant) if r[0] > rows.start), len(self._vacant))
+        self._vacant.insert(k, [rows.start, rows.stop])
+        if k + 1 < len(self._vacant) and self._vacant[k + 1][0] == rows.stop:  # joins the run after
+            self._vacant[k][1] = self._vacant.pop(k + 1)[1]
+        if k > 0 and self._vacant[k - 1][1] == rows.start:  # and the run before
+            self._vacant[k - 1][1] = self._vacant.pop(k)[1]
 
     def set_status(self, rows: np.ndarray, status: FloeStatus) -> None:
         """Give rows a new status, keeping the counts."""
@@ -138,7 +169,8 @@ class FloeState(_Table):
 
 class TilePlacement(_Table):
     """Placed breakable tiles, by placement index: template, south-west corner (m),
-    rotation (quarter turns CCW about the centre), first row and row count."""
+    rotation (quarter turns CCW about the centre), first row and row count (0 rows while
+    the tile is frozen)."""
 
     template = _Column(np.int64)
     corner = _Column(np.float64, 2)
@@ -160,3 +192,63 @@ class TilePlacement(_Table):
         """Rows of a placed tile."""
         start = int(self._row_start[placement])
         return np.arange(start, start + int(self._row_count[placement]))
+
+
+# A frozen tile's broken cell: its offset in the tile, what broke it, and the pose and
+# velocities it froze with (as the FloeState columns of the same names). 65 bytes; a thaw
+# gives them back exactly.
+FROZEN_FLOE = np.dtype([("cell", np.uint32), ("cause", np.uint8), ("xy", np.float64, 2), ("yaw", np.float64),
+                        ("heave", np.float32), ("roll", np.float32), ("pitch", np.float32), ("vel", np.float32, 2),
+                        ("yaw_rate", np.float32), ("heave_rate", np.float32), ("roll_rate", np.float32),
+                        ("pitch_rate", np.float32)])
+_KEPT = FROZEN_FLOE.names[2:]  # the columns a frozen floe keeps
+
+
+class FrozenFloes:
+    """The broken cells of frozen tiles, by placement (``FROZEN_FLOE`` records, by cell).
+    A frozen tile's intact cells need no record: they lie where the placement put them."""
+
+    def __init__(self) -> None:
+        self._tiles: dict[int, np.ndarray] = {}
+        self.count = 0  # frozen floes held
+
+    def freeze(self, placement: int, state: FloeState, rows: np.ndarray, cells: np.ndarray) -> None:
+        """Keep the given rows (cells: their offsets in the tile) as the placement's record."""
+        floes = np.zeros(len(rows), dtype=FROZEN_FLOE)
+        floes["cell"], floes["cause"] = cells, state.cause[rows]
+        for name in _KEPT:
+            floes[name] = getattr(state, name)[rows]
+        self._tiles[placement] = floes
+        self.count += len(floes)
+
+    def restore(self, placement: int, state: FloeState, first_row: int) -> np.ndarray:
+        """Write the placement's record back into its tile's rows (from first_row on);
+        returns those rows. The record stays until ``forget``."""
+        floes = self._tiles[placement]
+        rows = first_row + floes["cell"].astype(np.int64)
+        state.cause[rows] = floes["cause"]
+        for name in _KEPT:
+            getattr(state, name)[rows] = floes[name]
+        return rows
+
+    def forget(self, placement: int) -> None:
+        """Drop the placement's record (its tile has thawed)."""
+        self.count -= len(self._tiles.pop(placement))
+
+    def __getitem__(self, placement: int) -> np.ndarray:
+        return self._tiles[placement]
+
+    def __contains__(self, placement: int) -> bool:
+        return placement in self._tiles
+
+    def placements(self) -> list[int]:
+        """Frozen placements, in the order they froze."""
+        return list(self._tiles)
+
+    def records(self) -> np.ndarray:
+        """Every frozen floe's record, in the order their tiles froze."""
+        return np.concatenate([np.zeros(0, dtype=FROZEN_FLOE), *self._tiles.values()])
+
+    def nbytes(self) -> int:
+        """Bytes of the records."""
+        return sum(f.nbytes for f in self._tiles.values())

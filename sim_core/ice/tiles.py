@@ -1,9 +1,12 @@
 """The life of a placed tile's rows: laid intact, broken free, frozen, thawed.
 
 This is the one module that changes a floe's status (through ``FloeState.set_status``):
-``place_tile`` adds rows INTACT, ``break_cells`` makes them FREE, ``freeze_tile`` makes
-a tile's free floes FROZEN and ``thaw_tile`` FREE again. The contact space follows each
-change. ``IceData`` is the dynamic half of the ice world.
+``place_tile`` takes rows INTACT, ``break_cells`` makes them FREE, ``freeze_tile`` keeps a
+tile's free floes as ``FrozenFloes`` records (their rows FROZEN until the tile's engine
+objects have left the space, then ``reclaim_rows`` makes the tile's rows VACANT for the
+next tile), and ``thaw_tile`` gives the tile rows again, its floes FREE with the poses and
+velocities they froze with. The contact space follows each change. ``IceData`` is the
+dynamic half of the ice world.
 
 Laying or thawing a tile builds a thousand or more engine objects. That work needs no row
 and touches no physics, so it can be done ahead of need: ``prepare_place`` and
@@ -14,29 +17,33 @@ and enter the space in the same order, at the same step.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from sim_core.ice.contact import ContactSpace, TileBodies
-from sim_core.ice.floes import BreakCause, FloeState, FloeStatus, TilePlacement
+from sim_core.ice.floes import BreakCause, FloeState, FloeStatus, FrozenFloes, TilePlacement
 from sim_core.ice.model import IceModel, placed_centroids
 
 
 @dataclass
 class IceData:
-    """Dynamic half of the ice world: floe rows, placed tiles, the contact space."""
+    """Dynamic half of the ice world: floe rows, placed tiles, the contact space, frozen
+    tiles' floes, and the rows of frozen tiles whose engine objects are still leaving."""
 
     state: FloeState
     tiles: TilePlacement
     contacts: ContactSpace
+    frozen: FrozenFloes = field(default_factory=FrozenFloes)
+    leaving_rows: dict[int, slice] = field(default_factory=dict)  # placement -> rows to give back
 
 
 @dataclass
 class PreparedTile:
     """Engine objects of a tile built ahead of its switch: the template, corner (m) and
-    quarter turns it is laid with, the placement it thaws (-1 for a new one), and the cell
-    offsets and floe rows still to build."""
+    quarter turns it is laid with, the placement it thaws (-1 for a new one) and the rows
+    taken for that thaw (VACANT until the switch), and the cell offsets and floe rows still
+    to build."""
 
     template: int
     corner: tuple[float, float]
@@ -45,6 +52,7 @@ class PreparedTile:
     bodies: TileBodies
     cells: np.ndarray
     floes: np.ndarray
+    rows: slice | None = None
 
     @property
     def done(self) -> bool:
@@ -65,15 +73,32 @@ def prepare_place(model: IceModel, template: int, corner: tuple[float, float], q
                         TileBodies(n), np.arange(n), np.zeros(0, dtype=np.int64))
 
 
-def prepare_thaw(data: IceData, placement: int) -> PreparedTile:
-    """Start preparing a frozen tile's return: its intact cells and its frozen floes, at
-    the poses they froze with (they do not change while frozen)."""
+def prepare_thaw(model: IceModel, data: IceData, placement: int) -> PreparedTile:
+    """Start preparing a frozen tile's return: take rows for it (vacant until the switch)
+    holding its intact cells and its frozen floes at the poses they froze with (they do not
+    change while frozen)."""
     tiles, st = data.tiles, data.state
-    rows = tiles.rows(placement)
-    status = st.status[rows]
-    return PreparedTile(int(tiles.template[placement]), tuple(tiles.corner[placement].tolist()),
-                        int(tiles.quarter_turns[placement]), placement, TileBodies(len(rows)),
-                        np.nonzero(status == FloeStatus.INTACT)[0], rows[status == FloeStatus.FROZEN])
+    template, turns = int(tiles.template[placement]), int(tiles.quarter_turns[placement])
+    corner = tuple(tiles.corner[placement].tolist())
+    rows = st.add_rows(model.templates[template].n_cells, FloeStatus.VACANT)
+    _lay(model, st, rows, template, corner, turns, placement)
+    floes = data.frozen.restore(placement, st, rows.start)
+    intact = np.ones(rows.stop - rows.start, dtype=bool)
+    intact[floes - rows.start] = False
+    return PreparedTile(template, corner, turns, placement, TileBodies(len(intact)), np.nonzero(intact)[0], floes, rows)
+
+
+def _lay(model: IceModel, st: FloeState, rows: slice, template: int, corner: tuple[float, float],
+         quarter_turns: int, placement: int) -> None:
+    """Fill a tile's rows as level ice: its cells at their placed centroids and floating height."""
+    g0, n = int(model.template_start[template]), rows.stop - rows.start
+    home, yaw = placed_centroids(model, template, corner, quarter_turns)
+    st.gcell[rows] = np.arange(g0, g0 + n)
+    st.tile[rows] = placement
+    st.home[rows] = home
+    st.xy[rows] = home
+    st.yaw[rows] = yaw
+    st.heave[rows] = model.z_equilibrium[g0:g0 + n]
 
 
 def advance(data: IceData, prepared: PreparedTile, max_items: int) -> int:
@@ -83,13 +108,16 @@ def advance(data: IceData, prepared: PreparedTile, max_items: int) -> int:
         data.contacts.build_cells(prepared.bodies, prepared.template, prepared.corner, prepared.quarter_turns, cells)
     floes, prepared.floes = prepared.floes[:max_items - len(cells)], prepared.floes[max_items - len(cells):]
     if len(floes):
-        data.contacts.build_floes(prepared.bodies, data.state, floes)
+        data.contacts.build_floes(prepared.bodies, data.state, floes, prepared.rows.start)
     return len(cells) + len(floes)
 
 
 def discard_prepared(data: IceData, prepared: PreparedTile) -> None:
-    """Free the engine objects of a preparation that will not be switched in."""
+    """Free the engine objects (and the rows taken) of a preparation that will not be
+    switched in."""
     data.contacts.discard(prepared.bodies)
+    if prepared.rows is not None:
+        data.state.release_rows(prepared.rows)
 
 
 def _finish(data: IceData, prepared: PreparedTile) -> None:
@@ -105,18 +133,9 @@ def place_tile(model: IceModel, data: IceData, template: int, corner: tuple[floa
     ``data.tiles.rows(index)``)."""
     prepared = prepared or prepare_place(model, template, corner, quarter_turns)
     _finish(data, prepared)
-    t = model.templates[template]
-    g0 = model.template_start[template]
-    st = data.state
-    rows = st.add_rows(t.n_cells, FloeStatus.INTACT)
+    rows = data.state.add_rows(model.templates[template].n_cells, FloeStatus.INTACT)
     index = data.tiles.add(template, prepared.corner, prepared.quarter_turns, rows)
-    home, yaw = placed_centroids(model, template, prepared.corner, prepared.quarter_turns)
-    st.gcell[rows] = np.arange(g0, g0 + t.n_cells)
-    st.tile[rows] = index
-    st.home[rows] = home
-    st.xy[rows] = home
-    st.yaw[rows] = yaw
-    st.heave[rows] = model.z_equilibrium[g0:g0 + t.n_cells]
+    _lay(model, data.state, rows, template, prepared.corner, prepared.quarter_turns, index)
     data.contacts.insert_tile(prepared.bodies, index)
     return index
 
@@ -129,25 +148,73 @@ def break_cells(data: IceData, rows: np.ndarray, cause: BreakCause) -> None:
 
 
 def freeze_tile(data: IceData, placement: int) -> None:
-    """Stop simulating a tile: its bodies leave the contact space, free floes keep their
-    last pose and velocity as FROZEN (a row and nothing else), intact cells stay INTACT
-    (drawn, not simulated)."""
-    rows = data.tiles.rows(placement)
-    st = data.state
-    st.submerged[rows] = False  # a frozen floe keeps its pose; it surfaces if thawed
-    st.resting[rows] = False  # nor is it resting: it thaws into the dynamic set
-    st.calm[rows] = 0
+    """Stop simulating a tile: its bodies leave the contact space, its free floes are kept
+    with their last pose and velocity as ``FrozenFloes`` records, and its rows go back to
+    the table once the bodies have left (``reclaim_rows``); until then its floes' rows are
+    FROZEN. Its intact cells are level ice again (drawn, not simulated)."""
+    tiles, st = data.tiles, data.state
+    rows = tiles.rows(placement)
+    free = rows[st.status[rows] == FloeStatus.FREE]
+    data.frozen.freeze(placement, st, free, free - rows[0])
     data.contacts.drop_tile(placement)
-    st.set_status(rows[st.status[rows] == FloeStatus.FREE], FloeStatus.FROZEN)
+    st.set_status(free, FloeStatus.FROZEN)
+    st.submerged[rows] = st.resting[rows] = False  # a frozen floe thaws afloat, in the dynamic set
+    st.calm[rows] = 0
+    data.leaving_rows[placement] = slice(int(rows[0]), int(rows[-1]) + 1)
+    tiles.row_start[placement], tiles.row_count[placement] = 0, 0
 
 
-def thaw_tile(data: IceData, placement: int, prepared: PreparedTile | None = None) -> None:
-    """Simulate a frozen tile again: intact cells rejoin as a tile body, frozen floes come
-    back as free floes with the poses and velocities they froze with. With a tile prepared for
-    this thaw, only switch it in."""
-    prepared = prepared or prepare_thaw(data, placement)
+def reclaim_rows(data: IceData) -> None:
+    """Give back to the table the rows of frozen tiles whose engine objects have left the
+    space (until then a contact may still name them)."""
+    for placement in [k for k in data.leaving_rows if not data.contacts.is_leaving(k)]:
+        data.state.release_rows(data.leaving_rows.pop(placement))
+
+
+def thaw_tile(model: IceModel, data: IceData, placement: int, prepared: PreparedTile | None = None) -> None:
+    """Simulate a frozen tile again, in rows of its own: intact cells rejoin as a tile body,
+    frozen floes come back as free floes with the poses and velocities they froze with.
+    With a tile prepared for this thaw, only switch it in."""
+    prepared = prepared or prepare_thaw(model, data, placement)
     _finish(data, prepared)
-    rows = data.tiles.rows(placement)
-    frozen = rows[data.state.status[rows] == FloeStatus.FROZEN]
+    rows, st = prepared.rows, data.state
+    data.tiles.row_start[placement], data.tiles.row_count[placement] = rows.start, rows.stop - rows.start
     data.contacts.insert_tile(prepared.bodies, placement)
-    data.state.set_status(frozen, FloeStatus.FREE)
+    st.set_status(np.arange(rows.start, rows.stop), FloeStatus.INTACT)
+    st.set_status(rows.start + data.frozen[placement]["cell"].astype(np.int64), FloeStatus.FREE)
+    data.frozen.forget(placement)
+
+
+@dataclass(frozen=True)
+class Cells:
+    """Cells of placed tiles, one entry each: global template cell, centre of mass (n, 2)
+    world m, yaw rad, ``FloeStatus`` and ``BreakCause``."""
+
+    gcell: np.ndarray
+    xy: np.ndarray
+    yaw: np.ndarray
+    status: np.ndarray
+    cause: np.ndarray
+
+
+def placed_cells(model: IceModel, data: IceData) -> Cells:
+    """Every cell of every placed tile, live or frozen (a frozen tile's intact cells where
+    its placement laid them, its floes FROZEN at the poses they froze with), for pictures."""
+    tiles, st = data.tiles, data.state
+    parts = []
+    for k in range(tiles.n):
+        if k not in data.frozen:
+            rows = tiles.rows(k)
+            parts.append((st.gcell[rows], st.xy[rows], st.yaw[rows], st.status[rows], st.cause[rows]))
+            continue
+        template = int(tiles.template[k])
+        home, yaw = placed_centroids(model, template, tiles.corner[k], int(tiles.quarter_turns[k]))
+        yaws, status, cause = np.full(len(home), yaw), np.zeros(len(home), np.uint8), np.zeros(len(home), np.uint8)
+        floes = data.frozen[k]
+        cell = floes["cell"].astype(np.int64)
+        home[cell], yaws[cell], status[cell], cause[cell] = floes["xy"], floes["yaw"], FloeStatus.FROZEN, floes["cause"]
+        g0 = int(model.template_start[template])
+        parts.append((np.arange(g0, g0 + len(home)), home, yaws, status, cause))
+    if not parts:
+        return Cells(np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros(0, np.uint8), np.zeros(0, np.uint8))
+    return Cells(*(np.concatenate(column) for column in zip(*parts)))

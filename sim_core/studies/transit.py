@@ -55,7 +55,7 @@ def run_transit(model: WorldModel, data: WorldData, distance: float, dt: float,
         ms = (time.perf_counter() - t0) * 1e3
         made = float(math.hypot(*(data.ship.eta[:2] - start)))
         st = data.ice.state
-        rows.append((made, st.count(FloeStatus.FREE), st.count(FloeStatus.FROZEN), len(data.scene.live), ms))
+        rows.append((made, st.count(FloeStatus.FREE), data.ice.frozen.count, len(data.scene.live), ms))
         if on_progress:
             on_progress(made)
         if data.ship.nu[0] < 0.05:
