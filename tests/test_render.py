@@ -12,8 +12,8 @@ from bridge_node.node.config import ConfigError, load_config
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.camera import channel_camera
 from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
-from bridge_node.render.meshes import cell_vertices, template_meshes
-from bridge_node.render.renderer import SceneRenderer, _FloeBuffer, horizon_split
+from bridge_node.render.meshes import CELL_VERTEX, cell_vertices, template_meshes
+from bridge_node.render.renderer import SceneRenderer, _FloeBuffer, _FloeCopies, horizon_split
 from bridge_node.render.settings import ChannelSettings, RenderSettings
 from bridge_node.render.warp import WarpError, write_pfm
 from bridge_node.stream.world_view import WorldView
@@ -145,18 +145,24 @@ def test_template_meshes_keep_each_vertex_once_and_every_triangle(ctx, exercise)
         np.testing.assert_array_equal(mesh.vertices["cell"][mesh.index], owner)
 
 
-def test_a_tiles_floe_buffer_keeps_every_index_over_its_growth(ctx, exercise):
+@pytest.mark.parametrize("copies", [False, True], ids=["frozen-indices", "live-copies"])
+def test_a_tiles_floe_buffer_keeps_every_triangle_over_its_growth(ctx, exercise, copies):
     model, _ = exercise
     renderer = SceneRenderer(ctx, model, RenderSettings(channels=[channel()]))
     mesh = renderer.meshes[0]
-    buf = _FloeBuffer(ctx, renderer.floe, renderer.mesh_vbos[0], mesh.index.dtype)
+    buf = _FloeCopies(ctx, renderer.floe, mesh) if copies else \
+        _FloeBuffer(ctx, renderer.floe, renderer.mesh_vbos[0], mesh.index.dtype)
     cells = np.array_split(np.arange(len(mesh.start) - 1), 12)
     parts = [mesh.corners(c, sides=s) for _ in range(3) for c in cells for s in (False, True)]
-    for part in parts:  # appended in parts, as cells break, over the storage's growth
+    for part in parts:  # appended in parts, as cells break, over the storages' growth
         buf.append(part)
     stored = np.frombuffer(buf.ibo.read(size=buf.indices * mesh.index.itemsize), dtype=mesh.index.dtype)
-    np.testing.assert_array_equal(stored, np.concatenate(parts))
-    assert buf.nbytes > 1 << 16  # it grew past its first storage
+    held = buf.vertex_count if copies else len(mesh.vertices)
+    vertices = np.frombuffer(buf.vbo.read(size=held * CELL_VERTEX.itemsize), dtype=CELL_VERTEX)
+    np.testing.assert_array_equal(vertices[stored], mesh.vertices[np.concatenate(parts)])
+    assert buf.ibo.size > 1 << 16  # it grew past its first storage
+    if copies:  # each vertex once per part
+        assert buf.vertex_count == sum(len(np.unique(p)) for p in parts)
 
 
 def neighbours():

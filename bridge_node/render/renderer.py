@@ -6,9 +6,10 @@ vertex names its cell), shared by every tile laid with the template; each templa
 raster (which cell covers each 0.1 m of the tile); the own ship's mesh. Dynamic: two float
 textures holding every floe row's pose (its attitude as a quaternion, made on the CPU; x,
 y, heave) and a texture of each row's status, a tile table (each placed tile's first
-status entry, template and rotation, and whether it is breakable), and per tile the index
-buffers of its broken floes (tops and sides apart), to which a cell's triangles are
-appended once, when it breaks: a floe costs its indices, not its vertices. The vertex
+status entry, template and rotation, and whether it is breakable), and per tile the
+triangles of its broken floes (tops and sides apart), to which a cell's triangles are
+appended once, when it breaks: a live tile keeps a copy of its floes' vertices (faster to
+fetch on llvmpipe), a frozen tile only indices into its template's. The vertex
 shader finds each vertex's floe from the tile's first row and the vertex's cell, and
 places it by the pose textures. A frozen tile gives its rows up (they go to other tiles):
 its floes get pose entries of their own, and its cells status entries that name each
@@ -41,7 +42,7 @@ from bridge_node.render.camera import (
     ship_matrix,
     visible_boxes,
 )
-from bridge_node.render.meshes import cell_rasters, rim_rasters, template_meshes
+from bridge_node.render.meshes import TemplateMesh, cell_rasters, rim_rasters, template_meshes
 from bridge_node.render.settings import (
     ChannelSettings,
     RenderSettings,
@@ -138,23 +139,24 @@ class _FloeBuffer:
     written once, a frozen tile's, holds just what it is given). Only indices are kept per
     floe."""
 
-    def __init__(self, ctx: moderngl.Context, program: moderngl.Program, vbo: moderngl.Buffer,
+    def __init__(self, ctx: moderngl.Context, program: moderngl.Program, vbo: moderngl.Buffer | None,
                  index_type: np.dtype, least: int = 1 << 16) -> None:
         self.ctx, self.program, self.vbo, self.index_type = ctx, program, vbo, np.dtype(index_type)
         self.least = least
         self.ibo = self.vao = None
+        self._bound: tuple = (None, None)  # the (vertex, index) buffers of the vertex array
         self.indices = 0
 
     def append(self, index: np.ndarray) -> None:
-        """Append triangles, as their corners' indices into the template's vertices."""
+        """Append triangles, as their corners' indices into the vertices."""
         size = self.index_type.itemsize
-        ibo = _grown(self.ctx, self.ibo, self.indices * size, (self.indices + len(index)) * size, self.least)
-        if ibo is not self.ibo:
-            self.ibo = ibo
+        self.ibo = _grown(self.ctx, self.ibo, self.indices * size, (self.indices + len(index)) * size, self.least)
+        if self._bound != (self.vbo, self.ibo):
             if self.vao is not None:
                 self.vao.release()
             self.vao = self.ctx.vertex_array(self.program, [(self.vbo, "3f 3f i", "in_pos", "in_normal", "in_cell")],
-                                             ibo, index_element_size=size)
+                                             self.ibo, index_element_size=size)
+            self._bound = self.vbo, self.ibo
         self.ibo.write(index.astype(self.index_type).tobytes(), offset=self.indices * size)
         self.indices += len(index)
 
@@ -168,12 +170,44 @@ class _FloeBuffer:
             if obj is not None:
                 obj.release()
         self.ibo = self.vao = None
+        self._bound = (None, None)
         self.indices = 0
 
     @property
     def nbytes(self) -> int:
-        """Bytes of index storage held."""
+        """Bytes of storage held."""
         return self.ibo.size if self.ibo is not None else 0
+
+
+class _FloeCopies(_FloeBuffer):
+    """A ``_FloeBuffer`` that keeps its own copy of its floes' vertices, for a live tile: on
+    llvmpipe, a tile's draw that fetches its vertices from the whole template's took about a
+    twentieth of the frame more than one that fetches them from its own few (3 channels at
+    1280x720, 3000 floes). Live floes are a few thousand; frozen ones index the template's."""
+
+    def __init__(self, ctx: moderngl.Context, program: moderngl.Program, mesh: TemplateMesh) -> None:
+        super().__init__(ctx, program, None, mesh.index.dtype)
+        self.template_vertices, self.vertex_count = mesh.vertices, 0
+
+    def append(self, index: np.ndarray) -> None:
+        """Append triangles, as their corners' indices into the template's vertices."""
+        ids, local = np.unique(index, return_inverse=True)  # the cells' vertices, each once
+        stride = self.template_vertices.itemsize
+        self.vbo = _grown(self.ctx, self.vbo, self.vertex_count * stride, (self.vertex_count + len(ids)) * stride,
+                          self.least)
+        self.vbo.write(self.template_vertices[ids].tobytes(), offset=self.vertex_count * stride)
+        super().append(local.ravel() + self.vertex_count)
+        self.vertex_count += len(ids)
+
+    def release(self) -> None:
+        super().release()
+        if self.vbo is not None:
+            self.vbo.release()
+        self.vbo, self.vertex_count = None, 0
+
+    @property
+    def nbytes(self) -> int:
+        return super().nbytes + (self.vbo.size if self.vbo is not None else 0)
 
 
 class SceneRenderer:
@@ -286,10 +320,12 @@ class SceneRenderer:
         """Empty triangle buffers for tile k, and its uniforms: its first row (or, frozen,
         its first status entry, first_floe its first floe's pose entry), its snow patches
         (each floe its own, by field tile and cell) and its ice thickness."""
-        vbo, index_type = self.mesh_vbos[p.template], self.meshes[p.template].index.dtype
-        least = 0 if first < 0 else 1 << 16  # a frozen tile's triangles are written once
-        self.tile_floes[k] = (_FloeBuffer(self.ctx, self.floe, vbo, index_type, least),
-                              _FloeBuffer(self.ctx, self.floe, vbo, index_type, least))
+        mesh = self.meshes[p.template]
+        if first < 0:  # frozen: indices into the template's vertices, written once
+            self.tile_floes[k] = (_FloeBuffer(self.ctx, self.floe, self.mesh_vbos[p.template], mesh.index.dtype, 0),
+                                  _FloeBuffer(self.ctx, self.floe, self.mesh_vbos[p.template], mesh.index.dtype, 0))
+        else:
+            self.tile_floes[k] = (_FloeCopies(self.ctx, self.floe, mesh), _FloeCopies(self.ctx, self.floe, mesh))
         self._tile_draw[k] = {"first": first, "first_floe": first_floe, "frozen": first < 0,
                               "patch_base": p.tile * 7919 % PATCHES, "thickness": self.template_thickness[p.template]}
 
