@@ -20,6 +20,7 @@ from rich.progress import Progress
 from bridge_node.node.config import load_config
 from bridge_node.node.world_setup import build_world, start_world
 from sim_core.ice.floes import BreakCause, FloeStatus
+from sim_core.ice.tiles import broken_counts
 from sim_core.world import step
 
 DT = 1 / 60
@@ -75,8 +76,8 @@ def main() -> None:
         st = w.data.ice.state
         print(f"  resting {'on ' if w.rest else 'off'}: world step {_figures(w.step_ms)}; engine {_figures(w.engine_ms)}")
         print(f"              live {st.count(FloeStatus.FREE)}, resting {int(st.resting.sum())}, frozen "
-              f"{w.data.ice.frozen.count}; broken by hull (live) {int((st.cause == BreakCause.HULL).sum())}, "
-              f"by contact (live) {int((st.cause == BreakCause.CONTACT).sum())}")
+              f"{w.data.ice.frozen.count}; broken by hull {broken_counts(w.data.ice)[BreakCause.HULL]}, "
+              f"by contact {broken_counts(w.data.ice)[BreakCause.CONTACT]}")
     half = len(after.step_ms) // 2  # the second half: the channel astern has filled
     print(f"  ratio on/off (same run): world step median {np.median(after.step_ms) / np.median(before.step_ms):.2f}, "
           f"second half {np.median(after.step_ms[half:]) / np.median(before.step_ms[half:]):.2f}, "

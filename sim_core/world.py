@@ -253,7 +253,8 @@ def _placed_tiles(tiles: TilePlacement, field_tiles: list[int], placements: list
 
 def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate) -> tuple[PlacedTiles, np.ndarray, np.ndarray]:
     """Carry out a scene update in the ice world: place, thaw and freeze tiles. Returns the
-    tiles placed and the placement indices thawed and frozen."""
+    tiles given rows (placed, and thawed with their new rows) and the placement indices
+    thawed and frozen."""
     scene, placement = model.scene, data.scene.placement
     reclaim_rows(data.ice)
     new = []

@@ -1,5 +1,6 @@
 """A frozen tile on the screen: it gives its rows up, and its floes stay drawn where they
-froze, for a renderer that followed the stream and for one that joins late."""
+froze, for a renderer that followed the stream and for one that joins late, and for one
+that resynchronised after a gap in which the tile thawed and froze again."""
 import dataclasses
 import math
 
@@ -12,7 +13,8 @@ from bridge_node.render.channels import ChannelSet, create_context
 from bridge_node.render.renderer import SceneRenderer
 from bridge_node.render.settings import ChannelSettings, RenderSettings
 from bridge_node.stream.world_view import WorldView
-from sim_core.ice.floes import FloeStatus
+from sim_core.ice.floes import BreakCause, FloeStatus
+from sim_core.ice.tiles import break_cells, freeze_tile, thaw_tile
 from sim_core.world import FROZEN_FLOE_EVENT, snapshot, step
 
 W, H = 256, 160
@@ -58,13 +60,13 @@ def freezing(tmp_path_factory):
         f = events.frozen_floes
         counts = np.bincount(f["placement"], minlength=1) if len(f) else np.zeros(1, int)
         if counts.max() >= 20:
-            return model, view, events, int(counts.argmax())
+            return model, data, view, events, int(counts.argmax())
         view.apply(events)
     pytest.fail("no tile with 20 floes froze")
 
 
 def test_a_frozen_tile_stays_on_the_screen_where_its_floes_froze(freezing):
-    model, view, events, k = freezing
+    model, _, view, events, k = freezing
     ctx = create_context()
     rows = view.placements[k]
     rows = np.arange(rows.row_start, rows.row_start + rows.row_count)
@@ -95,3 +97,30 @@ def test_a_frozen_tile_stays_on_the_screen_where_its_floes_froze(freezing):
     # average it out)
     assert np.abs(followed_frozen - followed_live).mean() < 0.05 * lost
     assert np.abs(late_frozen - followed_live).mean() < 0.05 * lost
+
+
+def test_a_tile_thawed_and_frozen_again_in_a_gap_is_drawn_anew(freezing):
+    model, data, _, _, k = freezing  # the world after the freeze (this test changes it: it runs last)
+    ctx = create_context()
+    view = WorldView()
+    view.apply(snapshot(model, data))
+    c = channel_over(view, k, model)
+    cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=[c], visibility_m=8000.0)), [c])
+    cs.render(view)
+    before = blocks(cs.targets[0].image().astype(float))
+    held = len(view.frozen_floes[k])
+    thaw_tile(model.ice, data.ice, k)  # in a gap of the stream: thawed, more of it broken, frozen again
+    rows = data.ice.tiles.rows(k)
+    intact = rows[data.ice.state.status[rows] == FloeStatus.INTACT]
+    break_cells(data.ice, intact[::2], BreakCause.CONTACT)
+    freeze_tile(data.ice, k)
+    view.apply(snapshot(model, data))  # the resynchronisation
+    assert len(view.frozen_floes[k]) > held
+    cs.render(view)
+    after = blocks(cs.targets[0].image().astype(float))
+    fresh = WorldView()
+    fresh.apply(snapshot(model, data))
+    fresh_img, = images(ctx, model, c, [fresh])
+    changed = np.abs(after - before).mean()
+    assert changed > 3.0  # the cells broken in the gap show
+    assert np.abs(after - blocks(fresh_img)).mean() < 0.05 * changed  # as a renderer starting now draws them

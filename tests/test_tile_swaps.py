@@ -1,6 +1,6 @@
-"""Tile swaps off the critical path: tiles prepared ahead switch in with the same physics
-as tiles built at their switch, and floes that leave the simulation and come back keep
-their pose and momentum."""
+"""Tile swaps off the critical path: tiles prepared ahead switch in (and thaw) with the same
+physics as tiles built at their switch, and floes that leave the simulation and come back
+keep their pose and momentum."""
 import numpy as np
 import pytest
 from conftest import exercise_config
@@ -11,8 +11,16 @@ from sim_core.frames.hull_contour import waterline_contour
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.model import compile_ice_model
 from sim_core.ice.step import HullMotion, ice_step
-from sim_core.ice.tiles import break_cells, freeze_tile, new_ice_data, place_tile, reclaim_rows, thaw_tile
-from sim_core.world import step
+from sim_core.ice.tiles import (
+    break_cells,
+    broken_counts,
+    freeze_tile,
+    new_ice_data,
+    place_tile,
+    reclaim_rows,
+    thaw_tile,
+)
+from sim_core.world import Controls, KinematicPose, step
 
 
 def _transit(tmp_path, prepare_ahead: float, steps: int = 900):
@@ -43,6 +51,34 @@ def test_prepared_tiles_switch_in_with_the_same_physics_as_tiles_built_at_the_sw
     np.testing.assert_array_equal(a.xy, b.xy)  # bit for bit: contacts are read in a fixed order
     assert a.resting.any()  # floes at rest astern left the dynamic set, the same ones in both runs
     np.testing.assert_array_equal(a.resting, b.resting)
+
+
+def _there_and_back(tmp_path, prepare_ahead: float) -> tuple:
+    """The hull driven north at 4 m/s through a 400 m x 600 m field of 50 m tiles (tiles
+    freeze 205 m astern), then astern back down its channel: the frozen tiles thaw."""
+    cfg = exercise_config(tmp_path / "tiles", 400.0, 600.0, 50.0, start_north=-60.0, reverse_distance=205.0,
+                          prepare_ahead=prepare_ahead)
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    north, east, thawed, dt = data.ship.eta[0], data.ship.eta[1], 0, 0.1
+    for k in range(2300):
+        surge = 4.0 if k < 1250 else -4.0
+        north += surge * dt
+        events = step(model, data, dt, Controls(kinematic=KinematicPose(north, east, 0.0, surge)))
+        thawed += len(events.thawed)
+    return data, thawed
+
+
+def test_thawed_tiles_take_the_same_rows_prepared_or_not(tmp_path):
+    ahead, thawed = _there_and_back(tmp_path, prepare_ahead=60.0)
+    built, _ = _there_and_back(tmp_path, prepare_ahead=0.0)
+    assert thawed > 0 and ahead.ice.frozen.count > 0
+    a, b = ahead.ice.state, built.ice.state
+    assert a.n == b.n
+    np.testing.assert_array_equal(a.status, b.status)  # rows are taken at the switch, in step order
+    np.testing.assert_array_equal(a.cause, b.cause)
+    np.testing.assert_array_equal(a.xy, b.xy)
+    np.testing.assert_array_equal(broken_counts(ahead.ice), broken_counts(built.ice))
 
 
 @pytest.mark.parametrize("settle", [True, False], ids=["after-leaving", "while-leaving"])

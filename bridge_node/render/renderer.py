@@ -267,7 +267,7 @@ class SceneRenderer:
         self.status: moderngl.Texture | None = None  # each floe row's status, each frozen tile's cell's floe
         self._pose_lines = self._status_lines = 0
         self._frozen: dict[int, tuple[int, int]] = {}  # frozen placement -> its first floe and first cell entry
-        self._frozen_floes = self._frozen_cells = 0  # entries given to frozen tiles so far
+        self._frozen_floes = self._frozen_cells = 0  # entries given to frozen tiles (renumbered as textures grow)
         h = model.ice.thickness.mean() if len(model.ice.thickness) else 0.0
         mat = model.ice.material
         self.slab_z = float(h * (1.0 - mat.density / mat.water_density))
@@ -293,7 +293,7 @@ class SceneRenderer:
             self._freeze(view, k)
         for k in changes.placements:
             self._place(view, k)
-        if self._ensure_capacity(view.rows):
+        if self._ensure_capacity(view):
             self._upload_rows(view, 0, view.rows)
             for k in self._frozen:
                 self._upload_frozen(view, k)
@@ -396,15 +396,25 @@ class SceneRenderer:
         at = np.searchsorted(starts, rows, side="right") - 1
         return np.array([k for _, k in live], dtype=np.int64)[at], starts[at]
 
-    def _ensure_capacity(self, rows: int) -> bool:
-        """Grow the pose and status textures to hold the rows (from the first line up) and the
-        frozen tiles' entries (from the last line down); True if they were (re)made, so that
+    def _ensure_capacity(self, view: WorldView) -> bool:
+        """Grow the pose and status textures to hold the view's rows (from the first line up)
+        and the frozen tiles' entries (from the last line down), those renumbered without the
+        entries of tiles since thawed or frozen anew; True if they were (re)made, so that
         everything must be uploaded again."""
-        lines = max(1, math.ceil(rows / POSE_WIDTH))
+        lines = max(1, math.ceil(view.rows / POSE_WIDTH))
+        if (lines + math.ceil(self._frozen_floes / POSE_WIDTH) <= self._pose_lines
+                and lines + math.ceil(self._frozen_cells / POSE_WIDTH) <= self._status_lines):
+            return False
+        self._frozen_floes = self._frozen_cells = 0
+        for k in self._frozen:  # in the order they froze
+            p = view.placements[k]
+            self._frozen[k] = self._frozen_floes, self._frozen_cells
+            self._write_tile_info(p, -1 - self._frozen_cells, True)
+            self._tile_draw[k].update(first=-1 - self._frozen_cells, first_floe=self._frozen_floes)
+            self._frozen_floes += len(view.frozen_floes[k])
+            self._frozen_cells += self.model.ice.templates[p.template].n_cells
         pose_lines = lines + math.ceil(self._frozen_floes / POSE_WIDTH)
         status_lines = lines + math.ceil(self._frozen_cells / POSE_WIDTH)
-        if pose_lines <= self._pose_lines and status_lines <= self._status_lines:
-            return False
         for old in [*self.pose, self.status]:
             if old is not None:
                 old.release()

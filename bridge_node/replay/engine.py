@@ -27,6 +27,7 @@ from bridge_node.stream.publisher import StatePublisher
 from sim_core.frames.geodesy import local_to_geodetic
 from sim_core.frames.units import KNOT
 from sim_core.ice.floes import BreakCause
+from sim_core.ice.tiles import broken_counts
 from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
 from sim_core.world import Controls, WorldData, WorldEvents, WorldModel, snapshot, step
 
@@ -207,8 +208,7 @@ def run_replay(model: WorldModel, data: WorldData, source: Source, playback: Pla
                     anchor_wall, anchor_k = time.monotonic(), k
     except KeyboardInterrupt:
         pass
-    st = data.ice.state
     stats.steps, stats.sim_s, stats.wall_s = k, k * source.dt, time.monotonic() - start
-    stats.broken_by_hull = int(np.count_nonzero(st.cause == BreakCause.HULL))
-    stats.broken_by_contact = int(np.count_nonzero(st.cause == BreakCause.CONTACT))
+    broken = broken_counts(data.ice)
+    stats.broken_by_hull, stats.broken_by_contact = int(broken[BreakCause.HULL]), int(broken[BreakCause.CONTACT])
     return stats

@@ -102,9 +102,10 @@ class WorldView:
         before_ship, known_rows = self.ship, self.rows
         self.seq, self.time, self.ship, self.ice_load = events.seq, events.time, events.ship, events.ice_load
         frozen = set(events.frozen.tolist())
-        if events.snapshot:
-            self.status[:] = FloeStatus.VACANT  # rows the snapshot does not name belong to no tile
-            self.frozen_floes = {k: v for k, v in self.frozen_floes.items() if k in frozen}
+        held = self.frozen_floes
+        if events.snapshot:  # every frozen tile with all its floes; rows it does not name belong to no tile
+            self.status[:], self.cause[:] = FloeStatus.VACANT, BreakCause.NONE
+            self.frozen_floes = {k: np.zeros(0, dtype=FROZEN_FLOE_EVENT) for k in frozen}
         for k in frozen - self.frozen:
             self._frozen_new.append(k)
             self.frozen_floes[k] = np.zeros(0, dtype=FROZEN_FLOE_EVENT)  # no floes, unless listed
@@ -117,6 +118,8 @@ class WorldView:
         keys, starts = np.unique(f["placement"][order], return_index=True)
         for k, floes in zip(keys.tolist(), np.split(f[order], starts[1:])):
             self.frozen_floes[k] = floes.copy()  # its own memory, not the message's
+        if events.snapshot:  # frozen before and after a gap, but thawed and frozen again within it
+            self._frozen_new += [k for k in frozen & held.keys() if not np.array_equal(held[k], self.frozen_floes[k])]
         p = events.placed
         for i in range(len(p.placement)):
             k = int(p.placement[i])

@@ -454,23 +454,31 @@ class ContactSpace:
                                                m.is_sphere[g].tolist()):
             bodies.intact[j] = _new_shape(body, ring, float(m.radius[gi]), tuple(centre), sphere, friction)
 
-    def build_floes(self, bodies: TileBodies, state: FloeState, rows: np.ndarray, start: int) -> None:
-        """Make, outside the space, dynamic bodies for rows of a tile (whose rows start at
-        ``start``) at their current pose and velocity; ``insert_tile`` or
-        ``TileBodies.insert`` switch them in."""
+    def build_floes(self, bodies: TileBodies, offsets: np.ndarray, gcell: np.ndarray, xy: np.ndarray,
+                    yaw: np.ndarray, vel: np.ndarray, yaw_rate: np.ndarray) -> None:
+        """Make, outside the space, dynamic bodies for a tile's cells at offsets, of global
+        cells gcell (n,), at poses xy (n, 2) m and yaw (n,) rad, with velocities vel (n, 2)
+        m/s and yaw_rate (n,) rad/s; ``name_floes`` gives them their rows, ``insert_tile``
+        or ``TileBodies.insert`` switch them in."""
         m = self.model
-        g = state.gcell[rows]
-        rings = self._rings(g, np.zeros((len(rows), 2)), np.zeros(len(rows)))
+        rings = self._rings(gcell, np.zeros((len(gcell), 2)), np.zeros(len(gcell)))
         friction = m.settings.ice_friction
-        for i, gi, ring, sphere in zip(rows.tolist(), g.tolist(), rings, m.is_sphere[g].tolist()):
+        for j, gi, ring, sphere, at, angle, v, w in zip(offsets.tolist(), gcell.tolist(), rings,
+                                                         m.is_sphere[gcell].tolist(), xy.tolist(), yaw.tolist(),
+                                                         vel.tolist(), yaw_rate.tolist()):
             body = lib.cpBodyNew(float(m.mass[gi]), float(m.inertia[gi, 2]))
-            lib.cpBodySetUserData(body, ffi.cast("void *", _ROW0 + i))
-            lib.cpBodySetPosition(body, tuple(state.xy[i].tolist()))
-            lib.cpBodySetAngle(body, float(state.yaw[i]))
-            lib.cpBodySetVelocity(body, tuple(state.vel[i].tolist()))
-            lib.cpBodySetAngularVelocity(body, float(state.yaw_rate[i]))
-            bodies.floe_body[i - start] = _ptr(body)
-            bodies.floe_shape[i - start] = _new_shape(body, ring, float(m.radius[gi]), (0.0, 0.0), sphere, friction)
+            lib.cpBodySetPosition(body, (at[0], at[1]))
+            lib.cpBodySetAngle(body, angle)
+            lib.cpBodySetVelocity(body, (v[0], v[1]))
+            lib.cpBodySetAngularVelocity(body, w)
+            bodies.floe_body[j] = _ptr(body)
+            bodies.floe_shape[j] = _new_shape(body, ring, float(m.radius[gi]), (0.0, 0.0), sphere, friction)
+
+    @staticmethod
+    def name_floes(bodies: TileBodies, offsets: np.ndarray, rows: np.ndarray) -> None:
+        """Give the floe bodies at offsets their rows (a body names its floe's row)."""
+        for j, row in zip(offsets.tolist(), rows.tolist()):
+            lib.cpBodySetUserData(_body(int(bodies.floe_body[j])), ffi.cast("void *", _ROW0 + row))
 
     def insert_tile(self, bodies: TileBodies, placement: int) -> None:
         """Switch a built tile into the space as placement: its static body now, its intact
@@ -538,7 +546,9 @@ class ContactSpace:
             mine = rows[state.tile[rows] == tile]
             j = mine - start
             bodies.remove(self._cp, j)
-            self.build_floes(bodies, state, mine, start)
+            self.build_floes(bodies, j, state.gcell[mine], state.xy[mine], state.yaw[mine], state.vel[mine],
+                             state.yaw_rate[mine])
+            self.name_floes(bodies, j, mine)
             bodies.insert(self._cp, j)
 
     def remove(self, state: FloeState, rows: np.ndarray) -> None:

@@ -149,6 +149,7 @@ class FloeState(_Table):
     def release_rows(self, rows: slice) -> None:
         """Make rows vacant, for a later ``add_rows``."""
         self.set_status(np.arange(rows.start, rows.stop), FloeStatus.VACANT)
+        self._cause[rows] = BreakCause.NONE  # a vacant row broke nothing
         k = next((i for i, r in enumerate(self._vacant) if r[0] > rows.start), len(self._vacant))
         self._vacant.insert(k, [rows.start, rows.stop])
         if k + 1 < len(self._vacant) and self._vacant[k + 1][0] == rows.stop:  # joins the run after

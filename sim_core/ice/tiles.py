@@ -41,9 +41,11 @@ class IceData:
 @dataclass
 class PreparedTile:
     """Engine objects of a tile built ahead of its switch: the template, corner (m) and
-    quarter turns it is laid with, the placement it thaws (-1 for a new one) and the rows
-    taken for that thaw (VACANT until the switch), and the cell offsets and floe rows still
-    to build."""
+    quarter turns it is laid with, the placement it thaws (-1 for a new one), and the cell
+    offsets and frozen floes (their places in the tile's ``FrozenFloes`` record) still to
+    build. A preparation takes no rows: rows are taken at the switch, in step order, so
+    that the rows (and so the physics, which orders some sums by row) do not depend on how
+    much wall time preparing had."""
 
     template: int
     corner: tuple[float, float]
@@ -52,7 +54,6 @@ class PreparedTile:
     bodies: TileBodies
     cells: np.ndarray
     floes: np.ndarray
-    rows: slice | None = None
 
     @property
     def done(self) -> bool:
@@ -74,21 +75,19 @@ def prepare_place(model: IceModel, template: int, corner: tuple[float, float], q
 
 
 def prepare_thaw(model: IceModel, data: IceData, placement: int) -> PreparedTile:
-    """Start preparing a frozen tile's return: take rows for it (vacant until the switch)
-    holding its intact cells and its frozen floes at the poses they froze with (they do not
-    change while frozen)."""
-    tiles, st = data.tiles, data.state
-    template, turns = int(tiles.template[placement]), int(tiles.quarter_turns[placement])
-    corner = tuple(tiles.corner[placement].tolist())
-    rows = st.add_rows(model.templates[template].n_cells, FloeStatus.VACANT)
-    _lay(model, st, rows, template, corner, turns, placement)
-    floes = data.frozen.restore(placement, st, rows.start)
-    intact = np.ones(rows.stop - rows.start, dtype=bool)
-    intact[floes - rows.start] = False
-    return PreparedTile(template, corner, turns, placement, TileBodies(len(intact)), np.nonzero(intact)[0], floes, rows)
+    """Start preparing a frozen tile's return: its intact cells, and its frozen floes at
+    the poses they froze with (they do not change while frozen)."""
+    tiles = data.tiles
+    template = int(tiles.template[placement])
+    n = model.templates[template].n_cells
+    floes = data.frozen[placement]
+    intact = np.ones(n, dtype=bool)
+    intact[floes["cell"]] = False
+    return PreparedTile(template, tuple(tiles.corner[placement].tolist()), int(tiles.quarter_turns[placement]),
+                        placement, TileBodies(n), np.nonzero(intact)[0], np.arange(len(floes)))
 
 
-def _lay(model: IceModel, st: FloeState, rows: slice, template: int, corner: tuple[float, float],
+def _lay(model: IceModel, st: FloeState, rows: slice, template: int, corner: tuple[float, float] | np.ndarray,
          quarter_turns: int, placement: int) -> None:
     """Fill a tile's rows as level ice: its cells at their placed centroids and floating height."""
     g0, n = int(model.template_start[template]), rows.stop - rows.start
@@ -108,16 +107,16 @@ def advance(data: IceData, prepared: PreparedTile, max_items: int) -> int:
         data.contacts.build_cells(prepared.bodies, prepared.template, prepared.corner, prepared.quarter_turns, cells)
     floes, prepared.floes = prepared.floes[:max_items - len(cells)], prepared.floes[max_items - len(cells):]
     if len(floes):
-        data.contacts.build_floes(prepared.bodies, data.state, floes, prepared.rows.start)
+        f = data.frozen[prepared.placement][floes]
+        offsets = f["cell"].astype(np.int64)
+        g0 = int(data.contacts.model.template_start[prepared.template])
+        data.contacts.build_floes(prepared.bodies, offsets, g0 + offsets, f["xy"], f["yaw"], f["vel"], f["yaw_rate"])
     return len(cells) + len(floes)
 
 
 def discard_prepared(data: IceData, prepared: PreparedTile) -> None:
-    """Free the engine objects (and the rows taken) of a preparation that will not be
-    switched in."""
+    """Free the engine objects of a preparation that will not be switched in."""
     data.contacts.discard(prepared.bodies)
-    if prepared.rows is not None:
-        data.state.release_rows(prepared.rows)
 
 
 def _finish(data: IceData, prepared: PreparedTile) -> None:
@@ -153,6 +152,8 @@ def freeze_tile(data: IceData, placement: int) -> None:
     the table once the bodies have left (``reclaim_rows``); until then its floes' rows are
     FROZEN. Its intact cells are level ice again (drawn, not simulated)."""
     tiles, st = data.tiles, data.state
+    if placement in data.leaving_rows:  # its last freeze's rows: its thaw took its objects out of the space
+        st.release_rows(data.leaving_rows.pop(placement))
     rows = tiles.rows(placement)
     free = rows[st.status[rows] == FloeStatus.FREE]
     data.frozen.freeze(placement, st, free, free - rows[0])
@@ -177,12 +178,23 @@ def thaw_tile(model: IceModel, data: IceData, placement: int, prepared: Prepared
     With a tile prepared for this thaw, only switch it in."""
     prepared = prepared or prepare_thaw(model, data, placement)
     _finish(data, prepared)
-    rows, st = prepared.rows, data.state
-    data.tiles.row_start[placement], data.tiles.row_count[placement] = rows.start, rows.stop - rows.start
+    tiles, st = data.tiles, data.state
+    rows = st.add_rows(model.templates[prepared.template].n_cells, FloeStatus.INTACT)
+    _lay(model, st, rows, prepared.template, prepared.corner, prepared.quarter_turns, placement)
+    floes = data.frozen.restore(placement, st, rows.start)
+    data.contacts.name_floes(prepared.bodies, floes - rows.start, floes)
+    tiles.row_start[placement], tiles.row_count[placement] = rows.start, rows.stop - rows.start
     data.contacts.insert_tile(prepared.bodies, placement)
-    st.set_status(np.arange(rows.start, rows.stop), FloeStatus.INTACT)
-    st.set_status(rows.start + data.frozen[placement]["cell"].astype(np.int64), FloeStatus.FREE)
+    st.set_status(floes, FloeStatus.FREE)
     data.frozen.forget(placement)
+
+
+def broken_counts(data: IceData) -> np.ndarray:
+    """Cells broken so far, by ``BreakCause`` (an array indexed by it): the live tiles'
+    free floes and the frozen tiles' floes."""
+    st, n = data.state, len(BreakCause)
+    return (np.bincount(st.cause[st.status == FloeStatus.FREE], minlength=n)
+            + np.bincount(data.frozen.records()["cause"], minlength=n))
 
 
 @dataclass(frozen=True)
