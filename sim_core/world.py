@@ -67,6 +67,8 @@ _NO_ROWS = np.zeros(0, dtype=np.int64)
 # as floe poses travel on the stream. 33 bytes.
 FROZEN_FLOE_EVENT = np.dtype([("placement", np.int32), ("cell", np.uint32), ("cause", np.uint8),
                               ("pose", np.float32, 6)])
+_NO_FROZEN_FLOES = np.zeros(0, dtype=FROZEN_FLOE_EVENT)
+_NO_FROZEN_FLOES.flags.writeable = False  # shared by the events of every step that freezes nothing
 
 
 @dataclass(frozen=True)
@@ -171,7 +173,7 @@ class WorldEvents:
     floes_frozen: int
     ice_load: np.ndarray  # X, Y N (ship frame); N N m (+ to starboard)
     rejected: tuple[OrderRejection, ...]
-    frozen_floes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=FROZEN_FLOE_EVENT))
+    frozen_floes: np.ndarray = field(default_factory=lambda: _NO_FROZEN_FLOES)
     snapshot: bool = False
 
 
@@ -329,6 +331,8 @@ def _moved_rows(data: WorldData, placed: PlacedTiles) -> np.ndarray:
 
 def _frozen_floes(ice: IceData, placements: list[int]) -> np.ndarray:
     """The published records (``FROZEN_FLOE_EVENT``) of frozen placements' floes."""
+    if not placements:  # most steps freeze nothing
+        return _NO_FROZEN_FLOES
     records = [ice.frozen[k] for k in placements]
     out = np.zeros(sum(len(r) for r in records), dtype=FROZEN_FLOE_EVENT)
     out["placement"] = np.repeat(placements, [len(r) for r in records])
