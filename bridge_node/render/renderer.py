@@ -316,17 +316,17 @@ class SceneRenderer:
         self._tile_draw.pop(k, None)
         self._sides_due.discard(k)
 
-    def _new_floes(self, k: int, p: Placement, first: int, first_floe: int = 0) -> None:
-        """Empty triangle buffers for tile k, and its uniforms: its first row (or, frozen,
-        its first status entry, first_floe its first floe's pose entry), its snow patches
-        (each floe its own, by field tile and cell) and its ice thickness."""
+    def _new_floes(self, k: int, p: Placement, first: int) -> None:
+        """Empty triangle buffers for tile k, and its uniforms: its first row (negative for
+        a frozen tile, whose entries ``_give_entries`` numbers), its snow patches (each floe
+        its own, by field tile and cell) and its ice thickness."""
         mesh = self.meshes[p.template]
         if first < 0:  # frozen: indices into the template's vertices, written once
             self.tile_floes[k] = (_FloeBuffer(self.ctx, self.floe, self.mesh_vbos[p.template], mesh.index.dtype, 0),
                                   _FloeBuffer(self.ctx, self.floe, self.mesh_vbos[p.template], mesh.index.dtype, 0))
         else:
             self.tile_floes[k] = (_FloeCopies(self.ctx, self.floe, mesh), _FloeCopies(self.ctx, self.floe, mesh))
-        self._tile_draw[k] = {"first": first, "first_floe": first_floe, "frozen": first < 0,
+        self._tile_draw[k] = {"first": first, "first_floe": 0, "frozen": first < 0,
                               "patch_base": p.tile * 7919 % PATCHES, "thickness": self.template_thickness[p.template]}
 
     def _place(self, view: WorldView, k: int) -> None:
@@ -352,14 +352,20 @@ class SceneRenderer:
             self._frozen.pop(k, None)
             self._write_tile_info(p, 0, False)
             return
-        first = self._frozen_floes, self._frozen_cells
-        self._frozen[k] = first
-        self._frozen_floes += len(floes)
-        self._frozen_cells += self.model.ice.templates[p.template].n_cells
-        self._write_tile_info(p, -1 - first[1], True)
-        self._new_floes(k, p, -1 - first[1], first[0])
+        self._new_floes(k, p, -1)
+        self._give_entries(view, k)
         self.tile_floes[k][0].append(self.meshes[p.template].corners(floes["cell"].astype(np.int64), sides=False))
         self._sides_due.add(k)
+
+    def _give_entries(self, view: WorldView, k: int) -> None:
+        """Number frozen tile k's floes and cells after the entries given so far, and point
+        its tile table entry and its draw's uniforms at them."""
+        p = view.placements[k]
+        self._frozen[k] = self._frozen_floes, self._frozen_cells
+        self._write_tile_info(p, -1 - self._frozen_cells, True)
+        self._tile_draw[k].update(first=-1 - self._frozen_cells, first_floe=self._frozen_floes)
+        self._frozen_floes += len(view.frozen_floes[k])
+        self._frozen_cells += self.model.ice.templates[p.template].n_cells
 
     def _sides(self, view: WorldView, k: int) -> _FloeBuffer:
         """Tile k's side faces, made now for a frozen tile that has not needed them yet."""
@@ -406,13 +412,8 @@ class SceneRenderer:
                 and lines + math.ceil(self._frozen_cells / POSE_WIDTH) <= self._status_lines):
             return False
         self._frozen_floes = self._frozen_cells = 0
-        for k in self._frozen:  # in the order they froze
-            p = view.placements[k]
-            self._frozen[k] = self._frozen_floes, self._frozen_cells
-            self._write_tile_info(p, -1 - self._frozen_cells, True)
-            self._tile_draw[k].update(first=-1 - self._frozen_cells, first_floe=self._frozen_floes)
-            self._frozen_floes += len(view.frozen_floes[k])
-            self._frozen_cells += self.model.ice.templates[p.template].n_cells
+        for k in list(self._frozen):
+            self._give_entries(view, k)
         pose_lines = lines + math.ceil(self._frozen_floes / POSE_WIDTH)
         status_lines = lines + math.ceil(self._frozen_cells / POSE_WIDTH)
         for old in [*self.pose, self.status]:

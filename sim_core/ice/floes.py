@@ -242,10 +242,6 @@ class FrozenFloes:
     def __contains__(self, placement: int) -> bool:
         return placement in self._tiles
 
-    def placements(self) -> list[int]:
-        """Frozen placements, in the order they froze."""
-        return list(self._tiles)
-
     def records(self) -> np.ndarray:
         """Every frozen floe's record, in the order their tiles froze."""
         return np.concatenate([np.zeros(0, dtype=FROZEN_FLOE), *self._tiles.values()])
