@@ -14,6 +14,7 @@ from nmea2000.decoder import NMEA2000Decoder
 
 from bridge_node.hil.bench import PtyPair
 from bridge_node.links.hub import LinkHub
+from bridge_node.node.c_heap import heap_in_use_mib
 from bridge_node.node.config import load_config
 from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.world_setup import build_world, start_world
@@ -61,6 +62,9 @@ def test_console_steers_the_ship_in_real_time(tmp_path):
     assert data.ship.rudder > math.radians(5.0)  # the steering gear follows the console
     assert data.ship.eta[5] > psi0  # and the ship swings to starboard
     assert seen[-1].floes_free == data.ice.state.count(FloeStatus.FREE) > 0  # through ice it breaks
+    heap_said = heap_in_use_mib() is not None  # glibc 2.33 and later
+    assert len(stats.memory) == 3  # once a simulated second: resident memory and the C heap in use
+    assert all(r[2] > 0 and (r[3] > 0 if heap_said else r[3] is None) for r in stats.memory)
     heading = None
     dec = NMEA2000Decoder()
     while (msg := console.recv(timeout=0.05)) is not None:

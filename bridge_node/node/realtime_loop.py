@@ -11,6 +11,10 @@ the start, and if the loop falls more than a period behind, the schedule restart
 now, so simulated time runs slower than real time and the real-time factor reports it.
 Simulated time is always ticks x period. With a session record, the loop also writes its
 tick log (``tick_record``): what each tick read, so that the run can be re-simulated.
+Every few seconds, in a tick that has at least half a period left, the loop gives the C
+heap's free pages back to the system (``c_heap``), so that the node's resident memory
+follows what it keeps and not the free chunks its per-step temporaries leave. (A loop
+that overruns has no such slack, and gives nothing back until it has.)
 """
 from __future__ import annotations
 
@@ -27,9 +31,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bridge_node.links.hub import LinkHub
+from bridge_node.node.c_heap import give_back_free_pages, heap_in_use_mib
 from bridge_node.node.order_refusals import OrderRefusals
 from bridge_node.node.tick_record import TickRecord
 from sim_core.world import WorldData, WorldEvents, WorldModel, step
+
+TRIM_EVERY_S = 5.0  # s of wall time between the C heap's page give-backs (c_heap.py)
+TRIM_SLACK = 0.5  # periods a tick must have left over for a give-back to go in its slack
 
 
 @dataclass
@@ -45,7 +53,8 @@ class LoopStats:
     sim_s: float = 0.0
     step_ms: array = field(default_factory=lambda: array("f"))
     track: list = field(default_factory=list)  # (sim time s, north m, east m, speed m/s, live floes)
-    memory: list = field(default_factory=list)  # (sim time s, frozen floes, resident MiB), once a second
+    memory: list = field(default_factory=list)  # (sim time s, frozen floes, resident MiB, C heap in use MiB), once a second
+    trim_ms: array = field(default_factory=lambda: array("f"))  # wall times of the heap's page give-backs
     refusals: OrderRefusals = field(default_factory=OrderRefusals)
     input_to_outputs_ms: array = field(default_factory=lambda: array("f"))
 
@@ -58,17 +67,20 @@ class LoopStats:
                 "input_to_outputs_ms": distribution(self.input_to_outputs_ms), "memory": self.memory_summary()}
 
     def memory_summary(self) -> dict:
-        """Resident memory at the start and end (MiB) and its growth per 1000 frozen floes
-        over the last two thirds of the run (after the live-floe count has levelled off),
-        by a least-squares line; None where the platform gives no resident size or no
-        floes froze."""
-        m = np.array([r for r in self.memory if r[2] is not None]).reshape(-1, 3)
-        out = {"rss_mib_start": None, "rss_mib_end": None, "mib_per_1000_frozen": None}
-        if len(m):
-            out["rss_mib_start"], out["rss_mib_end"] = round(float(m[0, 2]), 1), round(float(m[-1, 2]), 1)
-            late = m[len(m) // 3:]
-            if len(late) > 2 and np.ptp(late[:, 1]) >= 1000:
-                out["mib_per_1000_frozen"] = round(float(np.polyfit(late[:, 1], late[:, 2], 1)[0] * 1000), 3)
+        """Resident memory and the C heap's bytes in use at the start and end (MiB), and
+        the growth of each per 1000 frozen floes over the last two thirds of the run (after
+        the live-floe count has levelled off), by a least-squares line; None where the
+        platform does not say or no floes froze; and how often the heap's free pages were
+        given back (``trims``) and the longest of those in ms."""
+        out = {"trims": len(self.trim_ms), "trim_ms_max": round(max(self.trim_ms), 2) if self.trim_ms else None}
+        for key, col in (("rss", 2), ("heap_in_use", 3)):
+            m = np.array([(r[1], r[col]) for r in self.memory if r[col] is not None]).reshape(-1, 2)
+            out[f"{key}_mib_start"] = out[f"{key}_mib_end"] = out[f"{key}_mib_per_1000_frozen"] = None
+            if len(m):
+                out[f"{key}_mib_start"], out[f"{key}_mib_end"] = round(float(m[0, 1]), 1), round(float(m[-1, 1]), 1)
+                late = m[len(m) // 3:]
+                if len(late) > 2 and np.ptp(late[:, 0]) >= 1000:
+                    out[f"{key}_mib_per_1000_frozen"] = round(float(np.polyfit(late[:, 0], late[:, 1], 1)[0] * 1000), 3)
         return out
 
 
@@ -154,7 +166,7 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
     gc.collect()
     gc.freeze()
     start = time.monotonic()
-    next_tick = start
+    next_tick = last_trim = start
     with _stop_between_ticks() as stop:
         while (duration is None or time.monotonic() - start < duration) and not should_stop() and not stop.requested:
             t0 = time.monotonic()
@@ -167,9 +179,14 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
             if stats.ticks % max(1, round(rate_hz)) == 0:
                 s = events.ship
                 stats.track.append((events.time, s.north, s.east, s.speed_over_ground, events.floes_free))
-                stats.memory.append((events.time, events.floes_frozen, resident_mib()))
+                stats.memory.append((events.time, events.floes_frozen, resident_mib(), heap_in_use_mib()))
             next_tick += period
             now = time.monotonic()
+            if now - last_trim >= TRIM_EVERY_S and next_tick - now >= TRIM_SLACK * period:
+                last_trim = now
+                if give_back_free_pages():
+                    stats.trim_ms.append((time.monotonic() - now) * 1e3)
+                now = time.monotonic()
             if now > next_tick:
                 stats.overruns += 1
                 if now - next_tick > period:

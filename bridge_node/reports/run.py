@@ -11,7 +11,7 @@ from bridge_node.reports.figures import plt, save_figure
 
 def plot_run(stats: LoopStats, path: Path) -> Path:
     """Track (north against east), tick wall time against simulated time, and the node's
-    resident memory against the frozen floes it keeps."""
+    resident memory and C heap in use against the frozen floes it keeps."""
     fig, (ax, bx, cx) = plt.subplots(1, 3, figsize=(15, 4.5))
     if stats.track:
         tr = np.array(stats.track)
@@ -31,14 +31,20 @@ def plot_run(stats: LoopStats, path: Path) -> Path:
     bx.set_title(f"{stats.ticks} ticks, {stats.overruns} overruns")
     bx.legend(fontsize=8)
     bx.grid(alpha=0.3)
-    mem = np.array([r for r in stats.memory if r[2] is not None]).reshape(-1, 3)
-    by_frozen = len(mem) > 0 and np.ptp(mem[:, 1]) > 0  # before any floe froze, against time
-    if len(mem):
-        cx.plot(mem[:, 1 if by_frozen else 0], mem[:, 2], ".-", ms=2, lw=0.5, color="C2")
-    slope = stats.memory_summary()["mib_per_1000_frozen"]
-    cx.set_title("resident memory" + (f": {slope} MiB per 1000 frozen floes" if slope is not None else ""))
-    cx.set_xlabel("frozen floes" if by_frozen else "simulated time, s (no floe frozen yet)")
-    cx.set_ylabel("resident memory, MiB")
+    summary, x_label = stats.memory_summary(), "simulated time, s"
+    for col, label, colour in ((2, "resident", "C2"), (3, "C heap in use", "C1")):
+        mem = np.array([(r[0], r[1], r[col]) for r in stats.memory if r[col] is not None]).reshape(-1, 3)
+        if not len(mem):
+            continue
+        by_frozen = np.ptp(mem[:, 1]) > 0  # before any floe froze, against time
+        slope = summary[("rss" if col == 2 else "heap_in_use") + "_mib_per_1000_frozen"]
+        cx.plot(mem[:, 1 if by_frozen else 0], mem[:, 2], ".-", ms=2, lw=0.5, color=colour,
+                label=label + (f": {slope} MiB per 1000 frozen floes" if slope is not None else ""))
+        x_label = "frozen floes" if by_frozen else "simulated time, s (no floe frozen yet)"
+        cx.legend(fontsize=8)
+    cx.set_xlabel(x_label)
+    cx.set_title("memory of the node's process")
+    cx.set_ylabel("MiB")
     cx.grid(alpha=0.3)
     fig.tight_layout()
     return save_figure(fig, path)
