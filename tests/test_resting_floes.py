@@ -8,7 +8,7 @@ from sim_core.fracture.tile_template import FractureSettings, build_tile
 from sim_core.frames.hull_contour import waterline_contour
 from sim_core.ice import resting
 from sim_core.ice.contact import Contacts
-from sim_core.ice.floes import BreakCause
+from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.model import IceDynamicsSettings, compile_ice_model
 from sim_core.ice.step import HullMotion, ice_step
 from sim_core.ice.tiles import break_cells, freeze_tile, new_ice_data, place_tile, thaw_tile
@@ -17,18 +17,24 @@ DT = 1 / 30
 FAR = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
 
 
+def _broken_strip(colliders: str):
+    """A 40 m tile of the given colliders with a strip of cells 12 m wide broken free."""
+    settings = IceDynamicsSettings(rest_after_s=0.2, rest_distance=150.0)
+    model = compile_ice_model([build_tile(0.5, 5, FractureSettings(tile_side=40.0, colliders=colliders))],
+                              settings=settings)
+    data = new_ice_data(model, waterline_contour(150.0, 24.0), 0.1)
+    rows = data.tiles.rows(place_tile(model, data, 0, (0.0, 0.0)))
+    loose = rows[np.abs(data.state.home[rows, 0] - 20.0) < 6.0]
+    break_cells(data, loose, BreakCause.HULL)
+    return model, data, loose
+
+
 @pytest.fixture
 def rested():
     """A 40 m tile with a broken strip drifting slower than the rest speed, the hull far
     away, stepped until the strip has left the dynamic set."""
-    settings = IceDynamicsSettings(rest_after_s=0.2, rest_distance=150.0)
-    model = compile_ice_model([build_tile(0.5, 5, FractureSettings(tile_side=40.0, colliders="sphere"))],
-                              settings=settings)
-    data = new_ice_data(model, waterline_contour(150.0, 24.0), 0.1)
-    rows = data.tiles.rows(place_tile(model, data, 0, (0.0, 0.0)))
+    model, data, loose = _broken_strip("sphere")
     st = data.state
-    loose = rows[np.abs(st.home[rows, 0] - 20.0) < 6.0]
-    break_cells(data, loose, BreakCause.HULL)
     rng = np.random.default_rng(5)
     data.contacts.set_velocity(st, loose, rng.uniform(-0.004, 0.004, (len(loose), 2)),
                                rng.uniform(-1e-4, 1e-4, len(loose)))
@@ -124,3 +130,27 @@ def test_a_tile_frozen_with_resting_floes_thaws_with_their_pose_and_momentum(res
     assert set(back.tolist()) <= set(data.contacts.read_free(st).tolist())  # dynamic bodies again
     drift = np.hypot(*(st.xy[back] - held[0]).T)
     assert drift.max() <= np.hypot(*held[2].T).max() * steps * DT + 1e-6  # moving on from where they froze
+
+
+def test_floes_come_to_rest_without_contacts_the_engine_would_keep():
+    """Broken mesh cells touch one another and the level ice. Chipmunk keeps a contact
+    between two static bodies for good and lists it every step, so a floe sheds its
+    contacts before it rests: once the strip rests, no contact names a resting floe and
+    another resting floe or the level ice."""
+    model, data, loose = _broken_strip("mesh")
+    st, strip = data.state, set(loose.tolist())
+
+    def static(row: int) -> bool:  # the level ice (an intact cell or its tile), or a resting floe
+        return row < 0 or st.status[row] == FloeStatus.INTACT or bool(st.resting[row])
+
+    def strip_contacts() -> tuple[int, int]:
+        """The strip's contacts: between two static bodies, and all."""
+        con = data.contacts.read_contacts(st)
+        pairs = [(a, b) for a, b in zip(con.a.tolist(), con.b.tolist()) if a in strip or b in strip]
+        return sum(static(a) and static(b) for a, b in pairs), len(pairs)
+    ice_step(model, data, FAR, DT)
+    assert strip_contacts()[1] > len(loose) // 2  # the strip's floes touch each other and the level ice
+    for _ in range(30):
+        ice_step(model, data, FAR, DT)
+    assert st.resting[loose].all()
+    assert strip_contacts()[0] == 0

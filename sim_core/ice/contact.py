@@ -43,7 +43,7 @@ import pymunk
 import pymunk.batch as pb
 from pymunk._chipmunk import ffi, lib
 
-from sim_core.ice.floes import FloeState, TilePlacement
+from sim_core.ice.floes import FloeState, FloeStatus, TilePlacement
 from sim_core.ice.model import IceModel, placed_centroids, placed_outlines
 
 HULL_ROW = -1
@@ -54,14 +54,14 @@ _HULL_BIT, _FLOE_BIT = 1, 2
 _INTACT_IN, _FLOE_IN = 1, 2  # TileBodies.in_space flags
 _HULL = (0, _HULL_BIT, _FLOE_BIT)  # Chipmunk shape filters: (group, categories, mask)
 _FLOE = (0, _FLOE_BIT, _HULL_BIT | _FLOE_BIT)
-_UNDER_HULL = (0, 0, 0)
+_NO_CONTACT = (0, 0, 0)  # floes under the hull, and floes shedding their contacts before they rest
 _IDENTITY = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)  # cpTransform
 _SEEDS_PER_BUCKET = 4  # mean Voronoi seeds per bucket of a template's seed grid
 _BODY_FIELDS = (pb.BodyFields.BODY_ID | pb.BodyFields.POSITION | pb.BodyFields.ANGLE
                 | pb.BodyFields.VELOCITY | pb.BodyFields.ANGULAR_VELOCITY)
 _ARB_FIELDS = (pb.ArbiterFields.BODY_A_ID | pb.ArbiterFields.BODY_B_ID | pb.ArbiterFields.TOTAL_IMPULSE
                | pb.ArbiterFields.NORMAL | pb.ArbiterFields.CONTACT_COUNT | pb.ArbiterFields.POINT_A_1
-               | pb.ArbiterFields.POINT_B_1 | pb.ArbiterFields.POINT_A_2 | pb.ArbiterFields.POINT_B_2)
+               | pb.ArbiterFields.POINT_A_2)  # a contact's points on body a only: its mean point is all we use
 
 
 @dataclass(frozen=True)
@@ -331,7 +331,7 @@ def _nearest_intact(qx, qy, t, row_start, status, bucket0, per_side, size, first
 def _contact_rows(ints, f, status, working, template, corner, turns, row_start, sides,
                   bucket0, per_side, size, first, entries, seeds, g0):
     """Rows of both bodies of each arbiter (ints (k, 3): body ids a, b and contact count;
-    f (k, 12): impulse, normal, points A1, B1, A2, B2) and the mean contact point (k, 2) m.
+    f (k, 8): impulse, normal, points A1, A2) and the mean contact point (k, 2) m.
     On a tile body the row is the intact cell with the seed nearest the point (the point
     lies on its cell's boundary, the cell across is broken); on a tile no longer worked
     (leaving the space), or a body that is not a floe, it is _NOT_A_FLOE."""
@@ -340,7 +340,7 @@ def _contact_rows(ints, f, status, working, template, corner, turns, row_start, 
     point = np.empty((k_n, 2))
     for k in range(k_n):
         if ints[k, 2] > 1:
-            point[k, 0], point[k, 1] = 0.5 * (f[k, 4] + f[k, 8]), 0.5 * (f[k, 5] + f[k, 9])
+            point[k, 0], point[k, 1] = 0.5 * (f[k, 4] + f[k, 6]), 0.5 * (f[k, 5] + f[k, 7])
         else:
             point[k, 0], point[k, 1] = f[k, 4], f[k, 5]
         for side in range(2):
@@ -375,7 +375,7 @@ def warm_up() -> None:
                   np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2), np.float32), np.zeros(0, np.float32))
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     one = np.zeros(1, dtype=np.int64)
-    _contact_rows(np.zeros((0, 3), np.uintp), np.zeros((0, 12)), none.astype(np.uint8), none.astype(np.uint8),
+    _contact_rows(np.zeros((0, 3), np.uintp), np.zeros((0, 8)), none.astype(np.uint8), none.astype(np.uint8),
                   none, np.zeros((0, 2)), none, none, np.ones(1), one, one + 1, np.ones(1), np.zeros(2, np.int64),
                   none, np.zeros((0, 2)), np.zeros(2, np.int64))
     _with_hull(none, none, np.zeros((0, 2)), np.zeros((0, 2)))
@@ -423,11 +423,16 @@ class ContactSpace:
                                    self.hull_outline[:, 1].min(), self.hull_outline[:, 1].max()])
         self._hull_pose = (np.zeros(2), 0.0)
         self._tiles: dict[int, TileBodies] = {}  # placement -> its engine objects
+        self._tile_index: tuple | None = None  # _in_space's arrays, until _tiles or the placements change
         self._entering: list[TileBodies] = []  # switched in, objects still going into the space
         self._leaving: list[tuple[int, TileBodies]] = []  # switched out, objects still to take out
         self._insert_budget, self._removal_work = s.swap_objects_per_step, s.swap_removal_work
         self._arbiters = 0  # contacts Chipmunk kept at the last read
         self._moving = 0  # floes in the dynamic set at the last read
+        self._steps = 0  # engine steps taken
+        # floes shedding their contacts before they rest: (engine step from which they may,
+        # their rows, bodies and tiles' engine objects), oldest first (``rest``, ``settle``)
+        self._shedding: list[tuple[int, np.ndarray, list[int], list[TileBodies]]] = []
         d = np.hypot(model.outline[:, 0], model.outline[:, 1])
         self.extent = np.maximum.reduceat(d, model.outline_start[:-1]) if len(d) else np.zeros(0)  # cell radius, m
         # farthest a point of the hull and of a cell it touches can be from the hull's reference point, m
@@ -494,6 +499,7 @@ class ContactSpace:
         lib.cpSpaceAddBody(self._cp, _body(bodies.body))
         bodies.queue = bodies.built()
         self._tiles[placement] = bodies
+        self._tile_index = None
         self._entering.append(bodies)
 
     def drop_tile(self, placement: int) -> None:
@@ -501,6 +507,7 @@ class ContactSpace:
         leave the space over the coming steps. Its floes are frozen in the arrays meanwhile
         (``read_free`` does not copy FROZEN rows)."""
         bodies = self._tiles.pop(placement)
+        self._tile_index = None
         if bodies in self._entering:
             self._entering.remove(bodies)
         bodies.queue = bodies.built()
@@ -527,6 +534,15 @@ class ContactSpace:
             budget -= max(bodies.remove(self._cp, chunk), 1)
             if not len(bodies.queue):
                 self._leaving.pop(0)[1].release(self._cp)
+
+    def switch_in_now(self) -> None:
+        """Put every entering tile's objects into the space now, whatever the per-step
+        budget: in the order the steps would have, without their engine steps between (a
+        benchmark of a field already in the space)."""
+        for bodies in self._entering:
+            bodies.insert(self._cp, bodies.queue)
+            bodies.queue = bodies.queue[:0]
+        self._entering.clear()
 
     @property
     def swaps_pending(self) -> int:
@@ -585,7 +601,7 @@ class ContactSpace:
     def set_submerged(self, state: FloeState, rows: np.ndarray, submerged: bool) -> None:
         """Take free rows out of (or back into) all planar contact: floes under the hull. A
         floe going under is pinned by the hull and loses its planar velocity."""
-        f = _UNDER_HULL if submerged else _FLOE
+        f = _NO_CONTACT if submerged else _FLOE
         for p in self._floe_shapes(state, rows):
             lib.cpShapeSetFilter(_shape(p), f)
         if submerged:
@@ -607,6 +623,18 @@ class ContactSpace:
         lib.cpSpaceReindexShapesForBody(self._cp, self._hull)
         self._hull_pose = (np.array([float(xy[0]), float(xy[1])]), float(angle))
 
+    def _in_space(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The placements in the space (k,), their south-west and north-east corners (k, 2;
+        m) and a flag per placement (tiles.n,) set for those in the space; made again only
+        when the tiles in the space or the placements change."""
+        if self._tile_index is None or len(self._tile_index[3]) != self.tiles.n:
+            ids = np.fromiter(self._tiles, dtype=np.int64, count=len(self._tiles))
+            lo = self.tiles.corner[ids]
+            working = np.zeros(self.tiles.n, dtype=np.uint8)
+            working[ids] = 1
+            self._tile_index = (ids, lo, lo + self._sides[self.tiles.template[ids]][:, None], working)
+        return self._tile_index
+
     def hull_touching(self, state: FloeState) -> np.ndarray:
         """Rows of intact cells in the space whose true outline the hull overlaps now
         (kinematic-static pairs make no contacts in Chipmunk, and sphere colliders are not
@@ -615,8 +643,7 @@ class ContactSpace:
         xy, angle = self._hull_pose
         c, s = math.cos(angle), math.sin(angle)
         hull = self.hull_outline @ np.array([[c, s], [-s, c]]) + xy
-        tiles = np.fromiter(self._tiles, dtype=np.int64, count=len(self._tiles))
-        lo, hi = self.tiles.corner[tiles], self.tiles.corner[tiles] + self._sides[self.tiles.template[tiles]][:, None]
+        tiles, lo, hi, _ = self._in_space()
         near = tiles[np.all((lo <= hull.max(axis=0)) & (hi >= hull.min(axis=0)), axis=1)]  # a tile's cells lie in it
         if not len(near):
             return np.zeros(0, dtype=np.int64)
@@ -629,7 +656,14 @@ class ContactSpace:
     def step(self, dt: float) -> None:
         """Switch the step's share of tile objects in or out, then step the engine by dt (s)."""
         self._swap_work()
-        self.space.step(dt)
+        self.engine_step(dt)
+
+    def engine_step(self, dt: float) -> None:
+        """The bare engine step of dt (s), ``cpSpaceStep``. Called through the C API: the
+        floes are no pymunk objects, so pymunk's ``Space.step`` would only add its
+        bookkeeping of them."""
+        lib.cpSpaceStep(self._cp, dt)
+        self._steps += 1
 
     def read_free(self, state: FloeState) -> np.ndarray:
         """Copy pose and velocity of the moving free floes (not resting) from Chipmunk into
@@ -645,27 +679,51 @@ class ContactSpace:
 
     @property
     def rest_budget(self) -> int:
-        """Floes a step may take out of the dynamic set: each costs Chipmunk a walk over every
-        cached contact and a search of its dynamic bodies, so by the same work budget as
-        tile removals (a count, not a time)."""
-        return max(1, self._removal_work // max(self._arbiters + self._moving, 1))
+        """Floes a step may start taking out of the dynamic set: each, as it settles, costs
+        Chipmunk a search of its dynamic bodies, so by the same work budget as tile removals
+        (a count, not a time)."""
+        return max(1, self._removal_work // max(self._moving, 1))
 
     def rest(self, state: FloeState, rows: np.ndarray) -> None:
-        """Take free rows out of the dynamic set: their bodies become static (no solver
-        work; moving floes still collide with them). Their arrays keep the pose and the
-        velocity they came to rest with. Each shape leaves the space and comes back, so that
-        Chipmunk forgets its contacts: it keeps contacts between static bodies for good, and
-        every step would list them again. Then the body leaves the space's body lists and
-        its shape stays: Chipmunk needs a shape's body in the space only when the shape goes
-        in, and collides a static shape through the shape alone, while ``read_free`` (which
-        walks every body the space lists) no longer reads the resting floes back."""
-        for b, p in zip(self._floe_bodies(state, rows), self._floe_shapes(state, rows)):
-            shape, body = _shape(p), _body(b)
-            lib.cpSpaceRemoveShape(self._cp, shape)
-            lib.cpBodySetType(body, lib.CP_BODY_TYPE_STATIC)
-            lib.cpSpaceAddShape(self._cp, shape)
-            lib.cpSpaceRemoveBody(self._cp, body)
-        state.resting[rows] = True
+        """Start taking free rows out of the dynamic set (no solver work; moving floes
+        still collide with them): for the engine's contact persistence (steps) their shapes
+        collide with nothing, so that Chipmunk drops their contacts in its own steps, as it
+        drops every contact not renewed; then ``settle`` makes their bodies static. Chipmunk
+        keeps contacts between two static bodies for good, and lists them every step;
+        dropping a shape's contacts by taking it out of the space and back costs a walk over
+        every contact the space holds, for each shape (30 us a floe at 10 000 floes, most
+        of what resting cost). Rows already shedding are left as they are; the others'
+        count of steps at rest starts again, so that they are not picked again meanwhile."""
+        shedding = [r for _, rs, _, _ in self._shedding for r in rs.tolist()]
+        rows = rows[~np.isin(rows, shedding)] if shedding else rows
+        if not len(rows):
+            return
+        state.calm[rows] = 0
+        for p in self._floe_shapes(state, rows):
+            lib.cpShapeSetFilter(_shape(p), _NO_CONTACT)
+        tiles = [self._tiles[t] for t in state.tile[rows].tolist()]
+        self._shedding.append((self._steps + self.space.collision_persistence, rows.copy(),
+                               self._floe_bodies(state, rows), tiles))
+
+    def settle(self, state: FloeState) -> None:
+        """Make the floes that have shed their contacts static bodies, and take those bodies
+        out of the space's body lists; their shapes collide again, from the static index.
+        Chipmunk needs a shape's body in the space only when the shape goes in, and
+        collides a static shape through the shape alone, while ``read_free`` (which walks
+        every body the space lists) no longer reads the resting floes back. The arrays keep
+        the pose and the velocity they came to rest with. A floe whose tile left the space
+        meanwhile is gone with it; one that was struck under the hull stays as it is."""
+        while self._shedding and self._shedding[0][0] <= self._steps:
+            _, rows, bodies, tiles = self._shedding.pop(0)
+            ours = np.array([self._tiles.get(t) is b and int(b.floe_body[r - int(self.tiles.row_start[t])]) == p
+                             for r, t, b, p in zip(rows.tolist(), state.tile[rows].tolist(), tiles, bodies)],
+                            dtype=bool)
+            ok = ours & (state.status[rows] == FloeStatus.FREE) & ~state.submerged[rows]
+            for p, body in zip(self._floe_shapes(state, rows[ok]), np.array(bodies, dtype=np.uintp)[ok].tolist()):
+                lib.cpBodySetType(_body(body), lib.CP_BODY_TYPE_STATIC)  # its shape moves to the static index
+                lib.cpShapeSetFilter(_shape(p), _FLOE)
+                lib.cpSpaceRemoveBody(self._cp, _body(body))
+            state.resting[rows[ok]] = True
 
     def wake(self, state: FloeState, rows: np.ndarray) -> None:
         """Bring resting rows back into the dynamic set with their mass, moment and the
@@ -691,11 +749,9 @@ class ContactSpace:
         buf.clear()
         pb.get_space_arbiters(self.space, _ARB_FIELDS, buf)
         ints = np.frombuffer(buf.int_buf(), dtype=np.uintp).reshape(-1, 3)
-        f = np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ints), 12)
+        f = np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ints), 8)
         self._arbiters = len(ints)
         tiles = self.tiles
-        working = np.zeros(tiles.n, dtype=np.uint8)
-        working[list(self._tiles)] = 1
-        a, b, point = _contact_rows(ints, f, state.status, working, tiles.template, tiles.corner,
+        a, b, point = _contact_rows(ints, f, state.status, self._in_space()[3], tiles.template, tiles.corner,
                                     tiles.quarter_turns, tiles.row_start, self._sides, *self._grid)
         return Contacts(a, b, f[:, 0:2].copy(), f[:, 2:4].copy(), point)

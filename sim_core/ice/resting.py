@@ -77,7 +77,7 @@ def _near(flag, xy, at, radius):
     out = np.empty(len(flag), np.int64)
     n = 0
     for i in range(len(flag)):
-        if flag[i] and math.hypot(xy[i, 0] - at[0], xy[i, 1] - at[1]) < radius:
+        if flag[i] and (xy[i, 0] - at[0]) ** 2 + (xy[i, 1] - at[1]) ** 2 < radius * radius:
             out[n] = i
             n += 1
     return out[:n]
@@ -160,10 +160,12 @@ def wake_struck(model: IceModel, data: IceData, con: Contacts) -> None:
 
 
 def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.ndarray, dt: float) -> None:
-    """Count the moving rows' steps at rest, and take out of the dynamic set, up to
+    """Settle the floes that have shed their contacts (``ContactSpace.settle``); count the
+    moving rows' steps at rest, and start taking out of the dynamic set, up to
     ``rest_per_step`` of them and the contact space's ``rest_budget`` (lowest rows first),
     those at rest for ``rest_after_s``, above water, settled and beyond the rest radius."""
     s, st = model.settings, data.state
+    data.contacts.settle(st)
     steps = min(65535, max(1, math.ceil(s.rest_after_s / dt)))
     far = _calm_far(moving, st.vel, st.yaw_rate, st.gcell, data.contacts.extent, st.calm, s.rest_speed, steps,
                     st.submerged, model.z_equilibrium, st.heave, st.roll, st.pitch, st.heave_rate, st.roll_rate,

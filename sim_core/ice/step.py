@@ -105,15 +105,20 @@ def _contact_breaks(model: IceModel, st: FloeState, con: Contacts,
                         model.k_impact, model.ride_load, model.edge_capacity)
 
 
-def _hull_load(impulse: np.ndarray, point: np.ndarray, hull: HullMotion, dt: float) -> tuple[np.ndarray, float]:
-    """Force (N, world) and moment (N m, CCW about the hull's reference point) of the hull's
-    contact impulses (N s) at points (m) over dt (s). Summed exactly rounded (``math.fsum``):
-    the engine lists contacts in a run-dependent order, and a sum that depended on it would
-    make reruns of the same orders drift apart, through the ship, by whole cells."""
-    force = impulse / dt
-    arm = point - hull.xy
-    moment = math.fsum(np.concatenate([arm[:, 0] * force[:, 1], -arm[:, 1] * force[:, 0]]).tolist())
-    return np.array([math.fsum(force[:, 0].tolist()), math.fsum(force[:, 1].tolist())]), moment
+@numba.njit(cache=True)
+def _hull_load(rows, impulse, point, hull_xy, dt):
+    """Force (N, world; fx, fy) and moment (N m, CCW about the hull's reference point
+    hull_xy) of the hull's contact impulses (k, 2; N s) at points (k, 2; m) over dt (s),
+    summed in the order of the struck rows (k,), each struck once: the engine lists
+    contacts in a run-dependent order, and a sum that depended on it would make reruns of
+    the same orders drift apart, through the ship, by whole cells."""
+    fx = fy = moment = 0.0
+    for k in np.argsort(rows):
+        jx, jy = impulse[k, 0] / dt, impulse[k, 1] / dt
+        moment += (point[k, 0] - hull_xy[0]) * jy - (point[k, 1] - hull_xy[1]) * jx
+        fx += jx
+        fy += jy
+    return fx, fy, moment
 
 
 @numba.njit(cache=True)
@@ -191,8 +196,9 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
     rights it."""
     st, space = data.state, data.contacts
     c, s = math.cos(hull.angle), math.sin(hull.angle)
-    if len(struck) or len(jammed):
-        under = _going_under(struck, jammed, st.status, st.submerged, st.xy, hull.xy, c, s, space.hull_half_beam)
+    under = _going_under(struck, jammed, st.status, st.submerged, st.xy, hull.xy, c, s, space.hull_half_beam) \
+        if len(struck) or len(jammed) else _NO_ROWS
+    if len(under):
         st.submerged[under] = True
         space.set_submerged(st, under, True)
         g = st.gcell[under]
@@ -238,8 +244,8 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> Ice
     if rest:
         resting.wake_struck(model, data, con)
         resting.rest_far(model, data, moving, hull.xy, dt)
-    force, moment = _hull_load(impulse, point, hull, dt)
-    return IceStepReport(by_hull, by_contact, force, moment)
+    fx, fy, moment = _hull_load(struck, impulse, point, np.asarray(hull.xy, dtype=np.float64), dt)
+    return IceStepReport(by_hull, by_contact, np.array([fx, fy]), moment)
 
 
 def warm_up(model: IceModel, data: IceData) -> None:
@@ -249,6 +255,7 @@ def warm_up(model: IceModel, data: IceData) -> None:
                  np.zeros(0, dtype=np.uint8), np.zeros((0, 2), np.float32), np.zeros(0, dtype=np.int32), model.mass,
                  model.k_impact, model.ride_load, model.edge_capacity)
     resting.warm_up(model)
+    _hull_load(np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(2), 1.0)
     none, f32 = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.float32)
     _surfacing(none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hull_outline, 1.0, 1.0,
                1.0)
