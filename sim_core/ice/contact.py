@@ -334,7 +334,9 @@ def _contact_rows(ints, f, status, working, template, corner, turns, row_start, 
     f (k, 8): impulse, normal, points A1, A2) and the mean contact point (k, 2) m.
     On a tile body the row is the intact cell with the seed nearest the point (the point
     lies on its cell's boundary, the cell across is broken); on a tile no longer worked
-    (leaving the space), or a body that is not a floe, it is _NOT_A_FLOE."""
+    (leaving the space), on a tile body in a contact with no points this step (Chipmunk
+    keeps a separated pair's contact a few steps, with no impulse), or on a body that is
+    not a floe, it is _NOT_A_FLOE."""
     k_n = ints.shape[0]
     rows = np.empty((2, k_n), np.int64)
     point = np.empty((k_n, 2))
@@ -348,7 +350,7 @@ def _contact_rows(ints, f, status, working, template, corner, turns, row_start, 
             if code >= _TILE0:
                 p = code - _TILE0
                 row = _NOT_A_FLOE
-                if p < len(working) and working[p]:
+                if ints[k, 2] > 0 and p < len(working) and working[p]:
                     t = template[p]
                     half = 0.5 * sides[t]
                     q = (-turns[p]) % 4
@@ -429,9 +431,8 @@ class ContactSpace:
         self._insert_budget, self._removal_work = s.swap_objects_per_step, s.swap_removal_work
         self._arbiters = 0  # contacts Chipmunk kept at the last read
         self._moving = 0  # floes in the dynamic set at the last read
-        self._steps = 0  # engine steps taken
-        # floes shedding their contacts before they rest: (engine step from which they may,
-        # their rows, bodies and tiles' engine objects), oldest first (``rest``, ``settle``)
+        # floes shedding their contacts before they rest: (the engine's time stamp from which
+        # they may, their rows, bodies and tiles' engine objects), oldest first (``rest``, ``settle``)
         self._shedding: list[tuple[int, np.ndarray, list[int], list[TileBodies]]] = []
         d = np.hypot(model.outline[:, 0], model.outline[:, 1])
         self.extent = np.maximum.reduceat(d, model.outline_start[:-1]) if len(d) else np.zeros(0)  # cell radius, m
@@ -663,7 +664,6 @@ class ContactSpace:
         floes are no pymunk objects, so pymunk's ``Space.step`` would only add its
         bookkeeping of them."""
         lib.cpSpaceStep(self._cp, dt)
-        self._steps += 1
 
     def read_free(self, state: FloeState) -> np.ndarray:
         """Copy pose and velocity of the moving free floes (not resting) from Chipmunk into
@@ -692,7 +692,10 @@ class ContactSpace:
         keeps contacts between two static bodies for good, and lists them every step;
         dropping a shape's contacts by taking it out of the space and back costs a walk over
         every contact the space holds, for each shape (30 us a floe at 10 000 floes, most
-        of what resting cost). Rows already shedding are left as they are; the others'
+        of what resting cost). Meanwhile the floe and its neighbours may pass into each
+        other by what they drift at rest in those steps (0.02 m/s: under a millimetre); the
+        engine pushes such an overlap apart once the floe is static, and a push that gives
+        it ``rest_speed`` wakes it. Rows already shedding are left as they are; the others'
         count of steps at rest starts again, so that they are not picked again meanwhile."""
         shedding = [r for _, rs, _, _ in self._shedding for r in rs.tolist()]
         rows = rows[~np.isin(rows, shedding)] if shedding else rows
@@ -702,7 +705,8 @@ class ContactSpace:
         for p in self._floe_shapes(state, rows):
             lib.cpShapeSetFilter(_shape(p), _NO_CONTACT)
         tiles = [self._tiles[t] for t in state.tile[rows].tolist()]
-        self._shedding.append((self._steps + self.space.collision_persistence, rows.copy(),
+        # the stamp Chipmunk ages contacts by: one a step (not for dt = 0)
+        self._shedding.append((lib.cpSpaceGetTimestamp(self._cp) + self.space.collision_persistence, rows.copy(),
                                self._floe_bodies(state, rows), tiles))
 
     def settle(self, state: FloeState) -> None:
@@ -713,7 +717,7 @@ class ContactSpace:
         every body the space lists) no longer reads the resting floes back. The arrays keep
         the pose and the velocity they came to rest with. A floe whose tile left the space
         meanwhile is gone with it; one that was struck under the hull stays as it is."""
-        while self._shedding and self._shedding[0][0] <= self._steps:
+        while self._shedding and self._shedding[0][0] <= lib.cpSpaceGetTimestamp(self._cp):
             _, rows, bodies, tiles = self._shedding.pop(0)
             ours = np.array([self._tiles.get(t) is b and int(b.floe_body[r - int(self.tiles.row_start[t])]) == p
                              for r, t, b, p in zip(rows.tolist(), state.tile[rows].tolist(), tiles, bodies)],

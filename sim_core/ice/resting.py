@@ -3,9 +3,9 @@
 Astern of the ship the broken channel packs and comes to rest: thousands of floes the engine
 would otherwise solve every step for nothing. A free floe that has stayed slower than
 ``rest_speed`` (its centre, and its rim turning) for ``rest_after_s``, settled on the water
-and farther from the hull than the rest radius becomes a static body
-(``ContactSpace.rest``): moving floes still strike it, but it and its resting neighbours
-cost no solver work. It wakes (``ContactSpace.wake``), with the velocity it came to rest
+and farther from the hull than the rest radius sheds its contacts and becomes a static
+body (``ContactSpace.rest``, then ``settle``): moving floes still strike it, but it and
+its resting neighbours cost no solver work. It wakes (``ContactSpace.wake``), with the velocity it came to rest
 with, when the hull comes within the wake radius (Chipmunk does not collide kinematic and
 static bodies, so the hull must never meet a resting floe), or when the contacts' pushes
 have brought it to ``rest_speed``: in each step it met its strikers as a wall, so it takes
