@@ -154,3 +154,17 @@ def test_floes_come_to_rest_without_contacts_the_engine_would_keep():
         ice_step(model, data, FAR, DT)
     assert st.resting[loose].all()
     assert strip_contacts()[0] == 0
+
+
+def test_floes_counted_at_rest_again_while_they_shed_rest_once():
+    """With steps so long that a floe counts as at rest again within its shedding (0.1 s
+    steps, 0.2 s at rest), the step that settles a floe still holds it among the moving
+    floes it read before: it must not be taken out of the dynamic set a second time
+    (Chipmunk aborts on removing a body twice)."""
+    model, data, loose = _broken_strip("sphere")
+    for _ in range(30):
+        ice_step(model, data, FAR, 0.1)
+    st = data.state
+    assert st.resting[loose].all()
+    moving = set(data.contacts.read_free(st).tolist())
+    assert not moving & set(loose.tolist())  # each body left the dynamic set, once

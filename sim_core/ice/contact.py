@@ -696,8 +696,11 @@ class ContactSpace:
         other by what they drift at rest in those steps (0.02 m/s: under a millimetre); the
         engine pushes such an overlap apart once the floe is static, and a push that gives
         it ``rest_speed`` wakes it. Rows already shedding are left as they are; the others'
-        count of steps at rest starts again, so that they are not picked again meanwhile."""
+        count of steps at rest starts again, so that they are not picked again meanwhile.
+        Rows already resting are left too: ``settle`` may have rested them since the caller
+        read the moving rows (a step long enough to count a floe at rest within the shedding)."""
         shedding = [r for _, rs, _, _ in self._shedding for r in rs.tolist()]
+        rows = rows[~state.resting[rows]]
         rows = rows[~np.isin(rows, shedding)] if shedding else rows
         if not len(rows):
             return
@@ -722,7 +725,7 @@ class ContactSpace:
             ours = np.array([self._tiles.get(t) is b and int(b.floe_body[r - int(self.tiles.row_start[t])]) == p
                              for r, t, b, p in zip(rows.tolist(), state.tile[rows].tolist(), tiles, bodies)],
                             dtype=bool)
-            ok = ours & (state.status[rows] == FloeStatus.FREE) & ~state.submerged[rows]
+            ok = ours & (state.status[rows] == FloeStatus.FREE) & ~state.submerged[rows] & ~state.resting[rows]
             for p, body in zip(self._floe_shapes(state, rows[ok]), np.array(bodies, dtype=np.uintp)[ok].tolist()):
                 lib.cpBodySetType(_body(body), lib.CP_BODY_TYPE_STATIC)  # its shape moves to the static index
                 lib.cpShapeSetFilter(_shape(p), _FLOE)
