@@ -10,8 +10,9 @@ tiles are all in the engine before the timing starts (switching tiles in is time
 of the medians, of the totals, and the median of the steps' own ratios. Where most floes go
 to rest within the timed steps (10 000 floes), the step times fall from one level to
 another, the two medians can land on different steps, and their ratio moved by 0.4 between
-runs; the other two are what the glue costs over the same steps. Buoyancy alone is timed for the numba
-kernel and for the plain numpy reference, run in the same process, with their ratio.
+runs; the other two are what the glue costs over the same steps. Buoyancy alone is timed
+for the numba kernel and for the plain numpy reference, run in the same process, with
+their ratio.
 Targets: ice step <= 1.5 x the bare engine step; median within one 60 Hz period at 10 000
 live floes. Floes at rest beyond ``rest_distance`` of the hull leave the dynamic set
 (``sim_core/ice/resting.py``), which makes the engine step, and so the ratio's denominator,

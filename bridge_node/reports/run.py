@@ -41,6 +41,7 @@ def plot_run(stats: LoopStats, path: Path) -> Path:
         cx.plot(mem[:, 1 if by_frozen else 0], mem[:, 2], ".-", ms=2, lw=0.5, color=colour,
                 label=label + (f": {slope} MiB per 1000 frozen floes" if slope is not None else ""))
         x_label = "frozen floes" if by_frozen else "simulated time, s (no floe frozen yet)"
+    if cx.lines:
         cx.legend(fontsize=8)
     cx.set_xlabel(x_label)
     cx.set_title("memory of the node's process")

@@ -5,11 +5,12 @@ would otherwise solve every step for nothing. A free floe that has stayed slower
 ``rest_speed`` (its centre, and its rim turning) for ``rest_after_s``, settled on the water
 and farther from the hull than the rest radius sheds its contacts and becomes a static
 body (``ContactSpace.rest``, then ``settle``): moving floes still strike it, but it and
-its resting neighbours cost no solver work. It wakes (``ContactSpace.wake``), with the velocity it came to rest
-with, when the hull comes within the wake radius (Chipmunk does not collide kinematic and
-static bodies, so the hull must never meet a resting floe), or when the contacts' pushes
-have brought it to ``rest_speed``: in each step it met its strikers as a wall, so it takes
-their impulses into the velocity it keeps while resting, and a steady push adds up.
+its resting neighbours cost no solver work. It wakes (``ContactSpace.wake``), with the
+velocity it came to rest with, when the hull comes within the wake radius (Chipmunk does
+not collide kinematic and static bodies, so the hull must never meet a resting floe), or
+when the contacts' pushes have brought it to ``rest_speed``: in each step it met its
+strikers as a wall, so it takes their impulses into the velocity it keeps while resting,
+and a steady push adds up.
 
 This is Chipmunk's sleeping done floe by floe. Chipmunk sleeps and wakes whole touching
 groups, and the packed channel is one group of thousands: one touch woke them all, in steps
