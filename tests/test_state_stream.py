@@ -103,6 +103,22 @@ def test_late_joiner_and_lost_messages_end_with_the_published_state(exercise):
     assert publisher.dropped == 0 and publisher.snapshots >= 10
 
 
+def test_catching_up_at_the_end_reaches_the_last_step_published(exercise):
+    """A renderer told to finish right after the node's last step still draws that step:
+    it waits for the next heartbeat, which names the last step sent."""
+    _, cfg, model = exercise
+    data = start_world(model, cfg)
+    with StatePublisher(cfg.stream) as publisher:
+        publisher.publish(snapshot(model, data))
+        with StateSubscriber(cfg.stream.publish, cfg.stream.snapshot) as sub:
+            sub.sync()
+            for _ in range(30):
+                publisher.publish(step(model, data, 0.1))
+            applied = sub.catch_up(10.0)
+            assert sub.view.seq == data.seq and sub.heartbeats >= 1
+            assert [e.seq for e in applied] == list(range(data.seq - len(applied) + 1, data.seq + 1))
+
+
 def test_the_publisher_process_that_dies_is_reported_and_the_physics_goes_on(exercise):
     """The publisher runs in its own process: a second one on the same endpoints cannot
     bind (ZMQError, as the first holds them); killed, it is named in ``error`` with its

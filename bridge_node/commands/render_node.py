@@ -31,7 +31,10 @@ from bridge_node.render.channels import ChannelSet
 from bridge_node.render.open_channels import open_channels, select_channels
 from bridge_node.render.video import VideoWriter, save_png, side_by_side
 from bridge_node.stream.settings import StreamSettings
+from bridge_node.stream.publisher import HEARTBEAT_S
 from bridge_node.stream.subscriber import StateSubscriber, StreamError
+
+CATCH_UP_S = 4 * HEARTBEAT_S  # s, at most, spent on the node's last steps after SIGTERM
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -132,6 +135,14 @@ def _render_loop(sub: StateSubscriber, channels: ChannelSet, outputs: _Outputs, 
             outputs.frame(sub.view.time, now)
             time.sleep(args.frame_delay)
             next_frame = _frame_pacing(next_frame, period)
+        if stop.is_set():  # the node asked us to finish: its last steps may still be on the way
+            seq = sub.view.seq
+            sub.catch_up(CATCH_UP_S)
+            if sub.view.seq != seq:  # the last frame, the video's and the panorama's, shows them
+                sub.view.blend(1.0)
+                channels.render(sub.view)
+                frames += 1
+                outputs.frame(sub.view.time, float("inf"))
     except KeyboardInterrupt:
         pass
     except StreamError as exc:  # the node went away during a resync: end with what we have

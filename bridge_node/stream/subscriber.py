@@ -35,6 +35,7 @@ class StateSubscriber:
         self.resyncs = 0  # snapshots taken after a gap
         self.lost = 0  # steps missed (before each resync)
         self.malformed = 0
+        self.heartbeats = 0  # heartbeats received
         self.last_input: tuple[int, float] | None = None  # (seq, monotonic input time) of the last input
         self._sub = self.context.socket(zmq.SUB)
         self._sub.setsockopt(zmq.SUBSCRIBE, b"")
@@ -81,11 +82,12 @@ class StateSubscriber:
             self.last_input = (events.seq, input_time)
 
     def poll(self, timeout_ms: int = 0, drop=None) -> list[WorldEvents]:
-        """Apply every pending step (waiting up to timeout_ms for the first); returns the
-        events applied. ``drop(seq)`` may discard messages on purpose (fault injection)."""
-        applied = []
-        while self._sub.poll(timeout_ms if not applied else 0):
-            frames = self._sub.recv_multipart()
+        """Apply every pending step (waiting up to timeout_ms for the first message, step or
+        heartbeat); returns the events applied. ``drop(seq)`` may discard messages on
+        purpose (fault injection)."""
+        applied, wait = [], timeout_ms
+        while self._sub.poll(wait):
+            frames, wait = self._sub.recv_multipart(), 0
             if frames[0] == HEARTBEAT:
                 self._heartbeat(frames)
                 continue
@@ -104,12 +106,30 @@ class StateSubscriber:
             applied.append(events)
         return applied
 
+    def catch_up(self, timeout_s: float) -> list[WorldEvents]:
+        """Apply what is pending, then wait for the publisher's next heartbeat (it names the
+        last step it has sent) and apply every step up to it, resynchronising if one was
+        lost: at the end of a run this is the last state the node published. Returns the
+        events applied; gives up after ``timeout_s`` (the node is gone).
+
+        The heartbeat must arrive after the pending messages were read: one already queued
+        may have been sent before the last steps reached the publisher."""
+        applied = self.poll(0)
+        seen, deadline = self.heartbeats, time.monotonic() + timeout_s
+        while self.heartbeats == seen:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                break
+            applied += self.poll(max(1, int(left * 1000)))
+        return applied
+
     def _heartbeat(self, frames: list[bytes]) -> None:
         try:
             seq = int(frames[1])
         except (IndexError, ValueError):
             self.malformed += 1
             return
+        self.heartbeats += 1
         if seq > self.view.seq:  # steps published before the heartbeat never arrived
             self._resync(seq - self.view.seq)
 
