@@ -8,9 +8,10 @@ Python and numba glue around the engine costs, whatever the machine's speed. The
 tiles are all in the engine before the timing starts (switching tiles in is timed in
 ``bench_scene.py``). Median and p99 are printed beside the core count, with three ratios:
 of the medians, of the totals, and the median of the steps' own ratios. Where most floes go
-to rest within the timed steps (10 000 floes), the step times fall from one level to
-another, the two medians can land on different steps, and their ratio moved by 0.4 between
-runs; the other two are what the glue costs over the same steps. Buoyancy alone is timed
+to rest within the timed steps (3000 and 10 000 floes), the step times fall from one level
+to another, and the two medians can land on different steps; the other two are what the
+glue costs over the same steps, and the steps are also split by the share of the live
+floes resting (under 10 %: the field as broken; over 80 %: come to rest). Buoyancy alone is timed
 for the numba kernel and for the plain numpy reference, run in the same process, with
 their ratio.
 Targets: ice step <= 1.5 x the bare engine step; median within one 60 Hz period at 10 000
@@ -62,8 +63,9 @@ def live_field(target: int):
     return model, data, (150.0, 0.0, 0.5 * math.pi)
 
 
-def time_steps(model, data, pose, n: int = 240) -> tuple[np.ndarray, np.ndarray]:
-    """Wall times (ms) of n whole ice steps and of the bare engine step inside each."""
+def time_steps(model, data, pose, n: int = 240) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Wall times (ms) of n whole ice steps and of the bare engine step inside each, and the
+    share of the live floes resting after each step."""
     x, y, heading = pose
     space = data.contacts
     engine_step, engine = space.engine_step, []
@@ -74,15 +76,16 @@ def time_steps(model, data, pose, n: int = 240) -> tuple[np.ndarray, np.ndarray]
         engine.append(time.perf_counter() - t0)
 
     space.engine_step = timed_engine_step
-    out = []
+    out, resting = [], []
     for _ in range(n):
         v = SPEED * np.array([math.cos(heading), math.sin(heading)])
         t0 = time.perf_counter()
         ice_step(model, data, HullMotion(np.array([x, y]), heading, v, 0.0), DT)
         out.append(time.perf_counter() - t0)
+        resting.append(data.state.resting.sum() / max(data.state.count(FloeStatus.FREE), 1))
         x, y = x + v[0] * DT, y + v[1] * DT
     space.engine_step = engine_step
-    return np.array(out) * 1e3, np.array(engine) * 1e3
+    return np.array(out) * 1e3, np.array(engine) * 1e3, np.array(resting)
 
 
 def bench_buoyancy(model, n: int) -> tuple[float, float]:
@@ -110,14 +113,21 @@ def main() -> None:
     with Progress(transient=True) as progress:
         for target in progress.track((1000, 3000, 10000), description="ice step at 1000/3000/10000 floes"):
             model, data, pose = live_field(target)
-            ms, engine = time_steps(model, data, pose)
-            rows.append((data.state.count(FloeStatus.FREE), int(data.state.resting.sum()), data.state.n, ms, engine))
-    for live, rest, total, ms, engine in rows:
+            ms, engine, resting = time_steps(model, data, pose)
+            rows.append((data.state.count(FloeStatus.FREE), int(data.state.resting.sum()), data.state.n, ms, engine,
+                         resting))
+    for live, rest, total, ms, engine, resting in rows:
         print(f"ice step, {live:6d} live floes, {rest} of them resting at the end ({total} cells placed): "
               f"median {np.median(ms):6.2f} ms, "
               f"p99 {np.percentile(ms, 99):6.2f} ms; bare engine median {np.median(engine):6.2f} ms; "
               f"ratio of medians {np.median(ms) / np.median(engine):4.2f}, of totals {ms.sum() / engine.sum():4.2f}, "
               f"median of the steps' {np.median(ms / engine):4.2f} ({os.cpu_count()} cores)")
+        for name, steps in (("under 10 %", resting < 0.1), ("10-80 %", (resting >= 0.1) & (resting <= 0.8)),
+                            ("over 80 %", resting > 0.8)):
+            if steps.any():
+                print(f"    {steps.sum():3d} steps with {name} of the live floes resting: median {np.median(ms[steps]):6.2f}"
+                      f" ms, ratio of medians {np.median(ms[steps]) / np.median(engine[steps]):4.2f}, of totals "
+                      f"{ms[steps].sum() / engine[steps].sum():4.2f}")
     for n in (1000, 3000, 10000):
         fast, ref = bench_buoyancy(model, n)
         print(f"buoyancy, {n:6d} floes: numba {fast:6.3f} ms, numpy reference {ref:7.2f} ms ({ref / fast:5.0f}x)")

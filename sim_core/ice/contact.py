@@ -223,36 +223,57 @@ def _separated(p: np.ndarray, q: np.ndarray) -> bool:
 
 
 @numba.njit(cache=True)
-def _hull_overlaps(starts, counts, present, status, gcell, xy, yaw, outline, outline_start, extent,
-                   hull, hull_xy, hull_c, hull_s, box):
-    """Rows of tiles' intact cells in the space whose outline overlaps the hull polygon
-    (world m), ascending per tile. Tile t has counts[t] rows from starts[t]; present holds
-    the tiles' ``TileBodies.in_space`` one after another. The hull's body-frame box
-    [x0, x1, y0, y1] screens first."""
+def _hull_overlaps(near, present, status, gcell, xy, yaw, outline, outline_start, extent, hull, hull_xy, hull_c,
+                   hull_s, box, template, corner, turns, row_start, row_count, sides, pad, bucket0, per_side, size, first,
+                   entries):
+    """Rows of intact cells in the space, of the placements ``near``, whose outline
+    overlaps the hull polygon (world m). present holds those placements'
+    ``TileBodies.in_space`` one after another. Only the cells whose seed lies in a bucket of
+    the seed grid (``_seed_grid``) that the hull's bounds reach, widened by the template's
+    pad (m: the farthest a cell's outline lies from its seed), are looked at; the hull's
+    body-frame box [x0, x1, y0, y1] screens them first."""
     out = np.empty(len(present), np.int64)
     n_out = 0
     offset = 0
-    for t in range(len(starts)):
-        for k in range(counts[t]):
-            j = starts[t] + k
-            if present[offset + k] & _INTACT_IN == 0 or status[j] != 0:
-                continue
-            g = gcell[j]
-            dx, dy = xy[j, 0] - hull_xy[0], xy[j, 1] - hull_xy[1]
-            u, v, e = hull_c * dx + hull_s * dy, -hull_s * dx + hull_c * dy, extent[g]
-            if u < box[0] - e or u > box[1] + e or v < box[2] - e or v > box[3] + e:
-                continue
-            a, b = outline_start[g], outline_start[g + 1]
-            c, s = math.cos(yaw[j]), math.sin(yaw[j])
-            cell = np.empty((b - a, 2))
-            for i in range(b - a):
-                ox, oy = outline[a + i, 0], outline[a + i, 1]
-                cell[i, 0] = xy[j, 0] + c * ox - s * oy
-                cell[i, 1] = xy[j, 1] + s * ox + c * oy
-            if not _separated(hull, cell) and not _separated(cell, hull):
-                out[n_out] = j
-                n_out += 1
-        offset += counts[t]
+    x0, x1 = hull[:, 0].min(), hull[:, 0].max()
+    y0, y1 = hull[:, 1].min(), hull[:, 1].max()
+    for p in near:
+        t = template[p]
+        half, n, h = 0.5 * sides[t], per_side[t], size[t]
+        q = (-turns[p]) % 4  # world to template frame, as in _contact_rows
+        c, s = (1, 0, -1, 0)[q], (0, 1, 0, -1)[q]
+        lo_x = lo_y = np.inf
+        hi_x = hi_y = -np.inf
+        for wx, wy in ((x0, y0), (x1, y0), (x0, y1), (x1, y1)):
+            rx, ry = wx - corner[p, 0] - half, wy - corner[p, 1] - half
+            lx, ly = c * rx - s * ry + half, s * rx + c * ry + half
+            lo_x, hi_x, lo_y, hi_y = min(lo_x, lx), max(hi_x, lx), min(lo_y, ly), max(hi_y, ly)
+        i0, i1 = max(int((lo_x - pad[t]) // h), 0), min(int((hi_x + pad[t]) // h), n - 1)
+        j0, j1 = max(int((lo_y - pad[t]) // h), 0), min(int((hi_y + pad[t]) // h), n - 1)
+        for bj in range(j0, j1 + 1):
+            for bi in range(i0, i1 + 1):
+                k = bucket0[t] + bi + n * bj
+                for e in range(first[k], first[k + 1]):
+                    cell = entries[e]
+                    j = row_start[p] + cell
+                    if present[offset + cell] & _INTACT_IN == 0 or status[j] != 0:
+                        continue
+                    g = gcell[j]
+                    dx, dy = xy[j, 0] - hull_xy[0], xy[j, 1] - hull_xy[1]
+                    u, v, r = hull_c * dx + hull_s * dy, -hull_s * dx + hull_c * dy, extent[g]
+                    if u < box[0] - r or u > box[1] + r or v < box[2] - r or v > box[3] + r:
+                        continue
+                    a, b = outline_start[g], outline_start[g + 1]
+                    cy, sy = math.cos(yaw[j]), math.sin(yaw[j])
+                    ring = np.empty((b - a, 2))
+                    for i in range(b - a):
+                        ox, oy = outline[a + i, 0], outline[a + i, 1]
+                        ring[i, 0] = xy[j, 0] + cy * ox - sy * oy
+                        ring[i, 1] = xy[j, 1] + sy * ox + cy * oy
+                    if not _separated(hull, ring) and not _separated(ring, hull):
+                        out[n_out] = j
+                        n_out += 1
+        offset += row_count[p]
     return out[:n_out]
 
 
@@ -260,8 +281,9 @@ def _hull_overlaps(starts, counts, present, status, gcell, xy, yaw, outline, out
 def _scatter_free(ids, f, status, resting, xy, yaw, vel, yaw_rate):
     """Write the pose and velocity rows f (n, 6) of floe bodies with these ids into the
     arrays, but not of rows already frozen (bodies of a tile still leaving the space) or
-    resting (their static bodies report no velocity). Returns the rows written."""
-    out = np.empty(len(ids), np.int64)
+    resting (their static bodies report no velocity). Returns the rows written and their
+    bodies' places in ids."""
+    out, at = np.empty(len(ids), np.int64), np.empty(len(ids), np.int64)
     n = 0
     for k in range(len(ids)):
         if ids[k] >= _ROW0 and ids[k] < _TILE0:
@@ -270,9 +292,9 @@ def _scatter_free(ids, f, status, resting, xy, yaw, vel, yaw_rate):
                 continue
             xy[i, 0], xy[i, 1], yaw[i] = f[k, 0], f[k, 1], f[k, 2]
             vel[i, 0], vel[i, 1], yaw_rate[i] = f[k, 3], f[k, 4], f[k, 5]
-            out[n] = i
+            out[n], at[n] = i, k
             n += 1
-    return out[:n]
+    return out[:n], at[:n]
 
 
 def _seed_grid(model: IceModel) -> tuple[np.ndarray, ...]:
@@ -381,9 +403,10 @@ def warm_up() -> None:
                   none, np.zeros((0, 2)), none, none, np.ones(1), one, one + 1, np.ones(1), np.zeros(2, np.int64),
                   none, np.zeros((0, 2)), np.zeros(2, np.int64))
     _with_hull(none, none, np.zeros((0, 2)), np.zeros((0, 2)))
-    _hull_overlaps(none, none, none.astype(np.uint8), none.astype(np.uint8), none.astype(np.int32),
-                   np.zeros((0, 2)), np.zeros(0), square, np.array([0, 4]), np.ones(1),
-                   square, np.zeros(2), 1.0, 0.0, np.zeros(4))
+    _hull_overlaps(none, none.astype(np.uint8), none.astype(np.uint8), none.astype(np.int32), np.zeros((0, 2)),
+                   np.zeros(0), square, np.array([0, 4]), np.ones(1), square, np.zeros(2), 1.0, 0.0, np.zeros(4),
+                   none, np.zeros((0, 2)), none, none, none, np.ones(1), np.ones(1), one, one + 1, np.ones(1),
+                   np.zeros(2, np.int64), none)
 
 
 class ContactSpace:
@@ -430,15 +453,20 @@ class ContactSpace:
         self._leaving: list[tuple[int, TileBodies]] = []  # switched out, objects still to take out
         self._insert_budget, self._removal_work = s.swap_objects_per_step, s.swap_removal_work
         self._arbiters = 0  # contacts Chipmunk kept at the last read
-        self._moving = 0  # floes in the dynamic set at the last read
+        self._moving_at = np.zeros(0, dtype=np.int64)  # the moving floes' places among the bodies, last read
         # floes shedding their contacts before they rest: (the engine's time stamp from which
-        # they may, their rows, bodies and tiles' engine objects), oldest first (``rest``, ``settle``)
-        self._shedding: list[tuple[int, np.ndarray, list[int], list[TileBodies]]] = []
+        # they may, their rows, the rows' placements and bodies, and those placements' engine
+        # objects), oldest first (``rest``, ``settle``)
+        self._shedding: list[tuple[int, np.ndarray, np.ndarray, np.ndarray, dict[int, TileBodies]]] = []
         d = np.hypot(model.outline[:, 0], model.outline[:, 1])
         self.extent = np.maximum.reduceat(d, model.outline_start[:-1]) if len(d) else np.zeros(0)  # cell radius, m
         # farthest a point of the hull and of a cell it touches can be from the hull's reference point, m
         self.reach = float(np.hypot(*np.abs(self.hull_outline).max(axis=0))) + float(self.extent.max(initial=0.0))
         self._grid = _seed_grid(model)
+        # per template, the farthest a cell's outline lies from its Voronoi seed, m
+        spread = np.hypot(*model.seed_offset.T) + self.extent if len(self.extent) else np.zeros(0)
+        self._pad = np.array([spread[a:b].max(initial=0.0) for a, b in zip(model.template_start[:-1],
+                                                                           model.template_start[1:])])
         self._sides = np.array([t.side for t in model.templates], dtype=float)
         self._buffer = pb.Buffer()
         weakref.finalize(self, _free_all, self.space, self._tiles, self._leaving, (_ptr(hull), _ptr(hull_shape)))
@@ -587,17 +615,22 @@ class ContactSpace:
         """Whether the placement's bodies are in the space."""
         return placement in self._tiles
 
-    def _floe_shapes(self, state: FloeState, rows: np.ndarray) -> list[int]:
-        out = []
-        for i, tile in zip(rows.tolist(), state.tile[rows].tolist()):
-            out.append(int(self._tiles[tile].floe_shape[i - int(self.tiles.row_start[tile])]))
+    def _floe_objects(self, state: FloeState, rows: np.ndarray, kind: str) -> np.ndarray:
+        """The engine objects (``"floe_body"`` or ``"floe_shape"``; C pointers, uintp) of
+        free rows (n,) in the space, read tile by tile."""
+        tiles = state.tile[rows]
+        local = rows - self.tiles.row_start[tiles]
+        out = np.empty(len(rows), dtype=np.uintp)
+        for t in np.unique(tiles).tolist():
+            at = tiles == t
+            out[at] = getattr(self._tiles[t], kind)[local[at]]
         return out
 
+    def _floe_shapes(self, state: FloeState, rows: np.ndarray) -> list[int]:
+        return self._floe_objects(state, rows, "floe_shape").tolist()
+
     def _floe_bodies(self, state: FloeState, rows: np.ndarray) -> list[int]:
-        out = []
-        for i, tile in zip(rows.tolist(), state.tile[rows].tolist()):
-            out.append(int(self._tiles[tile].floe_body[i - int(self.tiles.row_start[tile])]))
-        return out
+        return self._floe_objects(state, rows, "floe_body").tolist()
 
     def set_submerged(self, state: FloeState, rows: np.ndarray, submerged: bool) -> None:
         """Take free rows out of (or back into) all planar contact: floes under the hull. A
@@ -648,10 +681,11 @@ class ContactSpace:
         near = tiles[np.all((lo <= hull.max(axis=0)) & (hi >= hull.min(axis=0)), axis=1)]  # a tile's cells lie in it
         if not len(near):
             return np.zeros(0, dtype=np.int64)
-        found = _hull_overlaps(self.tiles.row_start[near], self.tiles.row_count[near],
-                               np.concatenate([self._tiles[k].in_space for k in near.tolist()]), state.status,
+        tl = self.tiles
+        found = _hull_overlaps(near, np.concatenate([self._tiles[k].in_space for k in near.tolist()]), state.status,
                                state.gcell, state.xy, state.yaw, m.outline, m.outline_start, self.extent, hull, xy,
-                               c, s, self._hull_box)
+                               c, s, self._hull_box, tl.template, tl.corner, tl.quarter_turns, tl.row_start,
+                               tl.row_count, self._sides, self._pad, *self._grid[:5])
         return np.sort(found)
 
     def step(self, dt: float) -> None:
@@ -667,22 +701,23 @@ class ContactSpace:
 
     def read_free(self, state: FloeState) -> np.ndarray:
         """Copy pose and velocity of the moving free floes (not resting) from Chipmunk into
-        the arrays; returns their rows."""
+        the arrays; returns their rows, in the order of the space's dynamic bodies."""
         buf = self._buffer
         buf.clear()
-        pb.get_space_bodies(self.space, _BODY_FIELDS, buf)
+        pb.get_space_bodies(self.space, _BODY_FIELDS, buf)  # the dynamic bodies first, in the space's order
         ids = np.frombuffer(buf.int_buf(), dtype=np.uintp)
-        moving = _scatter_free(ids, np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ids), 6),
-                               state.status, state.resting, state.xy, state.yaw, state.vel, state.yaw_rate)
-        self._moving = len(moving)
+        moving, self._moving_at = _scatter_free(
+            ids, np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ids), 6), state.status, state.resting,
+            state.xy, state.yaw, state.vel, state.yaw_rate)
         return moving
 
-    @property
-    def rest_budget(self) -> int:
-        """Floes a step may start taking out of the dynamic set: each, as it settles, costs
-        Chipmunk a search of its dynamic bodies, so by the same work budget as tile removals
-        (a count, not a time)."""
-        return max(1, self._removal_work // max(self._moving, 1))
+    def rest_share(self, picks: np.ndarray) -> int:
+        """How many of the moving floes at these places (ascending) in the last
+        ``read_free`` a step may start taking out of the dynamic set. Each, as it settles,
+        costs Chipmunk a search of its dynamic bodies from the first up to its own, so the
+        searches are counted (not timed) against the same work budget as tile removals;
+        at least one is taken."""
+        return max(1, int(np.searchsorted(np.cumsum(self._moving_at[picks]), self._removal_work, side="right")))
 
     def rest(self, state: FloeState, rows: np.ndarray) -> None:
         """Start taking free rows out of the dynamic set (no solver work; moving floes
@@ -699,38 +734,51 @@ class ContactSpace:
         count of steps at rest starts again, so that they are not picked again meanwhile.
         Rows already resting are left too: ``settle`` may have rested them since the caller
         read the moving rows (a step long enough to count a floe at rest within the shedding)."""
-        shedding = [r for _, rs, _, _ in self._shedding for r in rs.tolist()]
+        if self._shedding:
+            rows = rows[~np.isin(rows, np.concatenate([entry[1] for entry in self._shedding]))]
         rows = rows[~state.resting[rows]]
-        rows = rows[~np.isin(rows, shedding)] if shedding else rows
         if not len(rows):
             return
         state.calm[rows] = 0
         for p in self._floe_shapes(state, rows):
             lib.cpShapeSetFilter(_shape(p), _NO_CONTACT)
-        tiles = [self._tiles[t] for t in state.tile[rows].tolist()]
+        tiles = state.tile[rows]
+        held = {t: self._tiles[t] for t in np.unique(tiles).tolist()}
         # the stamp Chipmunk ages contacts by: one a step (not for dt = 0)
         self._shedding.append((lib.cpSpaceGetTimestamp(self._cp) + self.space.collision_persistence, rows.copy(),
-                               self._floe_bodies(state, rows), tiles))
+                               tiles, self._floe_objects(state, rows, "floe_body"), held))
 
-    def settle(self, state: FloeState) -> None:
+    def settle(self, state: FloeState) -> np.ndarray:
         """Make the floes that have shed their contacts static bodies, and take those bodies
         out of the space's body lists; their shapes collide again, from the static index.
         Chipmunk needs a shape's body in the space only when the shape goes in, and
         collides a static shape through the shape alone, while ``read_free`` (which walks
         every body the space lists) no longer reads the resting floes back. The arrays keep
         the pose and the velocity they came to rest with. A floe whose tile left the space
-        meanwhile is gone with it; one that was struck under the hull stays as it is."""
+        meanwhile is gone with it (its row may hold another tile's floe by now: the tile's
+        engine objects and the body must be the same); one that was struck under the hull
+        stays as it is. Returns the rows now resting."""
+        settled = [np.zeros(0, dtype=np.int64)]
         while self._shedding and self._shedding[0][0] <= lib.cpSpaceGetTimestamp(self._cp):
-            _, rows, bodies, tiles = self._shedding.pop(0)
-            ours = np.array([self._tiles.get(t) is b and int(b.floe_body[r - int(self.tiles.row_start[t])]) == p
-                             for r, t, b, p in zip(rows.tolist(), state.tile[rows].tolist(), tiles, bodies)],
-                            dtype=bool)
-            ok = ours & (state.status[rows] == FloeStatus.FREE) & ~state.submerged[rows] & ~state.resting[rows]
-            for p, body in zip(self._floe_shapes(state, rows[ok]), np.array(bodies, dtype=np.uintp)[ok].tolist()):
-                lib.cpBodySetType(_body(body), lib.CP_BODY_TYPE_STATIC)  # its shape moves to the static index
-                lib.cpShapeSetFilter(_shape(p), _FLOE)
-                lib.cpSpaceRemoveBody(self._cp, _body(body))
+            _, rows, tiles, bodies, held = self._shedding.pop(0)
+            ok = (state.tile[rows] == tiles) & (state.status[rows] == FloeStatus.FREE) & ~state.submerged[rows] \
+                & ~state.resting[rows]
+            for t, objects in held.items():
+                at = np.flatnonzero(ok & (tiles == t))
+                if self._tiles.get(t) is not objects:
+                    ok[at] = False
+                    continue
+                local = rows[at] - self.tiles.row_start[t]
+                ours = objects.floe_body[local] == bodies[at]
+                ok[at[~ours]] = False
+                for p, shape in zip(bodies[at[ours]].tolist(), objects.floe_shape[local[ours]].tolist()):
+                    body = _body(p)
+                    lib.cpBodySetType(body, lib.CP_BODY_TYPE_STATIC)  # its shape moves to the static index
+                    lib.cpShapeSetFilter(_shape(shape), _FLOE)
+                    lib.cpSpaceRemoveBody(self._cp, body)
             state.resting[rows[ok]] = True
+            settled.append(rows[ok])
+        return np.concatenate(settled)
 
     def wake(self, state: FloeState, rows: np.ndarray) -> None:
         """Bring resting rows back into the dynamic set with their mass, moment and the

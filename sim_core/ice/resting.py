@@ -30,6 +30,7 @@ from sim_core.ice.vertical import settled
 
 _WAKE_SHARE = 0.8  # the wake radius as a share of the rest radius
 _CLEARANCE = 10.0  # m beyond the hull's reach that a resting floe always wakes
+_LOOK_AGAIN = 20.0  # m the hull moves between looks at every row for resting floes to wake
 
 
 def radii(model: IceModel, data: IceData) -> tuple[float, float]:
@@ -50,9 +51,9 @@ def _speed(i, vel, yaw_rate, gcell, extent):
 def _calm_far(rows, vel, yaw_rate, gcell, extent, calm, speed, steps, submerged, z_equilibrium, heave, roll,
               pitch, heave_rate, roll_rate, pitch_rate, xy, hull_xy, radius):
     """Count the moving rows' steps at rest (slower than speed, m/s: the centre's speed
-    plus the rim's from turning; a faster step starts the count again), and return those at
-    rest for ``steps``, above water, settled at their draft and farther than radius (m)
-    from the hull's reference point."""
+    plus the rim's from turning; a faster step starts the count again), and return the
+    places in rows (ascending) of those at rest for ``steps``, above water, settled at
+    their draft and farther than radius (m) from the hull's reference point."""
     out = np.empty(len(rows), np.int64)
     n = 0
     for k in range(len(rows)):
@@ -67,21 +68,27 @@ def _calm_far(rows, vel, yaw_rate, gcell, extent, calm, speed, steps, submerged,
         if (xy[i, 0] - hull_xy[0]) ** 2 + (xy[i, 1] - hull_xy[1]) ** 2 <= radius * radius:
             continue
         if settled(i, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate, pitch_rate):
-            out[n] = i
+            out[n] = k
             n += 1
     return out[:n]
 
 
 @numba.njit(cache=True)
-def _near(flag, xy, at, radius):
-    """Rows whose flag is set with their centre closer than radius (m) to the point at (m)."""
-    out = np.empty(len(flag), np.int64)
-    n = 0
+def _look(flag, xy, at, radius, zone):
+    """Rows whose flag is set with their centre closer than radius (m) to the point at (m),
+    and the other flagged rows closer than zone (m); both ascending."""
+    near, other = np.empty(len(flag), np.int64), np.empty(len(flag), np.int64)
+    n = m = 0
     for i in range(len(flag)):
-        if flag[i] and (xy[i, 0] - at[0]) ** 2 + (xy[i, 1] - at[1]) ** 2 < radius * radius:
-            out[n] = i
-            n += 1
-    return out[:n]
+        if flag[i]:
+            d = (xy[i, 0] - at[0]) ** 2 + (xy[i, 1] - at[1]) ** 2
+            if d < radius * radius:
+                near[n] = i
+                n += 1
+            elif d < zone * zone:
+                other[m] = i
+                m += 1
+    return near[:n], other[:m]
 
 
 @numba.njit(cache=True)
@@ -122,11 +129,33 @@ def _pushes_on(a, b, impulse, point, flag, xy):
 
 
 def wake_near_hull(model: IceModel, data: IceData, hull_xy: np.ndarray) -> None:
-    """Wake the resting floes within the wake radius of the hull's reference point (m)."""
-    st = data.state
-    near = _near(st.resting, st.xy, np.asarray(hull_xy, dtype=np.float64), radii(model, data)[1])
+    """Wake the resting floes within the wake radius of the hull's reference point (m).
+    Resting floes do not move: every ``_LOOK_AGAIN`` m that the hull moves, all rows are
+    looked at, and the resting ones within that distance of the wake radius are kept
+    (``IceData.wake_look``); until the next look only those can come within it."""
+    st, wake = data.state, radii(model, data)[1]
+    hull_xy = np.asarray(hull_xy, dtype=np.float64)
+    at, rows = data.wake_look
+    if math.hypot(hull_xy[0] - at[0], hull_xy[1] - at[1]) < _LOOK_AGAIN:
+        rows = rows[st.resting[rows]]
+        near, rows = _look_among(rows, st.xy, hull_xy, wake)
+        data.wake_look = (at, rows)
+    else:
+        near, rows = _look(st.resting, st.xy, hull_xy, wake, wake + _LOOK_AGAIN)
+        data.wake_look = (hull_xy.copy(), rows)
     if len(near):
         data.contacts.wake(st, near)
+
+
+@numba.njit(cache=True)
+def _look_among(rows, xy, at, radius):
+    """Of rows (ascending), those with their centre closer than radius (m) to the point at
+    (m), and the others; both ascending."""
+    near = np.zeros(len(rows), np.bool_)
+    for k in range(len(rows)):
+        i = rows[k]
+        near[k] = (xy[i, 0] - at[0]) ** 2 + (xy[i, 1] - at[1]) ** 2 < radius * radius
+    return rows[near], rows[~near]
 
 
 @numba.njit(cache=True)
@@ -162,18 +191,22 @@ def wake_struck(model: IceModel, data: IceData, con: Contacts) -> None:
 
 def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.ndarray, dt: float) -> None:
     """Settle the floes that have shed their contacts (``ContactSpace.settle``); count the
-    moving rows' steps at rest, and start taking out of the dynamic set, up to
-    ``rest_per_step`` of them and the contact space's ``rest_budget`` (lowest rows first),
-    those at rest for ``rest_after_s``, above water, settled and beyond the rest radius."""
+    moving rows' steps at rest, and start taking out of the dynamic set those at rest for
+    ``rest_after_s``, above water, settled and beyond the rest radius: up to
+    ``rest_per_step`` of them and the contact space's ``rest_share``, first those that come
+    first among its dynamic bodies (moving is in that order), which Chipmunk finds soonest."""
     s, st = model.settings, data.state
-    data.contacts.settle(st)
+    settled = data.contacts.settle(st)
+    if len(settled):  # those within the last look's zone join the rows it kept
+        at, rows = data.wake_look
+        zone = radii(model, data)[1] + _LOOK_AGAIN
+        data.wake_look = (at, np.union1d(rows, settled[((st.xy[settled] - at) ** 2).sum(axis=1) < zone * zone]))
     steps = min(65535, max(1, math.ceil(s.rest_after_s / dt)))
-    far = _calm_far(moving, st.vel, st.yaw_rate, st.gcell, data.contacts.extent, st.calm, s.rest_speed, steps,
+    picks = _calm_far(moving, st.vel, st.yaw_rate, st.gcell, data.contacts.extent, st.calm, s.rest_speed, steps,
                     st.submerged, model.z_equilibrium, st.heave, st.roll, st.pitch, st.heave_rate, st.roll_rate,
                     st.pitch_rate, st.xy, np.asarray(hull_xy, dtype=np.float64), radii(model, data)[0])
-    far = np.sort(far)[:min(s.rest_per_step, data.contacts.rest_budget)]
-    if len(far):
-        data.contacts.rest(st, far)
+    if len(picks):
+        data.contacts.rest(st, moving[picks[:min(s.rest_per_step, data.contacts.rest_share(picks))]])
 
 
 def warm_up(model: IceModel) -> None:
@@ -182,7 +215,8 @@ def warm_up(model: IceModel) -> None:
     _calm_far(none, np.zeros((0, 2), np.float32), f32, none.astype(np.int32), np.ones(1), none.astype(np.uint16),
               1.0, 1, none.astype(np.bool_), model.z_equilibrium, f32, f32, f32, f32, f32, f32, np.zeros((0, 2)),
               np.zeros(2), 1.0)
-    _near(none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0)
+    _look(none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 2.0)
+    _look_among(none, np.zeros((0, 2)), np.zeros(2), 1.0)
     _take_pushes(none, np.zeros((0, 2)), np.zeros(0), model.mass, model.inertia, none.astype(np.int32), np.ones(1),
                  np.zeros((0, 2), np.float32), np.zeros(0, np.float32), 1.0)
     _pushes_on(none, none, np.zeros((0, 2)), np.zeros((0, 2)), none.astype(np.bool_), np.zeros((0, 2)))

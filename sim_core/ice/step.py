@@ -142,14 +142,14 @@ def _going_under(struck, jammed, status, submerged, xy, hull_xy, c, s, beam_half
 
 
 @numba.njit(cache=True)
-def _surfacing(submerged, xy, hull_xy, c, s, outline, reach, stem, clear_ahead):
-    """Submerged rows the hull has passed: centre outside the hull's convex CCW outline
-    (body frame, m) and aft of midship, farther than reach (m) from the centre line, or
-    clear ahead of the stem (m)."""
-    out = np.empty(len(submerged), np.int64)
+def _surfacing(rows, submerged, xy, hull_xy, c, s, outline, reach, stem, clear_ahead):
+    """Of rows, the submerged ones the hull has passed: centre outside the hull's convex
+    CCW outline (body frame, m) and aft of midship, farther than reach (m) from the centre
+    line, or clear ahead of the stem (m)."""
+    out = np.empty(len(rows), np.int64)
     n_out = 0
     n = outline.shape[0]
-    for i in range(len(submerged)):
+    for i in rows:
         if not submerged[i]:
             continue
         dx, dy = xy[i, 0] - hull_xy[0], xy[i, 1] - hull_xy[1]
@@ -199,6 +199,7 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
     under = _going_under(struck, jammed, st.status, st.submerged, st.xy, hull.xy, c, s, space.hull_half_beam) \
         if len(struck) or len(jammed) else _NO_ROWS
     if len(under):
+        data.went_under = np.concatenate([data.went_under[st.submerged[data.went_under]], under])
         st.submerged[under] = True
         space.set_submerged(st, under, True)
         g = st.gcell[under]
@@ -207,10 +208,11 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
         st.heave_rate[under] = st.roll_rate[under] = st.pitch_rate[under] = 0.0
         st.vel[under] = 0.0
         st.yaw_rate[under] = 0.0
-    up = _surfacing(st.submerged, st.xy, hull.xy, c, s, space.hull_outline, space.hull_half_beam + _BESIDE,
-                    space.hull_stem, _CLEAR_AHEAD)
+    up = _surfacing(data.went_under, st.submerged, st.xy, hull.xy, c, s, space.hull_outline,
+                    space.hull_half_beam + _BESIDE, space.hull_stem, _CLEAR_AHEAD)
     if len(up):
         st.submerged[up] = False
+        data.went_under = data.went_under[st.submerged[data.went_under]]
         space.set_submerged(st, up, False)
 
 
@@ -257,8 +259,8 @@ def warm_up(model: IceModel, data: IceData) -> None:
     resting.warm_up(model)
     _hull_load(np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(2), 1.0)
     none, f32 = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.float32)
-    _surfacing(none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hull_outline, 1.0, 1.0,
-               1.0)
+    _surfacing(none, none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hull_outline,
+               1.0, 1.0, 1.0)
     _going_under(none, none, none.astype(np.uint8), none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 0.0,
                  1.0)
     _unsettled(none, none.astype(np.bool_), none.astype(np.int32), model.z_equilibrium, f32, f32, f32, f32, f32, f32)

@@ -36,6 +36,13 @@ class IceData:
     contacts: ContactSpace
     frozen: FrozenFloes = field(default_factory=FrozenFloes)
     leaving_rows: dict[int, slice] = field(default_factory=dict)  # placement -> rows to give back
+    # rows sent under the hull, each once: a superset of the submerged rows (a row surfaces,
+    # or is vacated or thawed, without leaving it), so that surfacing need not scan every row
+    went_under: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    # the hull's reference point (m) at the last look at every row for resting floes to
+    # wake, and the resting rows (ascending) within the zone it kept (``resting.wake_near_hull``)
+    wake_look: tuple[np.ndarray, np.ndarray] = field(
+        default_factory=lambda: (np.full(2, np.inf), np.zeros(0, dtype=np.int64)))
 
 
 @dataclass
