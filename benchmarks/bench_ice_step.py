@@ -7,9 +7,9 @@ contact, floe contacts, breaking and buoyancy. Inside the same steps the bare Ch
 Python and numba glue around the engine costs, whatever the machine's speed. The field's
 tiles are all in the engine before the timing starts (switching tiles in is timed in
 ``bench_scene.py``). Median and p99 are printed beside the core count, with three ratios:
-of the medians, of the totals, and the median of the steps' own ratios. Where most floes go
-to rest within the timed steps (3000 and 10 000 floes), the step times fall from one level
-to another, and the two medians can land on different steps; the other two are what the
+of the medians, of the totals, and the median of the steps' own ratios. Where floes go to
+rest within the timed steps (about half of them at 3000 floes, most at 10 000), the step
+times fall from one level to another, and the two medians can land on different steps; the other two are what the
 glue costs over the same steps, and the steps are also split by the share of the live
 floes resting (under 10 %: the field as broken; over 80 %: come to rest). Buoyancy alone is timed
 for the numba kernel and for the plain numpy reference, run in the same process, with

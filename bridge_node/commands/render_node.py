@@ -30,11 +30,11 @@ from bridge_node.node.world_setup import build_world
 from bridge_node.render.channels import ChannelSet
 from bridge_node.render.open_channels import open_channels, select_channels
 from bridge_node.render.video import VideoWriter, save_png, side_by_side
-from bridge_node.stream.settings import StreamSettings
 from bridge_node.stream.publisher import HEARTBEAT_S
+from bridge_node.stream.settings import StreamSettings
 from bridge_node.stream.subscriber import StateSubscriber, StreamError
 
-CATCH_UP_S = 4 * HEARTBEAT_S  # s, at most, spent on the node's last steps after SIGTERM
+CATCH_UP_S = 6 * HEARTBEAT_S  # s spent on the node's last steps after SIGTERM (two heartbeats), at most
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -195,12 +195,6 @@ def _relay(pull: zmq.Socket, pub: zmq.Socket, router: zmq.Socket, counters) -> N
     parent = mp.parent_process()
     while True:
         ready = dict(poller.poll(int(HEARTBEAT_S * 1000)))
-        if time.monotonic() - beat >= HEARTBEAT_S:
-            if parent is not None and not parent.is_alive():
-                return
-            if view.ship is not None:
-                pub.send_multipart([HEARTBEAT, str(view.seq).encode()])
-            beat = time.monotonic()
         if pull in ready:
             frames = pull.recv_multipart()
             if frames == [STOP]:
@@ -216,3 +210,9 @@ def _relay(pull: zmq.Socket, pub: zmq.Socket, router: zmq.Socket, counters) -> N
                 counters[_SNAPSHOTS] += 1
             else:
                 router.send_multipart([identity, b"not-ready"])
+        if time.monotonic() - beat >= HEARTBEAT_S:  # after the step just relayed: it names that one
+            if parent is not None and not parent.is_alive():
+                return
+            if view.ship is not None:
+                pub.send_multipart([HEARTBEAT, str(view.seq).encode()])
+            beat = time.monotonic()

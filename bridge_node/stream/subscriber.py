@@ -107,16 +107,18 @@ class StateSubscriber:
         return applied
 
     def catch_up(self, timeout_s: float) -> list[WorldEvents]:
-        """Apply what is pending, then wait for the publisher's next heartbeat (it names the
-        last step it has sent) and apply every step up to it, resynchronising if one was
-        lost: at the end of a run this is the last state the node published. Returns the
-        events applied; gives up after ``timeout_s`` (the node is gone).
+        """Apply what is pending, then wait for the publisher's second heartbeat from now
+        (each names the last step it has sent) and apply every step up to it,
+        resynchronising if one was lost: at the end of a run, this is the last state the
+        node published before it asked us to finish. Returns the events applied; gives up
+        after ``timeout_s`` (the node is gone), plus a resync's own wait.
 
-        The heartbeat must arrive after the pending messages were read: one already queued
-        may have been sent before the last steps reached the publisher."""
+        The first heartbeat may have been sent before the last steps reached the publisher
+        (they pass from the node to the publisher process, and from there to us); the
+        second comes a heartbeat period later."""
         applied = self.poll(0)
         seen, deadline = self.heartbeats, time.monotonic() + timeout_s
-        while self.heartbeats == seen:
+        while self.heartbeats < seen + 2:
             left = deadline - time.monotonic()
             if left <= 0:
                 break
