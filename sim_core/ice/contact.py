@@ -57,6 +57,7 @@ _FLOE = (0, _FLOE_BIT, _HULL_BIT | _FLOE_BIT)
 _NO_CONTACT = (0, 0, 0)  # floes under the hull, and floes shedding their contacts before they rest
 _IDENTITY = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)  # cpTransform
 _SEEDS_PER_BUCKET = 4  # mean Voronoi seeds per bucket of a template's seed grid
+_ROW_BY_ROW = 16  # fewer rows than this have their engine objects looked up one by one
 _BODY_FIELDS = (pb.BodyFields.BODY_ID | pb.BodyFields.POSITION | pb.BodyFields.ANGLE
                 | pb.BodyFields.VELOCITY | pb.BodyFields.ANGULAR_VELOCITY)
 _ARB_FIELDS = (pb.ArbiterFields.BODY_A_ID | pb.ArbiterFields.BODY_B_ID | pb.ArbiterFields.TOTAL_IMPULSE
@@ -617,7 +618,13 @@ class ContactSpace:
 
     def _floe_objects(self, state: FloeState, rows: np.ndarray, kind: str) -> np.ndarray:
         """The engine objects (``"floe_body"`` or ``"floe_shape"``; C pointers, uintp) of
-        free rows (n,) in the space, read tile by tile."""
+        free rows (n,) in the space: row by row for a few (most steps' floes going under,
+        surfacing or waking), tile by tile for more (floes going to rest); the two cost the
+        same at about 16 rows (2 us for one row, 13 us for 200 tile by tile)."""
+        if len(rows) < _ROW_BY_ROW:
+            start = self.tiles.row_start
+            return np.array([getattr(self._tiles[t], kind)[i - start[t]] for i, t in
+                             zip(rows.tolist(), state.tile[rows].tolist())], dtype=np.uintp)
         tiles = state.tile[rows]
         local = rows - self.tiles.row_start[tiles]
         out = np.empty(len(rows), dtype=np.uintp)

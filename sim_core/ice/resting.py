@@ -200,7 +200,9 @@ def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.nda
     if len(settled):  # those within the last look's zone join the rows it kept
         at, rows = data.wake_look
         zone = radii(model, data)[1] + _LOOK_AGAIN
-        data.wake_look = (at, np.union1d(rows, settled[((st.xy[settled] - at) ** 2).sum(axis=1) < zone * zone]))
+        inside = settled[((st.xy[settled] - at) ** 2).sum(axis=1) < zone * zone]
+        if len(inside):
+            data.wake_look = (at, np.union1d(rows, inside))
     steps = min(65535, max(1, math.ceil(s.rest_after_s / dt)))
     picks = _calm_far(moving, st.vel, st.yaw_rate, st.gcell, data.contacts.extent, st.calm, s.rest_speed, steps,
                     st.submerged, model.z_equilibrium, st.heave, st.roll, st.pitch, st.heave_rate, st.roll_rate,
