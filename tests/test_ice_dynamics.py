@@ -2,6 +2,7 @@
 import math
 
 import numpy as np
+import pymunk.batch as pb
 import pytest
 
 from sim_core.fracture.tile_template import FractureSettings, build_tile
@@ -98,6 +99,35 @@ def test_no_floe_accelerates_without_contact_and_energy_decays():
     speeds = np.array(speeds)
     assert np.all(np.diff(speeds, axis=0) <= 1e-12)
     assert np.all(np.diff(energies) < 0) and energies[-1] < 0.7 * energies[0]
+
+
+def test_a_floe_the_hull_has_left_is_not_among_its_contacts():
+    """Chipmunk keeps a separated pair's contact for a few steps, with no points and no
+    impulse: the hull's contacts (what strikes floes, sends them under and loads the hull)
+    leave such a pair out."""
+    t = build_tile(0.5, 4, FractureSettings(tile_side=40.0, colliders="sphere"))
+    m = compile_ice_model([t])
+    data = new_ice_data(m, waterline_contour(150, 24), 0.1)
+    rows = data.tiles.rows(place_tile(m, data, 0, (0.0, 0.0)))
+    one = rows[[len(rows) // 2]]
+    data.contacts.remove(data.state, np.setdiff1d(rows, one))
+    break_cells(data, one, BreakCause.HULL)
+    x, y = data.state.xy[one[0]]
+    hull = np.array([x - 75.0 - data.contacts.extent[data.state.gcell[one[0]]] - 0.3, y])  # stem short of it
+    hull_pairs, v = [], 2.0
+    for _ in range(90):  # ahead into the floe, then astern once it is struck
+        hull += (v / 30, 0.0)
+        ice_step(m, data, HullMotion(hull.copy(), 0.0, np.array([v, 0.0]), 0.0), 1 / 30)
+        buf = pb.Buffer()
+        pb.get_space_arbiters(data.contacts.space, pb.ArbiterFields.BODY_A_ID | pb.ArbiterFields.BODY_B_ID
+                              | pb.ArbiterFields.CONTACT_COUNT, buf)
+        held = np.frombuffer(buf.int_buf(), dtype=np.uintp).reshape(-1, 3)
+        touching = len(data.contacts.read_contacts(data.state).with_hull()[0])
+        hull_pairs.append((len(held), int(held[:, 2].sum()) if len(held) else 0, touching))
+        v = -3.0 if touching else v
+    assert any(pts > 0 and touching == 1 for _, pts, touching in hull_pairs)  # it was struck...
+    separated = [touching for held, pts, touching in hull_pairs if held and not pts]
+    assert separated and not any(separated)  # ...and once apart, its kept contact is no contact
 
 
 def test_band_measure_on_known_profiles():

@@ -357,9 +357,10 @@ def _contact_rows(ints, f, status, working, template, corner, turns, row_start, 
     f (k, 8): impulse, normal, points A1, A2) and the mean contact point (k, 2) m.
     On a tile body the row is the intact cell with the seed nearest the point (the point
     lies on its cell's boundary, the cell across is broken); on a tile no longer worked
-    (leaving the space), on a tile body in a contact with no points this step (Chipmunk
-    keeps a separated pair's contact a few steps, with no impulse), or on a body that is
-    not a floe, it is _NOT_A_FLOE."""
+    (leaving the space), or on a body that is not a floe, it is _NOT_A_FLOE. So are both
+    rows of a contact with no points this step: Chipmunk keeps a separated pair's contact a
+    few steps, with no impulse, and the pair no longer touches (a floe that has left the
+    hull is not struck by it)."""
     k_n = ints.shape[0]
     rows = np.empty((2, k_n), np.int64)
     point = np.empty((k_n, 2))
@@ -368,12 +369,15 @@ def _contact_rows(ints, f, status, working, template, corner, turns, row_start, 
             point[k, 0], point[k, 1] = 0.5 * (f[k, 4] + f[k, 6]), 0.5 * (f[k, 5] + f[k, 7])
         else:
             point[k, 0], point[k, 1] = f[k, 4], f[k, 5]
+        if ints[k, 2] == 0:
+            rows[0, k] = rows[1, k] = _NOT_A_FLOE
+            continue
         for side in range(2):
             code = np.int64(ints[k, side])
             if code >= _TILE0:
                 p = code - _TILE0
                 row = _NOT_A_FLOE
-                if ints[k, 2] > 0 and p < len(working) and working[p]:
+                if p < len(working) and working[p]:
                     t = template[p]
                     half = 0.5 * sides[t]
                     q = (-turns[p]) % 4
