@@ -205,8 +205,8 @@ def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.nda
             data.wake_look = (at, np.union1d(rows, inside))
     steps = min(65535, max(1, math.ceil(s.rest_after_s / dt)))
     picks = _calm_far(moving, st.vel, st.yaw_rate, st.gcell, data.contacts.extent, st.calm, s.rest_speed, steps,
-                    st.submerged, model.z_equilibrium, st.heave, st.roll, st.pitch, st.heave_rate, st.roll_rate,
-                    st.pitch_rate, st.xy, np.asarray(hull_xy, dtype=np.float64), radii(model, data)[0])
+                      st.submerged, model.z_equilibrium, st.heave, st.roll, st.pitch, st.heave_rate, st.roll_rate,
+                      st.pitch_rate, st.xy, np.asarray(hull_xy, dtype=np.float64), radii(model, data)[0])
     if len(picks):
         data.contacts.rest(st, moving[picks[:min(s.rest_per_step, data.contacts.rest_share(picks))]])
 
