@@ -1,5 +1,4 @@
 import os
-import socket
 import sys
 from pathlib import Path
 
@@ -7,6 +6,7 @@ import pytest
 from hypothesis import settings as hypothesis_settings
 
 from bridge_node.node.config import NodeConfig, load_config
+from bridge_node.node.network import free_port
 from sim_core.fracture.tile_template import FractureSettings, build_tile
 
 # The suite draws the same property-test examples every run (a red CI names a bug, not a
@@ -51,13 +51,6 @@ def exercise_config(cache_dir: Path, width: float, height: float, tile_side: flo
         "paths": base.paths.model_copy(update={"cache_dir": str(cache_dir)}),
         "exercise": base.exercise.model_copy(update={"start_north": start_north}),
     })
-
-
-def free_port() -> int:
-    """A TCP port on 127.0.0.1 that nothing listens on now."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def exercise_toml(folder: Path, channels: str = "", **sections: str) -> Path:

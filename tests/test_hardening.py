@@ -5,6 +5,7 @@ opens no socket off the loopback; torn record lines are skipped and counted."""
 import math
 import os
 import shutil
+import socket
 import subprocess
 import sys
 import time
@@ -29,6 +30,7 @@ from bridge_node.links.record_reader import read_can_log, read_modbus_csv, read_
 from bridge_node.links.session_record import SessionRecord
 from bridge_node.links.settings import CanLinkSettings, NmeaLinkSettings
 from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, load_config, load_ship
+from bridge_node.node.network import free_port
 
 CONSOLE = DEFAULT_CONFIG.parent / "bridge_console.toml"
 BASE = '[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n'
@@ -138,6 +140,15 @@ def test_can_orders_from_our_own_address_or_in_fd_frames_are_dropped():
 def test_the_udp_mirror_socket_is_bound_to_the_loopback():
     with NmeaLink(NmeaLinkSettings(type="nmea0183", name="n", udp_port=10110)) as link:
         assert link._udp.getsockname()[0] == "127.0.0.1"
+
+
+def test_free_ports_are_never_handed_out_twice():
+    """Nothing holds a port between free_port() and its user's bind: within a process it
+    never returns the same one twice, and each is free for a listener when returned."""
+    ports = [free_port() for _ in range(300)]
+    assert len(set(ports)) == len(ports)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", ports[-1]))
 
 
 def mutants():

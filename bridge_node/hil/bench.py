@@ -14,7 +14,6 @@ from __future__ import annotations
 import json
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -30,6 +29,7 @@ from bridge_node.hil.scenario import Scenario
 from bridge_node.hil.settings import ConsoleConfig, load_console_config
 from bridge_node.node.config import DEFAULT_CONFIG, load_config, resolve_path
 from bridge_node.node.errors import UserError
+from bridge_node.node.network import free_port
 
 KINDS = {"can": "can", "nmea": "nmea0183", "nmea0183": "nmea0183", "modbus": "modbus"}
 ORDER_ROLES = ("primary", "backup")
@@ -42,13 +42,6 @@ MODBUS_WRITES = [{"value": "rudder_angle", "address": 10, "type": "int16", "scal
                  {"value": "shaft_rpm", "address": 11, "type": "int16", "scale": 1.0},
                  {"value": "heading", "address": 12, "type": "int16", "scale": 0.1}]
 STOP_TIMEOUT_S = 30.0
-
-
-def free_port() -> int:
-    """A TCP port on 127.0.0.1 that nothing listens on now."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 class PtyPair:

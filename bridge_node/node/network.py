@@ -3,12 +3,14 @@ from __future__ import annotations
 
 import ipaddress
 import re
+import socket
 
 # pyserial URLs that open a network connection (socket://HOST:PORT, rfc2217://HOST:PORT),
 # also inside another URL (spy://, for one)
 _SERIAL_NETWORK_URL = re.compile(r"(?:socket|rfc2217)://(?:\[([^\]]*)\]|([^/:?]*))", re.IGNORECASE)
 # python-can interfaces that reach a network
 NETWORK_CAN_INTERFACES = ("udp_multicast", "socketcand")
+_HANDED_OUT: set[int] = set()  # ports free_port has returned in this process
 
 
 def is_loopback_host(host: str) -> bool:
@@ -34,3 +36,16 @@ def serial_port_unless(port: str, allowed: bool, key: str) -> str:
     for bracketed, plain in _SERIAL_NETWORK_URL.findall(port):
         loopback_unless(bracketed or plain, allowed, key)
     return port
+
+
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that nothing listens on now and that this process has not
+    handed out before: nothing holds a port between this call and its user's bind, so two
+    calls could otherwise return the same one. Another process may still take it first."""
+    while True:
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        if port not in _HANDED_OUT:
+            _HANDED_OUT.add(port)
+            return port
