@@ -38,6 +38,8 @@ from sim_core.world import WorldData, WorldEvents, WorldModel, step
 
 TRIM_EVERY_S = 5.0  # s of wall time between the C heap's page give-backs (c_heap.py)
 TRIM_SLACK = 0.5  # periods a tick must have left over for a give-back to go in its slack
+# the memory records' measured columns: (summary key, column in LoopStats.memory, label)
+MEMORY_SERIES = (("rss", 2, "resident"), ("heap_in_use", 3, "C heap in use"))
 
 
 @dataclass
@@ -73,7 +75,7 @@ class LoopStats:
         platform does not say or no floes froze; and how often the heap's free pages were
         given back (``trims``) and the longest of those in ms."""
         out = {"trims": len(self.trim_ms), "trim_ms_max": round(max(self.trim_ms), 2) if self.trim_ms else None}
-        for key, col in (("rss", 2), ("heap_in_use", 3)):
+        for key, col, _ in MEMORY_SERIES:
             m = np.array([(r[1], r[col]) for r in self.memory if r[col] is not None]).reshape(-1, 2)
             out[f"{key}_mib_start"] = out[f"{key}_mib_end"] = out[f"{key}_mib_per_1000_frozen"] = None
             if len(m):

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bridge_node.node.realtime_loop import LoopStats
+from bridge_node.node.realtime_loop import MEMORY_SERIES, LoopStats
 from bridge_node.reports.figures import plt, save_figure
 
 
@@ -32,12 +32,12 @@ def plot_run(stats: LoopStats, path: Path) -> Path:
     bx.legend(fontsize=8)
     bx.grid(alpha=0.3)
     summary, x_label = stats.memory_summary(), "simulated time, s"
-    for col, label, colour in ((2, "resident", "C2"), (3, "C heap in use", "C1")):
+    for (key, col, label), colour in zip(MEMORY_SERIES, ("C2", "C1")):
         mem = np.array([(r[0], r[1], r[col]) for r in stats.memory if r[col] is not None]).reshape(-1, 3)
         if not len(mem):
             continue
         by_frozen = np.ptp(mem[:, 1]) > 0  # before any floe froze, against time
-        slope = summary[("rss" if col == 2 else "heap_in_use") + "_mib_per_1000_frozen"]
+        slope = summary[f"{key}_mib_per_1000_frozen"]
         cx.plot(mem[:, 1 if by_frozen else 0], mem[:, 2], ".-", ms=2, lw=0.5, color=colour,
                 label=label + (f": {slope} MiB per 1000 frozen floes" if slope is not None else ""))
         x_label = "frozen floes" if by_frozen else "simulated time, s (no floe frozen yet)"
