@@ -3,6 +3,7 @@ opendis package (its PDU parser and its own ECEF and Euler-angle conversions), s
 heartbeat and the dead-reckoning thresholds; PDUs that opendis builds, as another simulator
 would send them, appear as AIS vessels on an NMEA link; bad PDUs are counted."""
 import dataclasses
+import datetime
 import io
 import math
 import socket
@@ -22,6 +23,7 @@ from opendis.RangeCoordinates import GPS
 from pyais import decode
 from pydantic import ValidationError
 
+from bridge_node.links.ais import static_report
 from bridge_node.links.dis_link import DisLink, PduError
 from bridge_node.links.hub import LinkHub
 from bridge_node.links.settings import DisLinkSettings
@@ -156,6 +158,31 @@ def test_a_vessel_from_another_simulator_goes_out_as_ais(tmp_path):
     assert any(s.startswith("!AIVDO") for s in sentences)  # the own ship too
 
 
+def test_a_marking_outside_ais_text_is_sanitised_counted_and_the_traffic_goes_on():
+    """One PDU whose marking holds characters AIS 6-bit text lacks used to raise KeyError in
+    pyais inside the hub's publish, which stopped ``icebridge run``."""
+    nmea_rx, listen = receiver(), free_port()
+    cfg = node_config([
+        {"type": "dis", "name": "dis", "listen_port": listen, "send_to": [f"127.0.0.1:{free_port()}"]},
+        {"type": "nmea0183", "name": "plotter", "udp_port": nmea_rx.getsockname()[1],
+         "rates": {k: 0 for k in ("RMC", "GGA", "VTG", "ZDA", "HDT", "ROT", "RSA", "RPM", "VBW", "XDR")},
+         "ais": {"mmsi": 257123450, "to_bow": 20, "to_stern": 130, "to_port": 10, "to_starboard": 12}}])
+    sim = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    with LinkHub(cfg.links, cfg.arbitration) as hub:
+        sim.sendto(other_simulator_pdu(74.02, 20.03, 0.0, 3.0, marking="od{|}~`en"), ("127.0.0.1", listen))
+        link = hub.links[0]
+        wait_for(lambda: link.vessels(time.monotonic()), poll=lambda: tick(hub, STATE, time.monotonic()))
+        for _ in range(3):
+            tick(hub, STATE, time.monotonic())
+        errors = dict(link.health().errors)
+    sim.close()
+    vdm = [d.decode().strip() for d in datagrams(nmea_rx) if d.startswith(b"!AIVDM")]
+    nmea_rx.close()
+    static = decode(*vdm[1:3]).asdict()
+    assert static["shipname"] == "OD     EN"
+    assert errors == {"marking_sanitised": 1}
+
+
 def test_bad_and_foreign_pdus_are_counted_own_echoes_skipped():
     listen = free_port()
     cfg = node_config([{"type": "dis", "name": "dis", "listen_port": listen, "send_to": [f"127.0.0.1:{listen}"]}])
@@ -200,6 +227,8 @@ def test_any_datagram_is_a_vessel_or_a_counted_kind(data, where, value):
             v = entity.at(1.0)
             assert all(math.isfinite(x) for x in (v.latitude, v.longitude, v.heading))
             assert v.speed_over_ground <= 100.0
+            assert static_report(v.mmsi, v.name, (1, 1, 1, 1), UTC, "VDM", 0)  # AIS can send what DIS took
 
 
 GOOD = other_simulator_pdu(74.0, 20.0, 1.0, 5.0)
+UTC = datetime.datetime(2026, 3, 1, tzinfo=datetime.timezone.utc)

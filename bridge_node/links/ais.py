@@ -24,6 +24,7 @@ from sim_core.params import Params
 STATIC_PERIOD_S = 360.0
 TURNING_DEG_PER_MIN = 5.0
 SIX_BIT_TEXT = r"^[A-Z0-9 @\[\\\]^_!\"#$%&'()*+,\-./:;<=>?]*$"  # AIS 6-bit ASCII
+SIX_BIT_CHARS = frozenset("@ABCDEFGHIJKLMNOPQRSTUVWXYZ[\\]^_ !\"#$%&'()*+,-./0123456789:;<=>?")  # ITU-R M.1371 Table 47
 
 
 class AisSettings(Params):
@@ -93,6 +94,14 @@ def static_report(mmsi: int, name: str, dims: tuple[int, int, int, int], utc: dt
                        talker_id="AI", sentence_type=sentence, seq_id=seq_id)
 
 
+def six_bit_text(text: str, length: int = 20) -> str:
+    """``text`` as AIS 6-bit text of at most ``length`` characters: upper case, and any
+    character the 6-bit alphabet lacks (``{ | } ~ ` ``, control and non-ASCII characters)
+    as a space. A name heard from another simulator may hold any of them; pyais raises
+    on them, so every other vessel's name goes through here before it is encoded."""
+    return "".join(c if c in SIX_BIT_CHARS else " " for c in text.upper()[:length]).rstrip()
+
+
 class AisReporter:
     """Own ship and other vessels as AIS sentences, each when its reports are due."""
 
@@ -133,7 +142,7 @@ class AisReporter:
                 out += position_report(v.mmsi, v, utc, "VDM")
             if self._due(v.key, 5, STATIC_PERIOD_S, now):
                 half_l, half_b = min(511, round(v.length / 2)), min(63, round(v.beam / 2))
-                out += self._static(v.mmsi, v.name.upper()[:20], (half_l, half_l, half_b, half_b), utc, "VDM", None)
+                out += self._static(v.mmsi, six_bit_text(v.name), (half_l, half_l, half_b, half_b), utc, "VDM", None)
         keys = {"own"} | {v.key for v in vessels}
         self._next = {k: t for k, t in self._next.items() if k[0] in keys}  # forget vessels gone
         return out

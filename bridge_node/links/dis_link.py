@@ -15,7 +15,8 @@ NMEA links send them as AIS targets).
   from ``mmsi_base`` (200 000 000: no country's MID) and its entity id. The node's own
   PDUs, looped back, are skipped; other PDU types, exercises and entities are ``ignored``;
   a PDU that is short or whose length field is wrong is ``malformed``; non-finite or
-  off-Earth positions and speeds over 100 m/s are ``bad_field``.
+  off-Earth positions and speeds over 100 m/s are ``bad_field``. A marking with characters
+  that AIS 6-bit text lacks is kept with them as spaces and counted ``marking_sanitised``.
 
 PDUs are packed and unpacked with ``struct`` (144 bytes, big-endian, no variable
 parameters); the tests decode and encode them with the independent opendis package.
@@ -32,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bridge_node.links.ais import six_bit_text
 from bridge_node.links.base import ControlInput, Link, Vessel, register_link
 from bridge_node.links.settings import DisLinkSettings
 from sim_core.ship.outputs import ShipOutputs
@@ -112,7 +114,8 @@ class _Entity:
 
     key: str
     mmsi: int
-    name: str
+    name: str  # AIS 6-bit text
+    marking: str  # as received (latin-1), or the key where it was empty
     time: float  # monotonic s when read
     location: np.ndarray
     velocity: np.ndarray
@@ -147,11 +150,15 @@ class HeardEntities:
         self._own = (settings.site, settings.application, settings.entity)
         self._entities: dict[str, _Entity] = {}
 
-    def hear(self, data: bytes, now: float) -> None:
-        """Take one PDU read at ``now`` (monotonic s); PduError for one that is no vessel."""
+    def hear(self, data: bytes, now: float) -> str | None:
+        """Take one PDU read at ``now`` (monotonic s); PduError for one that is no vessel.
+        Returns ``"marking_sanitised"`` where the entity's marking held characters that AIS
+        6-bit text lacks (they became spaces; the vessel is kept), else None."""
         entity = self.entity(data, now)
-        if entity is not None:
-            self._entities[entity.key] = entity
+        if entity is None:
+            return None
+        self._entities[entity.key] = entity
+        return "marking_sanitised" if entity.name != entity.marking else None
 
     def entity(self, data: bytes, now: float) -> _Entity | None:
         """The vessel a PDU describes; None for the node's own; PduError for the rest."""
@@ -177,10 +184,13 @@ class HeardEntities:
         lat, lon = ecef_to_geodetic(location)
         north, east, _ = ned_to_ecef(lat, lon).T @ matrix_from_euler(psi, theta, phi)[:, 0]
         key = "dis:{}.{}.{}".format(*site_app_entity)
-        marking = f[46].split(b"\x00")[0]  # character set 1 is ASCII; some senders leave it 0 (unused)
-        name = marking.decode("ascii") if marking.isascii() and marking.decode("ascii").isprintable() else ""
-        return _Entity(key, self.settings.mmsi_base + zlib.crc32(key.encode()) % 1_000_000, name or key, now,
-                       location, velocity, math.atan2(east, north) % (2 * math.pi), rate)
+        # character set 1 is ASCII; some senders leave it 0 (unused). The name goes out as AIS
+        # 6-bit text, so it is made so here, at the boundary: any simulator on the DIS network
+        # may send any bytes (one marking of "{|}~" used to stop the node's AIS encoding).
+        marking = f[46].split(b"\x00")[0].decode("latin-1")
+        name = six_bit_text(marking) or six_bit_text(key)
+        return _Entity(key, self.settings.mmsi_base + zlib.crc32(key.encode()) % 1_000_000, name, marking or key,
+                       now, location, velocity, math.atan2(east, north) % (2 * math.pi), rate)
 
     def vessels(self, now: float) -> list[Vessel]:
         """The vessels heard within the timeout, dead-reckoned to ``now`` (monotonic s)."""
@@ -221,9 +231,12 @@ class DisLink(Link):
                 break
             self._report("rx", data)
             try:
-                self.heard.hear(data, now)
+                note = self.heard.hear(data, now)
             except PduError as exc:
                 self._count_error(exc.kind)
+            else:
+                if note is not None:
+                    self._count_error(note)
         return iter(())
 
     def vessels(self, now: float) -> list[Vessel]:
