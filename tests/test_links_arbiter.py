@@ -5,8 +5,9 @@ import math
 import pytest
 
 from bridge_node.links.arbiter import ALARM_NUMBERS, OrderArbiter
-from bridge_node.links.base import RUDDER, TELEGRAPH, ControlInput
+from bridge_node.links.base import ControlInput
 from bridge_node.links.settings import ArbitrationSettings
+from sim_core.ship.orders import OrderKind
 
 TIMEOUTS = {"can": 1.0, "nmea": 1.0}  # s
 STALE, FAIL_SAFE = ALARM_NUMBERS["rudder"]
@@ -18,7 +19,7 @@ def arbiter(fail_safe: str = "midships_stop", **channels) -> OrderArbiter:
 
 
 def rudder(t: float, source: str, deg: float) -> ControlInput:
-    return ControlInput(t, source, RUDDER, math.radians(deg))
+    return ControlInput(t, source, OrderKind.RUDDER, math.radians(deg))
 
 
 def changes(decision) -> set[tuple[int, bool]]:
@@ -50,7 +51,7 @@ def test_hands_over_when_the_first_source_goes_stale_and_back_when_it_returns():
 def test_fail_safe_after_every_source_is_stale_then_cleared():
     arb = arbiter(engine=["can"], rudder=["can", "nmea"])
     arb.feed([rudder(0.0, "can", 10.0), rudder(0.0, "nmea", -5.0),
-              ControlInput(0.0, "can", TELEGRAPH, "half_ahead")])
+              ControlInput(0.0, "can", OrderKind.TELEGRAPH, "half_ahead")])
     d = arb.decide(0.0)
     assert d.controls.rudder == pytest.approx(math.radians(10.0)) and d.controls.telegraph == "half_ahead"
     d = arb.decide(1.5)  # every source stale from now on

@@ -7,13 +7,14 @@ import can
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from bridge_node.links.base import LEVER, RUDDER, TELEGRAPH, ControlInput
+from bridge_node.links.base import ControlInput
 from bridge_node.links.can_link import CanLink
 from bridge_node.links.modbus_link import register_order
 from bridge_node.links.n2k_frames import fast_packet_frames, identifier, parse_identifier
 from bridge_node.links.n2k_network import ADDRESS_CLAIM, NETWORK_PGNS
 from bridge_node.links.nmea0183 import ETL, PRC, ROR, SentenceError, parse_order
 from bridge_node.links.settings import CanLinkSettings, RegisterSpec
+from sim_core.ship.orders import OrderKind
 
 ORDERS = [str(ROR("RC", "ROR", ("-22.0", "A", "34.0", "A", "B"))),
           str(ETL("RC", "ETL", ("120000.00", "O", "14", "30", "B", "1"))),
@@ -89,10 +90,10 @@ def decoded_or_one_error(msg: can.Message) -> list[ControlInput]:
         return out
     assert errors == (0 if out else 1)
     for o in out:
-        assert o.kind in (RUDDER, TELEGRAPH, LEVER)
+        assert o.kind in (OrderKind.RUDDER, OrderKind.TELEGRAPH, OrderKind.LEVER)
         assert isinstance(o.value, str) or math.isfinite(o.value)
-        assert o.kind != RUDDER or abs(o.value) <= math.pi / 2
-        assert o.kind != LEVER or abs(o.value) <= 100.0
+        assert o.kind != OrderKind.RUDDER or abs(o.value) <= math.pi / 2
+        assert o.kind != OrderKind.LEVER or abs(o.value) <= 100.0
     return out
 
 

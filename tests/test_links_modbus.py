@@ -15,8 +15,8 @@ from bridge_node.hil.console_links import Order
 from bridge_node.hil.scenario import Fault
 from bridge_node.hil.settings import ModbusConsoleSettings
 from bridge_node.links.arbiter import ALARM_NUMBERS
-from bridge_node.links.base import RUDDER
 from bridge_node.links.hub import LINK_DOWN_ALARM, LinkHub
+from sim_core.ship.orders import OrderKind
 
 REGISTERS = [{"order": "rudder", "address": 0, "scale": 0.1}, {"order": "lever", "address": 1},
              {"order": "telegraph", "address": 2, "type": "uint16"}]
@@ -114,7 +114,7 @@ def test_malformed_replies_are_failed_requests_and_the_link_recovers(tmp_path):
     fault = Fault(at_s=0.0, kind="corrupt", corrupt="format", duration_s=600.0, probability=0.5)
     rudders = []
     with ConsoleModbus(settings) as console, LinkHub(cfg.links, cfg.arbitration, tmp_path / "rec") as hub:
-        console.order(Order(RUDDER, math.radians(5.0)), time.monotonic())
+        console.order(Order(OrderKind.RUDDER, math.radians(5.0)), time.monotonic())
 
         def tick_once() -> None:
             console.tick(time.monotonic())
@@ -123,7 +123,7 @@ def test_malformed_replies_are_failed_requests_and_the_link_recovers(tmp_path):
         console.inject(fault, random.Random(7))
         wait_for(lambda: hub.errors()["request_failed"] >= 5, timeout=20.0, poll=tick_once)
         console.clear(fault)
-        console.order(Order(RUDDER, math.radians(-3.0)), time.monotonic())
+        console.order(Order(OrderKind.RUDDER, math.radians(-3.0)), time.monotonic())
         wait_for(lambda: math.radians(-3.0) in rudders, timeout=10.0, poll=tick_once)
         health = hub.links[0].health()
     assert console.sent["bad_replies"] >= health.errors["request_failed"]

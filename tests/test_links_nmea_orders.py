@@ -16,11 +16,12 @@ from modbus_console import ModbusConsole
 from pydantic import ValidationError
 
 from bridge_node.links.arbiter import OrderArbiter
-from bridge_node.links.base import ALARM_TEXT_MAX, RUDDER, TELEGRAPH, Alarm, ControlInput
+from bridge_node.links.base import ALARM_TEXT_MAX, Alarm, ControlInput
 from bridge_node.links.hub import LINK_DOWN_ALARM, LinkHub
 from bridge_node.links.nmea0183 import ETL, PRC, ROR, SentenceError, parse_order, render_alarm
 from bridge_node.links.settings import NAME_MAX, ArbitrationSettings
 from bridge_node.node.order_refusals import REFUSED_TEXT
+from sim_core.ship.orders import OrderKind
 
 
 def kind_of(line: str, **kw) -> str | list:
@@ -37,7 +38,7 @@ def ror(talker: str, stbd: str, stbd_status: str, port: str = "", port_status: s
 @pytest.mark.parametrize("talker", ["AG", "AP", "RC", "II", "IN"])
 def test_autopilot_and_console_talkers_are_taken_by_default(talker):
     [order] = parse_order(ror(talker, "12.5", "A"), 0.0, "test")
-    assert order.kind == RUDDER and order.value == pytest.approx(math.radians(12.5))
+    assert order.kind == OrderKind.RUDDER and order.value == pytest.approx(math.radians(12.5))
 
 
 def test_other_talkers_only_when_allowed():
@@ -205,11 +206,11 @@ def test_every_alarm_text_fits_alr_whole_with_the_longest_link_names():
     a, b = "a" * NAME_MAX, "b" * NAME_MAX
     arb = OrderArbiter(ArbitrationSettings(rudder=[a, b], engine=[a, b], fail_safe_after_s=0.5), {a: 1.0, b: 1.0})
     alarms = []
-    arb.feed([ControlInput(0.0, a, RUDDER, 0.1), ControlInput(0.5, b, RUDDER, 0.2),
-              ControlInput(0.0, a, TELEGRAPH, "stop")])
+    arb.feed([ControlInput(0.0, a, OrderKind.RUDDER, 0.1), ControlInput(0.5, b, OrderKind.RUDDER, 0.2),
+              ControlInput(0.0, a, OrderKind.TELEGRAPH, "stop")])
     for now in (0.0, 1.2, 2.0, 3.0, 3.5):
         alarms += arb.decide(now).alarms
-    arb.feed([ControlInput(3.6, a, RUDDER, 0.1)])
+    arb.feed([ControlInput(3.6, a, OrderKind.RUDDER, 0.1)])
     alarms += arb.decide(3.6).alarms
     alarms += [Alarm(LINK_DOWN_ALARM, f"link {a} down", True), Alarm(LINK_DOWN_ALARM, f"link {a} up", False)]
     alarms += [Alarm(n, t, True) for n, t in REFUSED_TEXT.items()]

@@ -18,7 +18,6 @@ from links_helpers import STATE, node_config, pty_pair, wait_for
 from bridge_node.hil.console_links import Order, make_console_link
 from bridge_node.hil.scenario import Action
 from bridge_node.hil.settings import ConsoleConfig
-from bridge_node.links.base import SEARCHLIGHT
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config
 from bridge_node.node.order_refusals import OrderRefusals
@@ -29,6 +28,7 @@ from bridge_node.render.settings import ChannelSettings
 from bridge_node.replay.session import SessionSource, read_session
 from bridge_node.stream.publisher import StatePublisher
 from bridge_node.stream.subscriber import StateSubscriber
+from sim_core.ship.orders import OrderKind
 from sim_core.ship.searchlights import SearchlightMount, SearchlightOrder, SearchlightState, order_searchlight
 from sim_core.world import Controls, step
 
@@ -75,7 +75,7 @@ def passed_on(hub: LinkHub, end, order: SearchlightOrder, seconds: float) -> lis
         got.extend(hub.poll(now).controls.searchlights)
         hub.publish(STATE, now)
 
-    end.order(Order(SEARCHLIGHT, order), time.monotonic())
+    end.order(Order(OrderKind.SEARCHLIGHT, order), time.monotonic())
     with pytest.raises(AssertionError):
         wait_for(lambda: False, timeout=seconds, poll=tick)
     return got

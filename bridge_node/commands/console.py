@@ -21,10 +21,10 @@ from bridge_node.hil.player import TICK_S, Console, ScenarioResult, play
 from bridge_node.hil.report import result_lines, write_junit
 from bridge_node.hil.scenario import Fault, load_scenario
 from bridge_node.hil.settings import load_console_config
-from bridge_node.links.base import RUDDER, TELEGRAPH
 from bridge_node.node.config import DEFAULT_CONFIG
 from bridge_node.node.errors import UserError
 from bridge_node.replay.console import KeyReader
+from sim_core.ship.orders import OrderKind
 from sim_core.ship.particulars import TELEGRAPH_POSITIONS
 
 DEFAULT_CONSOLE = DEFAULT_CONFIG.parent / "console.toml"
@@ -89,8 +89,8 @@ def _steer(console: Console, terminal: Terminal) -> None:
     alarms: dict[int, str] = {}
     terminal.print(KEYS_HELP)
     with keys, Live(console=terminal, refresh_per_second=8, transient=True) as live:
-        end.order(Order(RUDDER, 0.0), time.monotonic())
-        end.order(Order(TELEGRAPH, TELEGRAPH_POSITIONS[telegraph]), time.monotonic())
+        end.order(Order(OrderKind.RUDDER, 0.0), time.monotonic())
+        end.order(Order(OrderKind.TELEGRAPH, TELEGRAPH_POSITIONS[telegraph]), time.monotonic())
         while True:
             for key in keys.keys():  # noqa: SIM118 (KeyReader.keys: the keys pressed)
                 if key == "q":
@@ -98,10 +98,10 @@ def _steer(console: Console, terminal: Terminal) -> None:
                 if key in "ad0":
                     helm = 0.0 if key == "0" else max(-HELM_LIMIT_DEG, min(HELM_LIMIT_DEG, helm + (
                         HELM_STEP_DEG if key == "d" else -HELM_STEP_DEG)))
-                    end.order(Order(RUDDER, math.radians(helm)), time.monotonic())
+                    end.order(Order(OrderKind.RUDDER, math.radians(helm)), time.monotonic())
                 elif key in "ws":
                     telegraph = max(0, min(len(TELEGRAPH_POSITIONS) - 1, telegraph + (1 if key == "w" else -1)))
-                    end.order(Order(TELEGRAPH, TELEGRAPH_POSITIONS[telegraph]), time.monotonic())
+                    end.order(Order(OrderKind.TELEGRAPH, TELEGRAPH_POSITIONS[telegraph]), time.monotonic())
                 elif key in FAULT_KEYS:
                     faults.press(key)
             for r in console.tick(time.monotonic()):

@@ -24,8 +24,8 @@ from bridge_node.node.errors import UserError
 from bridge_node.node.order_refusals import OrderRefusals
 from sim_core.frames.units import KNOT
 from sim_core.ship.model import ShipData, ShipModel, compile_ship, new_ship_data, step
+from sim_core.ship.orders import OrderKind
 from sim_core.ship.outputs import ship_outputs
-from sim_core.ship.searchlights import SEARCHLIGHT
 from sim_core.world import apply_controls
 
 TICK_S = 0.05  # 20 Hz
@@ -41,7 +41,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def _value(order) -> str:
     if order.kind == "rudder":
         return f"{math.degrees(order.value):+.1f} deg"
-    if order.kind == SEARCHLIGHT:
+    if order.kind == OrderKind.SEARCHLIGHT:
         v = order.value
         aim = [f"{what} {math.degrees(a):+.1f} deg" for what, a in (("bearing", v.bearing), ("elevation", v.elevation))
                if a is not None]
@@ -118,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
 def _summary(hub: LinkHub, data: ShipData, start: float, refusals: OrderRefusals, record: Path | None) -> dict:
     return {
         "duration_s": round(time.monotonic() - start, 2),
-        "orders": {key: {"last": dataclasses.asdict(o.value) if o.kind == SEARCHLIGHT else o.value,
+        "orders": {key: {"last": dataclasses.asdict(o.value) if o.kind == OrderKind.SEARCHLIGHT else o.value,
                          "count": hub.order_counts[key]}
                    for key, o in sorted(hub.last_orders.items())},
         "orders_per_source": dict(hub.arbiter.counts),

@@ -28,25 +28,27 @@ from pymodbus.simulator import DataType, SimData, SimDevice
 
 from bridge_node.hil.scenario import Fault
 from bridge_node.hil.settings import CanConsoleSettings, ModbusConsoleSettings, NmeaConsoleSettings
-from bridge_node.links.base import ETL_POSITIONS, LEVER, RUDDER, SEARCHLIGHT, TELEGRAPH
+from bridge_node.links.base import ETL_POSITIONS
 from bridge_node.links.can_link import N2K_DBC, dbc_path, load_dbc
 from bridge_node.links.modbus_link import raw_register, register_value
 from bridge_node.links.n2k_frames import identifier, parse_identifier
 from bridge_node.links.nmea0183 import ETL, PRC, ROR, SEARCHLIGHT_SENTENCE, checksum
 from bridge_node.node.errors import UserError
+from sim_core.ship.orders import OrderKind
 from sim_core.ship.searchlights import SearchlightOrder
 
 ETL_CODES = {name: code for code, name in ETL_POSITIONS.items()}  # telegraph position -> ETL code
-OUT_OF_RANGE = {RUDDER: math.radians(120.0), LEVER: 150.0, TELEGRAPH: "99"}  # corrupt = "range" sends these
+# corrupt = "range" sends these
+OUT_OF_RANGE = {OrderKind.RUDDER: math.radians(120.0), OrderKind.LEVER: 150.0, OrderKind.TELEGRAPH: "99"}
 OUT_OF_RANGE_BEARING = math.radians(200.0)  # and a searchlight order trained this far
-CHANNEL = {RUDDER: "rudder", TELEGRAPH: "engine", LEVER: "engine"}
+CHANNEL = {OrderKind.RUDDER: "rudder", OrderKind.TELEGRAPH: "engine", OrderKind.LEVER: "engine"}
 DEVICE_ERRORS = (OSError, can.CanError, serial.SerialException)  # a port, bus or server that failed
 
 
 @dataclass(frozen=True)
 class Order:
-    """A console order: ``kind`` RUDDER (value rad, + starboard), TELEGRAPH (a position
-    name), LEVER (percent) or SEARCHLIGHT (a ``SearchlightOrder`` with every field given)."""
+    """A console order: ``kind`` OrderKind.RUDDER (value rad, + starboard), OrderKind.TELEGRAPH (a position
+    name), OrderKind.LEVER (percent) or OrderKind.SEARCHLIGHT (a ``SearchlightOrder`` with every field given)."""
 
     kind: str
     value: float | str | SearchlightOrder
@@ -54,13 +56,13 @@ class Order:
     @property
     def channel(self) -> str:
         """The channel whose latest order this is: rudder, engine, or one searchlight's."""
-        return f"searchlight {self.value.index}" if self.kind == SEARCHLIGHT else CHANNEL[self.kind]
+        return f"searchlight {self.value.index}" if self.kind == OrderKind.SEARCHLIGHT else CHANNEL[self.kind]
 
     def wire_value(self, corrupt: str | None) -> float | str | SearchlightOrder:
         """The value to send: the order's, or with corrupt = "range" one out of range."""
         if corrupt != "range":
             return self.value
-        if self.kind == SEARCHLIGHT:
+        if self.kind == OrderKind.SEARCHLIGHT:
             return replace(self.value, bearing=OUT_OF_RANGE_BEARING)
         return OUT_OF_RANGE[self.kind]
 
@@ -299,22 +301,22 @@ class CanConsole(ConsoleLink):
     def _encode(self, order: Order, corrupt: str | None) -> list[can.Message]:
         value = order.wire_value(corrupt)
         s = self.settings
-        if order.kind == RUDDER and s.helm == "pgn127245":
+        if order.kind == OrderKind.RUDDER and s.helm == "pgn127245":
             raw = int(round(value / 1e-4)) & 0xFFFF
             data = bytes([0, 0xF8 | (1 if value > 0 else 2), raw & 0xFF, raw >> 8, 0xFF, 0x7F, 0xFF, 0xFF])
             can_id = identifier(2, 127245, s.source_address)
-        elif order.kind == RUDDER:
+        elif order.kind == OrderKind.RUDDER:
             self._counter = (self._counter + 1) % 256
             data = self.dbc.get_message_by_name("HelmOrder").encode(
                 {"RudderOrder": math.degrees(value), "Status": 1, "Counter": self._counter}, strict=False)
             can_id = identifier(CONSOLE_PRIORITY, HELM_PGN, s.source_address)
-        elif order.kind == SEARCHLIGHT:
+        elif order.kind == OrderKind.SEARCHLIGHT:
             data = self.dbc.get_message_by_name("SearchlightOrder").encode(
                 {"Light": value.index, "Lamp": int(value.on), "Bearing": math.degrees(value.bearing),
                  "Elevation": math.degrees(value.elevation), "Counter": 0}, strict=False)
             can_id = identifier(CONSOLE_PRIORITY, SEARCHLIGHT_PGN, s.source_address)
         else:
-            telegraph = order.kind == TELEGRAPH
+            telegraph = order.kind == OrderKind.TELEGRAPH
             code = (int(value) if corrupt == "range" else int(ETL_CODES[value])) if telegraph else 0
             data = self.dbc.get_message_by_name("EngineOrder").encode(
                 {"Engine": 0, "Lever": 0.0 if telegraph else value, "TelegraphPosition": code,
@@ -372,13 +374,13 @@ class NmeaConsole(ConsoleLink):
     def _encode(self, order: Order, corrupt: str | None) -> list[bytes]:
         value = order.wire_value(corrupt)
         talker = self.settings.talker
-        if order.kind == RUDDER:
+        if order.kind == OrderKind.RUDDER:
             sentence = str(ROR(talker, "ROR", (f"{math.degrees(value):.1f}", "A", "", "V", "B")))
-        elif order.kind == SEARCHLIGHT:
+        elif order.kind == OrderKind.SEARCHLIGHT:
             body = (f"{SEARCHLIGHT_SENTENCE},{value.index},{'A' if value.on else 'V'},"
                     f"{math.degrees(value.bearing):.1f},{math.degrees(value.elevation):.1f}")
             sentence = f"${body}*{checksum(body):02X}"
-        elif order.kind == TELEGRAPH:
+        elif order.kind == OrderKind.TELEGRAPH:
             code = value if corrupt == "range" else ETL_CODES[value]
             sentence = str(ETL(talker, "ETL", ("", "O", code, "", "B", "0")))
         else:
@@ -536,7 +538,7 @@ class ModbusConsole(ConsoleLink):
     def _encode(self, order: Order, corrupt: str | None) -> list[tuple[int, int]]:
         value = order.wire_value(corrupt)
         out = []
-        if order.kind == SEARCHLIGHT:
+        if order.kind == OrderKind.SEARCHLIGHT:
             fields = {"searchlight_on": float(value.on), "searchlight_bearing": math.degrees(value.bearing),
                       "searchlight_elevation": math.degrees(value.elevation)}
             return [(r.address, raw_register(fields[r.order] / r.scale, r.type)) for r in self.settings.registers
@@ -544,8 +546,8 @@ class ModbusConsole(ConsoleLink):
         for r in self.settings.registers:
             if r.order != order.kind:
                 continue
-            eng = math.degrees(value) if order.kind == RUDDER else (
-                int(value if corrupt == "range" else ETL_CODES[value]) if order.kind == TELEGRAPH else value)
+            eng = math.degrees(value) if order.kind == OrderKind.RUDDER else (
+                int(value if corrupt == "range" else ETL_CODES[value]) if order.kind == OrderKind.TELEGRAPH else value)
             out.append((r.address, raw_register(eng / r.scale, r.type)))
         return out
 

@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 from bridge_node.hil.console_links import AlarmReading, ConsoleLink, Order, Reading, make_console_link
 from bridge_node.hil.scenario import QUANTITIES, Expectation, Fault, Scenario
 from bridge_node.hil.settings import ConsoleConfig
-from bridge_node.links.base import LEVER, RUDDER, SEARCHLIGHT, TELEGRAPH
 from bridge_node.node.errors import UserError
+from sim_core.ship.orders import OrderKind
 from sim_core.ship.searchlights import SearchlightOrder
 
 TICK_S = 0.01  # the player's loop period, s
@@ -125,14 +125,14 @@ def check_plan(scenario: Scenario, path: str, console: Console, bus_off: BusOff 
 
 def _order(action) -> Order:
     if action.helm_deg is not None:
-        return Order(RUDDER, math.radians(action.helm_deg))
+        return Order(OrderKind.RUDDER, math.radians(action.helm_deg))
     if action.searchlight is not None:
         light = action.searchlight
-        return Order(SEARCHLIGHT, SearchlightOrder(light.light, light.on, math.radians(light.bearing_deg),
+        return Order(OrderKind.SEARCHLIGHT, SearchlightOrder(light.light, light.on, math.radians(light.bearing_deg),
                                                    math.radians(light.elevation_deg)))
     if action.telegraph is not None:
-        return Order(TELEGRAPH, action.telegraph)
-    return Order(LEVER, action.lever_pct)
+        return Order(OrderKind.TELEGRAPH, action.telegraph)
+    return Order(OrderKind.LEVER, action.lever_pct)
 
 
 def play(console: Console, scenario: Scenario, path: str, bus_off: BusOff | None = None) -> ScenarioResult:
@@ -169,7 +169,7 @@ def play(console: Console, scenario: Scenario, path: str, bus_off: BusOff | None
             value = hi if t >= t1 else lo + (hi - lo) * (t - t0) / (t1 - t0)
             if abs(value - lever.get(role, math.nan)) >= RAMP_STEP_PCT or t >= t1:
                 lever[role] = value
-                console.ends[role].order(Order(LEVER, value), now)
+                console.ends[role].order(Order(OrderKind.LEVER, value), now)
             if t >= t1:
                 del ramps[role]
         for i, (f, rng) in enumerate(faults):

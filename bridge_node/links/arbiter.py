@@ -16,11 +16,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from bridge_node.links.base import LEVER, RUDDER, SEARCHLIGHT, TELEGRAPH, Alarm, ControlInput
+from bridge_node.links.base import Alarm, ControlInput
 from bridge_node.links.settings import ArbitrationSettings
+from sim_core.ship.orders import OrderKind
 from sim_core.world import Controls
 
-CHANNELS = {"rudder": (RUDDER,), "engine": (TELEGRAPH, LEVER)}
+CHANNELS = {"rudder": (OrderKind.RUDDER,), "engine": (OrderKind.TELEGRAPH, OrderKind.LEVER)}
 ALARM_NUMBERS = {"rudder": (101, 111), "engine": (102, 112)}  # (source stale, fail-safe applied)
 
 
@@ -62,7 +63,7 @@ class OrderArbiter:
         """Count the orders, and keep each as its source's latest of its channel."""
         for order in inputs:
             self.counts[order.source] = self.counts.get(order.source, 0) + 1
-            if order.kind == SEARCHLIGHT and order.source in self.searchlight_sources:
+            if order.kind == OrderKind.SEARCHLIGHT and order.source in self.searchlight_sources:
                 self._searchlights.append(order)
             for name, kinds in CHANNELS.items():
                 ch = self.channels[name]
@@ -129,9 +130,9 @@ class OrderArbiter:
             if order.time > ch.applied:
                 ch.applied = order.time
                 newest = order.time if newest is None else max(newest, order.time)
-                if order.kind == RUDDER:
+                if order.kind == OrderKind.RUDDER:
                     controls.rudder = float(order.value)
-                elif order.kind == TELEGRAPH:
+                elif order.kind == OrderKind.TELEGRAPH:
                     controls.telegraph = str(order.value)
                 else:
                     controls.lever = float(order.value)

@@ -28,15 +28,17 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, ClassVar
 
+from sim_core.ship.orders import OrderKind
 from sim_core.ship.outputs import ShipOutputs
-# SEARCHLIGHT is a kind of order, as RUDDER: the links take it from here
-from sim_core.ship.searchlights import MAX_SEARCHLIGHTS, SEARCHLIGHT, SearchlightOrder  # noqa: F401
+from sim_core.ship.searchlights import MAX_SEARCHLIGHTS, SearchlightOrder
 
 if TYPE_CHECKING:
     from bridge_node.links.settings import LinkSettings
 
 log = logging.getLogger("icebridge.links")
-RUDDER, TELEGRAPH, LEVER = "rudder", "telegraph", "lever"  # the kinds of order, with SEARCHLIGHT
+# the one value type of each kind of order
+ORDER_VALUES: dict[OrderKind, type] = {OrderKind.RUDDER: float, OrderKind.TELEGRAPH: str, OrderKind.LEVER: float,
+                                       OrderKind.SEARCHLIGHT: SearchlightOrder}
 RUDDER_ORDER_LIMIT_DEG = 90.0  # beyond this a rudder order is nonsense, not an order to clamp
 ALARM_TEXT_MAX = 52  # characters: what an ALR sentence's text field holds within NMEA 0183's 82
 OPEN_WAIT_S = 5.0  # ``Link.open`` waits this long for the device; a slower one is taken up by a later poll
@@ -63,15 +65,25 @@ def searchlight_order(index: int, on: bool | None, bearing_deg: float | None,
 
 @dataclass(frozen=True)
 class ControlInput:
-    """One order from the console. ``value``: rudder rad (+ starboard), lever percent
-    (-100..100), a telegraph position name, or a ``SearchlightOrder``. ``time`` is the
-    node's monotonic clock, s."""
+    """One order from the console, typed: its ``kind`` and a ``value`` of that kind's one
+    type (``ORDER_VALUES``): rudder rad (+ starboard), lever percent (-100..100), a
+    telegraph position name, or a ``SearchlightOrder``. ``time`` is the node's monotonic
+    clock, s. TypeError for a value of another type (a link's decoding bug, not bad input:
+    the links count bad input before they make an order)."""
 
     time: float
     source: str  # link name
-    kind: str  # RUDDER, TELEGRAPH, LEVER or SEARCHLIGHT
+    kind: OrderKind
     value: float | str | SearchlightOrder
     engine: int = 0  # 0 centre, odd starboard, even port (NMEA convention)
+
+    def __post_init__(self) -> None:
+        kind = OrderKind(self.kind)
+        object.__setattr__(self, "kind", kind)
+        if isinstance(self.value, int) and not isinstance(self.value, bool) and ORDER_VALUES[kind] is float:
+            object.__setattr__(self, "value", float(self.value))
+        if not isinstance(self.value, ORDER_VALUES[kind]):
+            raise TypeError(f"a {kind} order's value is a {ORDER_VALUES[kind].__name__}, not {self.value!r}")
 
 
 @dataclass(frozen=True)
@@ -402,7 +414,7 @@ class Link(ABC):
         inputs = []
         try:
             for order in self._poll_device(now):  # orders before a failure are kept
-                if order.kind != RUDDER and order.engine != self.settings.engine:
+                if order.kind != OrderKind.RUDDER and order.engine != self.settings.engine:
                     self._count_error("other_engine")
                 else:
                     inputs.append(order)

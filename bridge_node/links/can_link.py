@@ -16,22 +16,12 @@ from pathlib import Path
 import can
 import cantools
 
-from bridge_node.links.base import (
-    ETL_POSITIONS,
-    LEVER,
-    RUDDER,
-    SEARCHLIGHT,
-    TELEGRAPH,
-    ControlInput,
-    Link,
-    QueuedWriter,
-    RateSchedule,
-    register_link,
-    searchlight_order,
-)
+from bridge_node.links.base import (ETL_POSITIONS, ControlInput, Link, QueuedWriter, RateSchedule, register_link,
+                                    searchlight_order)
 from bridge_node.links.n2k_frames import fast_packet_frames, identifier, parse_identifier
 from bridge_node.links.n2k_network import FAST_PACKET_PGNS, GLOBAL_ADDRESS, NETWORK_PGNS, Frame, NetworkManager
 from bridge_node.links.settings import CanLinkSettings
+from sim_core.ship.orders import OrderKind
 from sim_core.ship.outputs import ShipOutputs
 
 CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"  # the project's config folder
@@ -232,7 +222,7 @@ class CanLink(Link):
             if values["Status"] != 1:
                 self._count_error("invalid_status")
                 return []
-            return [ControlInput(now, self.name, RUDDER, math.radians(values["RudderOrder"]))]
+            return [ControlInput(now, self.name, OrderKind.RUDDER, math.radians(values["RudderOrder"]))]
         if spec.name == "EngineOrder":
             engine = int(values["Engine"])
             if values["Mode"] == 1:
@@ -240,14 +230,14 @@ class CanLink(Link):
                 if code not in ETL_POSITIONS:
                     self._count_error("out_of_range")
                     return []
-                return [ControlInput(now, self.name, TELEGRAPH, ETL_POSITIONS[code], engine)]
-            return [ControlInput(now, self.name, LEVER, float(values["Lever"]), engine)]
+                return [ControlInput(now, self.name, OrderKind.TELEGRAPH, ETL_POSITIONS[code], engine)]
+            return [ControlInput(now, self.name, OrderKind.LEVER, float(values["Lever"]), engine)]
         if spec.name == "SearchlightOrder":
             order = searchlight_order(int(values["Light"]), values["Lamp"] == 1, values["Bearing"], values["Elevation"])
             if isinstance(order, str):
                 self._count_error(order)
                 return []
-            return [ControlInput(now, self.name, SEARCHLIGHT, order)]
+            return [ControlInput(now, self.name, OrderKind.SEARCHLIGHT, order)]
         self._count_error("unknown_frame")
         return []
 
@@ -264,7 +254,7 @@ class CanLink(Link):
         if abs(angle) > math.pi / 2:
             self._count_error("out_of_range")
             return []
-        return [ControlInput(now, self.name, RUDDER, angle)]
+        return [ControlInput(now, self.name, OrderKind.RUDDER, angle)]
 
     def publish(self, state: ShipOutputs, now: float) -> None:
         if self.device is None or not self.network.can_send:

@@ -25,21 +25,11 @@ from dataclasses import dataclass
 from pymodbus.client import ModbusSerialClient, ModbusTcpClient
 from pymodbus.exceptions import ModbusException
 
-from bridge_node.links.base import (
-    ETL_POSITIONS,
-    LEVER,
-    RUDDER,
-    RUDDER_ORDER_LIMIT_DEG,
-    SEARCHLIGHT,
-    TELEGRAPH,
-    Backoff,
-    ControlInput,
-    Link,
-    register_link,
-    searchlight_order,
-)
+from bridge_node.links.base import (ETL_POSITIONS, RUDDER_ORDER_LIMIT_DEG, Backoff, ControlInput, Link, register_link,
+                                    searchlight_order)
 from bridge_node.links.settings import ModbusLinkSettings, RegisterSpec, WriteSpec
 from sim_core.frames.units import KNOT
+from sim_core.ship.orders import OrderKind
 from sim_core.ship.outputs import ShipOutputs
 
 # the link counts and reports its own errors; pymodbus would also print every refused
@@ -83,22 +73,22 @@ def register_order(spec: RegisterSpec, raw: int, now: float, source: str) -> Con
     if spec.order == "rudder":
         if abs(value) > RUDDER_ORDER_LIMIT_DEG:
             return "out_of_range"
-        return ControlInput(now, source, RUDDER, math.radians(value), spec.engine)
+        return ControlInput(now, source, OrderKind.RUDDER, math.radians(value), spec.engine)
     if spec.order == "lever":
         if abs(value) > 100.0:
             return "out_of_range"
-        return ControlInput(now, source, LEVER, float(value), spec.engine)
+        return ControlInput(now, source, OrderKind.LEVER, float(value), spec.engine)
     if spec.order.startswith("searchlight_"):  # one field of the light's order; the others as they were
         if spec.order == "searchlight_on" and value not in (0.0, 1.0):
             return "out_of_range"
         on = bool(value) if spec.order == "searchlight_on" else None
         angles = [value if spec.order == f"searchlight_{k}" else None for k in ("bearing", "elevation")]
         order = searchlight_order(spec.light, on, *angles)
-        return order if isinstance(order, str) else ControlInput(now, source, SEARCHLIGHT, order)
+        return order if isinstance(order, str) else ControlInput(now, source, OrderKind.SEARCHLIGHT, order)
     code = f"{int(round(value)):02d}"
     if code not in ETL_POSITIONS:
         return "out_of_range"
-    return ControlInput(now, source, TELEGRAPH, ETL_POSITIONS[code], spec.engine)
+    return ControlInput(now, source, OrderKind.TELEGRAPH, ETL_POSITIONS[code], spec.engine)
 
 
 def indicator_value(spec: WriteSpec, s: ShipOutputs) -> float:

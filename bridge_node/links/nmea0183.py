@@ -14,9 +14,9 @@ import re
 
 import pynmea2
 
-from bridge_node.links.base import (ETL_POSITIONS, LEVER, RUDDER, RUDDER_ORDER_LIMIT_DEG, SEARCHLIGHT, TELEGRAPH, Alarm,
-                                    ControlInput, searchlight_order)
+from bridge_node.links.base import ETL_POSITIONS, RUDDER_ORDER_LIMIT_DEG, Alarm, ControlInput, searchlight_order
 from sim_core.frames.units import KNOT
+from sim_core.ship.orders import OrderKind
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.ship.searchlights import SearchlightOrder
 
@@ -142,7 +142,7 @@ def parse_order(line: str, now: float, source: str,
         raise SentenceError("bad_checksum", "checksum does not match")
     address = frame["address"]
     if line[0] == "$" and address == SEARCHLIGHT_SENTENCE:
-        return [ControlInput(now, source, SEARCHLIGHT, _searchlight_order(frame["fields"] or ""))]
+        return [ControlInput(now, source, OrderKind.SEARCHLIGHT, _searchlight_order(frame["fields"] or ""))]
     if line[0] != "$" or len(address) != 5 or address[2:] not in ORDER_SENTENCES:
         raise SentenceError("ignored", f"{address} is not a console order")
     if allowed_talkers is not None and address[:2] not in allowed_talkers:
@@ -184,16 +184,16 @@ def _searchlight_order(fields: str) -> SearchlightOrder:
 
 def _orders(msg, now: float, source: str) -> list[ControlInput]:
     if isinstance(msg, ROR):
-        return [ControlInput(now, source, RUDDER, _rudder_order(msg))]
+        return [ControlInput(now, source, OrderKind.RUDDER, _rudder_order(msg))]
     if isinstance(msg, ETL):
         if msg.message_type != "O":
             raise SentenceError("ignored", "ETL answer-back")
         if msg.position not in ETL_POSITIONS:
             raise SentenceError("out_of_range", f"ETL position {msg.position!r}")
-        return [ControlInput(now, source, TELEGRAPH, ETL_POSITIONS[msg.position], _engine(msg.engine))]
+        return [ControlInput(now, source, OrderKind.TELEGRAPH, ETL_POSITIONS[msg.position], _engine(msg.engine))]
     if msg.lever_status != "A":  # PRC
         raise SentenceError("invalid_status", "PRC lever status is not A")
-    return [ControlInput(now, source, LEVER, _finite(msg.lever, "lever", 100.0), _engine(msg.engine))]
+    return [ControlInput(now, source, OrderKind.LEVER, _finite(msg.lever, "lever", 100.0), _engine(msg.engine))]
 
 
 def _lat(rad: float) -> tuple[str, str]:

@@ -12,11 +12,13 @@ from pathlib import Path
 from typing import Literal
 
 import cantools
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, ValidationError, field_validator, model_validator
 
 from bridge_node.links.settings import ArbitrationSettings, LinkSettings
 from bridge_node.node.errors import UserError
-from bridge_node.node.paths import expand_user, writable_dir
+from bridge_node.node.input_files import DBC_LIMIT, TOML_LIMIT, read_input, read_input_text
+from bridge_node.node.paths import NUL_IN_PATH, expand_user, writable_dir
+from bridge_node.node.toml_errors import shown, toml_error
 from bridge_node.render.settings import RenderSettings
 from bridge_node.render.warp import WarpError, read_pfm
 from bridge_node.replay.settings import ReplaySettings
@@ -31,7 +33,6 @@ from sim_core.scene.scene import SceneSettings
 from sim_core.ship.particulars import TELEGRAPH_POSITIONS, ShipParticulars
 
 SHIP_NAME = r"^[A-Za-z0-9_\-]{1,64}$"  # ships/<name>.toml
-MAX_DBC_BYTES = 4 * 2**20  # a console's DBC is kilobytes; anything this large is not one
 DEFAULT_CONFIG = Path(__file__).resolve().parents[2] / "config" / "default.toml"
 
 
@@ -40,6 +41,13 @@ class PathSettings(Params):
 
     cache_dir: str = Field("~/.cache/icebridge", description="template library")
     session_dir: str = Field("~/.cache/icebridge/sessions", description="session records of link traffic")
+
+    @field_validator("cache_dir", "session_dir")
+    @classmethod
+    def _no_nul(cls, value: str) -> str:
+        if "\0" in value:
+            raise ValueError(NUL_IN_PATH)
+        return value
 
 
 class ShipChoice(Params):
@@ -131,11 +139,11 @@ def _describe(err: dict) -> str:
     if kind == "missing":
         return f"{key}: required key is missing"
     if kind == "extra_forbidden":
-        return f"{key} = {err['input']!r}: unknown key (check the spelling)"
+        return f"{key} = {shown(err['input'])}: unknown key (check the spelling)"
     msg = err["msg"].removeprefix("Value error, ")
     if kind == "value_error":
         return f"{key}: {msg}"
-    return f"{key} = {err['input']!r}: {msg}"
+    return f"{key} = {shown(err['input'])}: {msg}"
 
 
 def load_config(path: str | Path | None = None) -> NodeConfig:
@@ -187,15 +195,14 @@ def _dbc_file(config: Path, key: str, value: str) -> Path:
     """The DBC file a CAN link names, resolved and checked: a regular, readable file of
     sane size that cantools parses. ConfigError naming the file, key and value otherwise."""
     where = f"{config}: {key} = {value!r}"
+    path = _config_file(config, key, value)
     try:
-        path = _config_file(config, key, value)
-        if path.stat().st_size > MAX_DBC_BYTES:
-            raise ConfigError(f"{where}: {path} is larger than {MAX_DBC_BYTES // 2**20} MiB; not a DBC file")
-        cantools.database.load_file(str(path), strict=False)
-    except ConfigError:
-        raise
-    except OSError as exc:  # a name too long, a file that cannot be read...
-        raise ConfigError(f"{where}: {exc.strerror or exc}") from None
+        data = read_input(path, "DBC file", DBC_LIMIT, where)
+        database_format = "dbc" if path.suffix.lower() == ".dbc" else None  # else: cantools tries each
+        text = data.decode("cp1252" if database_format else "utf-8", errors="replace")  # cantools' encodings
+        cantools.database.load_string(text, database_format=database_format, strict=False)
+    except UserError as exc:
+        raise ConfigError(str(exc)) from None
     except Exception as exc:  # cantools raises many kinds (its own, ValueError, KeyError...) on a bad file
         raise ConfigError(f"{where}: {path} is not a DBC file cantools can read ({type(exc).__name__})") from None
     return path
@@ -211,7 +218,7 @@ def load_ship(name: str, config_path: str | Path | None = None, key: str = "ship
     folders = [resolve_path(config_path, "ships"), DEFAULT_CONFIG.parent / "ships"]
     for folder in folders:
         path = folder / f"{name}.toml"
-        if path.is_file():
+        if path.exists():  # a FIFO or device in its place is an error of read_toml, not "unknown"
             return _load_validated(path, ShipParticulars)
     known = sorted({p.stem for f in folders if f.is_dir() for p in f.glob("*.toml")})
     raise ConfigError(f"{where}: unknown ship {name!r}; ships available: {', '.join(known) or 'none'}")
@@ -219,16 +226,18 @@ def load_ship(name: str, config_path: str | Path | None = None, key: str = "ship
 
 def read_toml(path: Path, what: str) -> tuple[str, dict]:
     """The text of a TOML file and its tables; ConfigError naming the file (``what``: the
-    kind of file, for the messages) if it is missing, unreadable or not TOML."""
+    kind of file, for the messages) if it is missing, not a regular file, too large,
+    unreadable or not TOML (also TOML that Python cannot take: nested too deep, an integer
+    too long; then the line and key are named too)."""
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_input_text(path, what, TOML_LIMIT)
         return text, tomllib.loads(text)
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: {what} not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"{path}: cannot read the {what}: {exc}") from None
+    except UserError as exc:
+        raise ConfigError(str(exc)) from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    except (RecursionError, ValueError) as exc:  # nested too deep, a too long integer, a bad time zone...
+        raise ConfigError(toml_error(path, text, exc)) from None
 
 
 def _load_validated(path: Path, schema: type[Params]) -> Params:

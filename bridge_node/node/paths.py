@@ -3,14 +3,21 @@ bad path is one clear message and never a traceback after a finished run."""
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from pathlib import Path
 
 from bridge_node.node.errors import UserError
+from bridge_node.node.input_files import file_kind
+
+NUL_IN_PATH = "a path cannot contain a NUL character"
 
 
 def expand_user(path: str | Path, what: str) -> Path:
-    """``~`` expanded; UserError naming ``what`` for an unknown user (``~nobody/x``)."""
+    """``~`` expanded; UserError naming ``what`` for an unknown user (``~nobody/x``) or a
+    NUL character in the path."""
+    if "\0" in str(path):
+        raise UserError(f"{what} = {str(path)!r}: {NUL_IN_PATH}")
     try:
         return Path(path).expanduser()
     except RuntimeError:
@@ -38,12 +45,32 @@ def writable_dir(path: str | Path, what: str) -> Path:
     return path
 
 
-def writable_file(path: str | Path, what: str) -> Path:
-    """The file path if it can be written: not a folder, in a folder files can be written
-    in (created if missing), not a read-only existing file; UserError otherwise."""
-    path = expand_user(path, what)
-    if path.is_dir():
+def replaceable(path: Path, what: str) -> None:
+    """UserError unless ``path`` is absent or a regular file, the only thing an output may
+    replace: never a symbolic link (the link would be replaced, or what it points to
+    written), a device node, a FIFO, a socket or a folder. Checks the path itself, never
+    opens it."""
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        return
+    except OSError as exc:
+        raise UserError(f"{what} = {str(path)!r}: cannot write this file ({exc.strerror or exc})") from None
+    if stat.S_ISLNK(mode):
+        raise UserError(f"{what} = {str(path)!r}: is a symbolic link; outputs replace only regular files "
+                        "(give the file's own path)")
+    if stat.S_ISDIR(mode):
         raise UserError(f"{what} = {str(path)!r}: is a folder, expected a file name")
+    if not stat.S_ISREG(mode):
+        raise UserError(f"{what} = {str(path)!r}: is {file_kind(mode)}; outputs replace only regular files")
+
+
+def writable_file(path: str | Path, what: str) -> Path:
+    """The file path if it can be written: absent or a regular file (see ``replaceable``),
+    in a folder files can be written in (created if missing), not a read-only existing
+    file; UserError otherwise."""
+    path = expand_user(path, what)
+    replaceable(path, what)
     reason = _cannot_write_in(path.parent)
     if reason is None and path.exists() and not os.access(path, os.W_OK):
         reason = "the file exists and cannot be overwritten"
