@@ -148,3 +148,31 @@ def replayed_errors(track_csv: str, fixes: list[Fix]) -> np.ndarray:
         de = (lon[i] - math.radians(f.lon)) * 6_378_137.0 * math.cos(lat[i])
         out.append(math.hypot(dn, de))
     return np.array(out)
+
+
+def at_anchor(t0: float, duration: float, every: float = 180.0, where: tuple[float, float] = (0.0, 0.0),
+              swing_m: float = 15.0, heading0: float = 200.0) -> list[Fix]:
+    """A ship at anchor reporting every ``every`` s (class A: 3 min): speed 0, swinging on
+    its cable, the position on a circle of ``swing_m`` about ``where`` (north, east m from
+    the reference point) and the heading following, a quarter turn an hour."""
+    out = []
+    for k in range(int(duration // every) + 1):
+        t = k * every
+        psi = math.radians(heading0) + 0.5 * math.pi * t / 3600.0
+        lat, lon = local_to_geodetic(where[0] - swing_m * math.cos(psi), where[1] - swing_m * math.sin(psi),
+                                     *REFERENCE)
+        deg = math.degrees(psi) % 360.0
+        out.append(Fix(t0 + t, math.degrees(lat), math.degrees(lon), deg, deg, 0.0))
+    return out
+
+
+def shifted(fixes: list[Fix], after: float, north_m: float) -> list[Fix]:
+    """The fixes, those after logged time ``after`` (unix s) moved ``north_m`` m north: a
+    log whose positions jump (a receiver swapped, a datum changed) while speed and course
+    say the ship ran on as before."""
+    from sim_core.frames.geodesy import radii
+
+    def north(f: Fix) -> float:
+        return f.lat + math.degrees(north_m / radii(math.radians(f.lat))[0])
+
+    return [Fix(f.t, north(f), f.lon, f.heading, f.course, f.speed) if f.t > after else f for f in fixes]

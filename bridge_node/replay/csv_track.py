@@ -3,7 +3,8 @@ mapping, and GPX tracks.
 
 Columns (case, spaces and a unit in brackets do not matter): time (``time``, ``timestamp``,
 ``datetime``, ``utc``, ``BaseDateTime``, ...; unix seconds, ISO 8601, or seconds from the
-start), an optional separate ``date``, ``lat``/``latitude`` and ``lon``/``lng``/``longitude``
+start), failing that elapsed seconds (``t``, ``t_s``, ``time_s``, ``elapsed``, ``elapsed_s``,
+``seconds``, ``sec``, ``t (s)``), an optional separate ``date`` (not with elapsed seconds), ``lat``/``latitude`` and ``lon``/``lng``/``longitude``
 (decimal degrees), ``heading``/``hdg``, ``cog``/``course``, ``sog``/``speed`` (knots unless
 the column name says m/s or km/h) and ``mmsi`` (several vessels in one file: pick one with
 ``--mmsi``). ``--columns time=ts,lat=y,lon=x,speed=v,speed_unit=m/s`` names others.
@@ -34,6 +35,8 @@ COLUMNS = {
               "sog_ms", "speed_ms", "speed_mps", "speed_kmh"),
     "mmsi": ("mmsi",),
 }
+ELAPSED = ("t", "t_s", "time_s", "elapsed", "elapsed_s", "elapsed_time", "seconds", "sec", "secs")  # s from the start
+TIME_PROBE_ROWS = 50  # rows read to suggest a column of times
 SPEED_UNITS = {"kn": KNOT, "m/s": 1.0, "km/h": 1.0 / 3.6}
 MAPPING_KEYS = (*COLUMNS, "speed_unit")
 NOT_AVAILABLE_ANGLE = 360.0  # AIS writes 511 for an unknown heading: >= 360 deg is none
@@ -82,7 +85,38 @@ def find_columns(header: list[str], mapping: dict[str, str]) -> dict[str, int]:
             if n in names:
                 found[key] = i
                 break
+    elapsed = next((normal.index(n) for n in ELAPSED if n in normal), None)
+    if "time" not in found and "time" not in mapping and elapsed is not None:
+        found.pop("date", None)  # a date and seconds from the start are no time
+        found["time"] = elapsed
     return found
+
+
+def _mapping_text(mapping: dict[str, str], **more: str) -> str:
+    return ",".join(f"{k}={v}" for k, v in (mapping | more).items())
+
+
+def _no_time(path: str, header: list[str], cols: dict[str, int], rows: list[list[str]],
+             mapping: dict[str, str]) -> UserError:
+    """The error for a CSV track with positions but no time column: what was found, and
+    the ``--columns`` that names the first other column whose cells read as increasing times."""
+    found = f"latitude in {header[cols['lat']]!r} and longitude in {header[cols['lon']]!r}"
+    if "time" in mapping:
+        return UserError(f"{path}: no time column: found {found}, but no column {mapping['time']!r} "
+                         f"(--columns {_mapping_text(mapping)}); the columns are {', '.join(header)}")
+    used = set(cols.values())
+    for i, name in enumerate(header):
+        try:
+            t = [_time(row[i])[0] for row in rows[:TIME_PROBE_ROWS]]
+        except (ValueError, IndexError):
+            continue
+        if i not in used and len(t) > 1 and all(b > a for a, b in zip(t, t[1:])):
+            return UserError(f"{path}: no time column: found {found}, but no column with a time's name "
+                             f"(time, timestamp, utc, t_s, elapsed, ...); if {name!r} holds the times, give "
+                             f"--columns {_mapping_text(mapping, time=name)}")
+    return UserError(f"{path}: no time column: found {found}, but none of the columns "
+                     f"({', '.join(header)}) holds times; a track needs them: add one and give "
+                     f"--columns {_mapping_text(mapping, time='COLUMN')}")
 
 
 def looks_like_csv_track(first_lines: list[str], mapping: dict[str, str]) -> bool:
@@ -133,6 +167,8 @@ def read_csv_track(path: str, lines: list[str], mapping: dict[str, str]) -> dict
     rows = csv.reader(body, dialect)
     header = next(rows)
     cols = find_columns(header, mapping)
+    if "time" not in cols:
+        raise _no_time(path, header, cols, list(rows), mapping)
     unit = SPEED_UNITS[mapping.get("speed_unit") or (_speed_unit(header[cols["speed"]]) if "speed" in cols else "kn")]
     logs: dict[int | None, TrackLog] = {}
     bad = 0

@@ -1,5 +1,5 @@
 """Picture of a replay: the track over the ice field with the broken channel, and the
-ship's speed and heading against logged time."""
+ship's speed and heading against logged time; the held gaps for the summary."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.patches import Rectangle
 
+from bridge_node.replay.console import logged_text
 from bridge_node.replay.engine import ReplayStats
 from bridge_node.replay.track import Track
 from bridge_node.reports.figures import plt, save_figure
@@ -20,11 +21,39 @@ MAX_DRAWN_CELLS = 60_000  # beyond this only the broken cells are drawn, on squa
 MARGIN = 60.0  # m around the track in the plan view
 ASPECT = 3.0  # the plan view's longest side over its shortest, at most
 MIN_HEADING_SPAN = 10.0  # deg: the heading axis spans at least this
+HELD = "#f2c14e"  # held gaps: shaded against time, dashed in the plan
 
 
-def _plan(ax, model: WorldModel, data: WorldData, xy: np.ndarray, track_ne: np.ndarray | None) -> None:
+def gap_summary(track: Track) -> dict:
+    """The summary's view of a track's gaps: ``gaps_held`` (from, to, length s, why, the
+    distance m the vessel would run through it at its logged speed) and how many gaps
+    were interpolated (``gaps_interpolated``, with their total length s)."""
+    absolute = track.log.absolute
+    return {"gaps_held": [{"from": logged_text(g.start, absolute), "to": logged_text(g.end, absolute),
+                           "s": round(g.end - g.start, 1), "why": g.reason, "run_m": round(g.run, 1)}
+                          for g in track.gaps],
+            "gaps_interpolated": {"count": len(track.bridged),
+                                  "s": round(sum(g.end - g.start for g in track.bridged), 1)}}
+
+
+def _held_in_plan(ax, track: Track, track_ne: np.ndarray) -> None:
+    """Each held gap as a dashed line from the fix before it to the fix after it (the jump
+    the ship makes at its end), labelled by its length."""
+    for k, gap in enumerate(track.gaps):
+        i = int(np.searchsorted(track.t, gap.start))
+        if i + 1 >= len(track_ne):
+            continue
+        (n0, e0), (n1, e1) = track_ne[i], track_ne[i + 1]
+        ax.plot([e0, e1], [n0, n1], "--", color="#b8860b", lw=1.6, zorder=5,
+                label="gap held (jump at its end)" if k == 0 else None)
+        ax.annotate(f"{gap.end - gap.start:.0f} s held", (0.5 * (e0 + e1), 0.5 * (n0 + n1)), fontsize=7,
+                    color="#7a5a00", xytext=(4, 4), textcoords="offset points", zorder=6)
+
+
+def _plan(ax, model: WorldModel, data: WorldData, xy: np.ndarray, track_ne: np.ndarray | None,
+          track: Track | None) -> None:
     """Plan view (east right, north up, m): the field, the cells near the track coloured
-    by what broke them, the replayed track and the logged fixes."""
+    by what broke them, the replayed track, the logged fixes and the held gaps."""
     scene = model.scene
     lo, hi = xy.min(axis=0) - MARGIN, xy.max(axis=0) + MARGIN
     span = hi - lo  # at most ASPECT times as tall as wide, or as wide as tall: a straight track stays readable
@@ -43,6 +72,8 @@ def _plan(ax, model: WorldModel, data: WorldData, xy: np.ndarray, track_ne: np.n
     ax.plot(xy[:, 0], xy[:, 1], "-", color="#e07a1f", lw=1.0, label="replayed track")
     if track_ne is not None:
         ax.plot(track_ne[:, 1], track_ne[:, 0], ".", color="#222222", ms=2.5, label="logged fixes")
+        if track is not None:
+            _held_in_plan(ax, track, track_ne)
     ax.plot(*xy[0], "o", color="#2a9d4b", label="start")
     ax.plot(*xy[-1], "s", color="#c0392b", label="end")
     ax.set_xlim(lo[0], hi[0])
@@ -68,7 +99,7 @@ def plot_replay(model: WorldModel, data: WorldData, stats: ReplayStats, track: T
     cx = fig.add_subplot(grid[1, 1], sharex=bx)
     t0 = rows[0, 0] if len(rows) else 0.0
     if len(rows):
-        _plan(ax, model, data, rows[:, [2, 1]], track_ne)
+        _plan(ax, model, data, rows[:, [2, 1]], track_ne, track)
         t = rows[:, 0] - t0
         bx.plot(t, rows[:, 4] / KNOT, color="#e07a1f", lw=1.0, label="replayed")
         heading = np.degrees(rows[:, 3])
@@ -81,9 +112,10 @@ def plot_replay(model: WorldModel, data: WorldData, stats: ReplayStats, track: T
         h = track.heading
         cx.plot(h.t - t0, np.degrees(h.value) % 360.0, ".", color="#222222", ms=2.5,
                 label=f"logged ({track.heading_source})")
-        for gap in track.gaps:
+        for k, gap in enumerate(track.gaps):
             for a in (bx, cx):
-                a.axvspan(gap.start - t0, gap.end - t0, color="#f2c14e", alpha=0.35, lw=0)
+                a.axvspan(gap.start - t0, gap.end - t0, color=HELD, alpha=0.35, lw=0,
+                          label=f"gap held ({len(track.gaps)})" if k == 0 else None)
     bx.set_ylim(0.0, 1.15 * max(1.0, bx.get_ylim()[1]))
     bx.set_ylabel("speed over ground, kn")
     cx.set_ylabel("heading, deg")
@@ -94,8 +126,9 @@ def plot_replay(model: WorldModel, data: WorldData, stats: ReplayStats, track: T
     for a in (bx, cx):
         a.grid(alpha=0.3)
         a.legend(fontsize=7, loc="upper right")
+    gaps = f"; gaps {len(track.bridged)} interpolated, {len(track.gaps)} held" if track is not None else ""
     fig.suptitle(f"{title}: {stats.distance / 1852.0:.2f} nm, cells broken {stats.broken_by_hull} by the hull, "
-                 f"{stats.broken_by_contact} by contact", fontsize=10)
+                 f"{stats.broken_by_contact} by contact{gaps}", fontsize=10)
     fig.tight_layout()
     return save_figure(fig, path)
 
