@@ -26,6 +26,9 @@ from sim_core.fracture.fragment_count import check_thickness
 from sim_core.fracture.tile_template import TileTemplate, build_tile, plan_areas, template_seed
 
 
+MAX_SEED = 2**64  # seeds are 0 .. 2**64 - 1 (numpy's generators take no negative seed)
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--thickness", type=float, help="build one tile of this thickness, m")
     p.add_argument("--seed", type=int, help="random seed of that tile (default: from config)")
@@ -47,6 +50,8 @@ def run(args: argparse.Namespace) -> int:
             check_thickness(args.thickness)
         except ValueError as exc:
             raise UserError(f"--thickness: {exc}") from None
+        if args.seed is not None and not 0 <= args.seed < MAX_SEED:
+            raise UserError(f"--seed {args.seed}: a seed is an integer from 0 to 2**64 - 1")
         seed = args.seed if args.seed is not None else template_seed(settings.seed, args.thickness, 0)
         t0 = time.perf_counter()
         tile = build_tile(args.thickness, seed, settings, cfg.ice_material)

@@ -25,6 +25,7 @@ from urllib.parse import urlsplit, urlunsplit
 
 from bridge_node.node.config import load_config
 from bridge_node.node.errors import UserError
+from bridge_node.node.output_files import write_output
 from bridge_node.node.realtime_loop import distribution
 from bridge_node.node.world_setup import build_world
 from bridge_node.render.channels import ChannelSet
@@ -94,7 +95,8 @@ class _Outputs:
             self.video.close()
             out |= {"video": self.args.video, "video_frames": self.video.frames}
         if self.args.panorama and self.channels.targets:
-            out["panorama"] = str(save_png(side_by_side(self.channels.images()), Path(self.args.panorama)))
+            out["panorama"] = str(save_png(side_by_side(self.channels.images()), Path(self.args.panorama),
+                                           "--panorama"))
         return out
 
 
@@ -150,21 +152,27 @@ def _render_loop(sub: StateSubscriber, channels: ChannelSet, outputs: _Outputs, 
     return {"frames": frames, "wall_s": round(time.monotonic() - start, 2), "input_to_pixels_ms": distribution(delays)}
 
 
+# option -> (attribute, lowest, highest): NaN, infinity and 1e308 s would wait for ever
+RANGES = {"--fps": ("fps", 1.0, 240.0), "--video-fps": ("video_fps", 0.1, 60.0), "--wait": ("wait", 0.1, 3600.0),
+          "--duration": ("duration", 0.0, 1e6), "--idle-exit": ("idle_exit", 0.1, 3600.0),
+          "--frames-every": ("frames_every", 0.0, 1e6), "--frame-delay": ("frame_delay", 0.0, 10.0)}
+
+
 def _check(args: argparse.Namespace) -> None:
-    if not 1.0 <= args.fps <= 240.0:
-        raise UserError(f"--fps {args.fps} is outside the allowed range [1, 240]")
-    if not 0.1 <= args.video_fps <= 60.0:
-        raise UserError(f"--video-fps {args.video_fps} is outside the allowed range [0.1, 60]")
+    """UserError for an option outside its range (the comparisons are false for NaN)."""
+    for option, (name, lo, hi) in RANGES.items():
+        value = getattr(args, name)
+        if value is not None and not lo <= value <= hi:
+            raise UserError(f"{option} {value} is outside the allowed range [{lo:g}, {hi:g}]")
     if args.drop_every is not None and args.drop_every < 2:
         raise UserError(f"--drop-every {args.drop_every}: must be at least 2")
 
 
 def _write_summary(summary: dict, path: str | None) -> None:
-    """Write the summary atomically (a reader never sees half of it)."""
+    """Write the summary atomically (a reader never sees half of it), replacing only a
+    regular file."""
     if path:
-        tmp = Path(path).with_name(Path(path).name + ".tmp")
-        tmp.write_text(json.dumps(summary))
-        os.replace(tmp, path)
+        write_output(path, json.dumps(summary), "--summary")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -27,6 +27,7 @@ from sim_core.studies.trials import (
 )
 
 MAX_ICE_H = 3.0  # m: Lindqvist's method is used up to here
+MIN_SPEED_KN = 1.0  # kn: slower, a trial's manoeuvre takes days and its numbers lose meaning
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -71,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     particulars = load_ship(args.ship or cfg.ship.name, args.config, "--ship" if args.ship else "ship.name")
     model = compile_ship(particulars, cfg.ice_material)
     speed_kn = particulars.service_speed_kn if args.speed is None else args.speed
-    _check("--speed", speed_kn, 0.0, 30.0, lo_open=True)
+    _check("--speed", speed_kn, MIN_SPEED_KN, 30.0)
     _check("--ice", args.ice, 0.0, MAX_ICE_H)
     limit = particulars.rudder.max_angle_deg
     speed = speed_kn * KNOT

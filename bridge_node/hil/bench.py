@@ -18,7 +18,6 @@ import subprocess
 import sys
 import tempfile
 import time
-import tomllib
 from contextlib import ExitStack
 from pathlib import Path
 
@@ -27,7 +26,7 @@ import tomli_w
 from bridge_node.hil.player import BusOff, Console, ScenarioResult, play
 from bridge_node.hil.scenario import Scenario
 from bridge_node.hil.settings import ConsoleConfig, load_console_config
-from bridge_node.node.config import DEFAULT_CONFIG, load_config, resolve_path
+from bridge_node.node.config import DEFAULT_CONFIG, load_config, read_toml, resolve_path
 from bridge_node.node.errors import UserError
 from bridge_node.node.network import free_port
 
@@ -151,7 +150,7 @@ class Bench:
     def _write_configs(self) -> ConsoleConfig:
         """The node config and the console config of the bench, in the run folder."""
         load_config(self.base)  # the user's config is checked with the node's own errors first
-        base = tomllib.loads(self.base.read_text(encoding="utf-8"))
+        _, base = read_toml(self.base, "config file")
         node_links, console_links = [], []
         ptys = pty_folder(self._stack)
         for role, kind in [*zip(ORDER_ROLES, self.kinds), ("panel", "nmea0183")]:

@@ -6,6 +6,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from bridge_node.hil.player import ScenarioResult
+from bridge_node.node.output_files import OutputFile
 
 
 def result_lines(result: ScenarioResult) -> list[str]:
@@ -46,4 +47,5 @@ def write_junit(results: list[ScenarioResult], path: Path) -> None:
                 ET.SubElement(case, "failure", message=o.measured, type="expectation").text = o.measured
     ET.indent(root)
     path.parent.mkdir(parents=True, exist_ok=True)
-    ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
+    with OutputFile(path, "--junit") as tmp:
+        ET.ElementTree(root).write(tmp, encoding="utf-8", xml_declaration=True)

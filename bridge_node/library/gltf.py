@@ -10,6 +10,7 @@ from pathlib import Path
 
 import trimesh
 
+from bridge_node.node.output_files import write_output
 from sim_core.fracture.tile_template import TileTemplate
 
 
@@ -44,4 +45,4 @@ def tile_scene(template: TileTemplate) -> trimesh.Scene:
 
 def export_glb(template: TileTemplate, path: str | Path) -> None:
     """Write the tile as a .glb file."""
-    Path(path).write_bytes(tile_scene(template).export(file_type="glb"))
+    write_output(path, tile_scene(template).export(file_type="glb"), "--export")

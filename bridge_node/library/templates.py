@@ -8,12 +8,11 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from bridge_node.node.output_files import OutputFile
 from sim_core.fracture.tile_template import FractureSettings, TileTemplate, build_tile, template_seed
 from sim_core.material import IceMaterial
 
@@ -34,15 +33,8 @@ def save_template(path: Path, template: TileTemplate) -> None:
     """Write a template atomically, through a temporary file of its own: processes that
     build the same template at once (a node and its render processes on a cold library)
     each write whole files, and the last rename wins with identical content."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **template.to_arrays())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with OutputFile(path, "template library file") as tmp, open(tmp, "wb") as f:
+        np.savez(f, **template.to_arrays())
 
 
 def load_template(path: Path) -> TileTemplate:

@@ -15,6 +15,8 @@ from pathlib import Path
 import can
 from can.io.canutils import CanutilsLogReader
 
+from bridge_node.node.input_files import LOG_LIMIT, read_input_text
+
 
 @dataclass(frozen=True)
 class NmeaRecord:
@@ -27,8 +29,9 @@ class NmeaRecord:
 
 
 def complete_lines(path: Path) -> tuple[list[str], Counter]:
-    """The newline-terminated lines of a text file, and {"torn": 0 or 1}."""
-    text = Path(path).read_bytes().decode("utf-8", errors="replace")
+    """The newline-terminated lines of a text file, and {"torn": 0 or 1}; UserError if it
+    is not a regular file, is larger than LOG_LIMIT or cannot be read."""
+    text = read_input_text(path, "session record file", LOG_LIMIT, errors="replace")
     lines = text.split("\n")
     tail = lines.pop()  # after the last newline: empty, or a torn line
     return lines, Counter(torn=1 if tail else 0)

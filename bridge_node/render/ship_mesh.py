@@ -7,16 +7,20 @@ waterline. Other vessels reuse the mesh, scaled to their length and beam.
 """
 from __future__ import annotations
 
+import io
 import math
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
+from bridge_node.node.errors import UserError
+from bridge_node.node.input_files import MIB, read_input
 from sim_core.ship.particulars import ShipParticulars
 
 HULL, BOOT, DECK, HOUSE, MAST = (0.50, 0.10, 0.08), (0.12, 0.12, 0.13), (0.33, 0.37, 0.34), (0.86, 0.86, 0.82), \
     (0.85, 0.62, 0.10)
+MAX_GLB_BYTES = 256 * MIB  # a ship model far larger than any a bridge view needs
 BOTTOM_M = -2.0  # m: the hull is drawn this deep (floes sliding under it show in the water)
 EYE_ABOVE_FLOOR_M = 1.7  # m: the bridge eye above the bridge deck
 SHEER = 0.25  # the deck's rise at the stem over the freeboard
@@ -91,10 +95,14 @@ def load_ship(particulars: ShipParticulars, contour: np.ndarray, freeboard: floa
         return default_ship(particulars, contour, freeboard)
     where = f"ships/{particulars.name}.toml: look.model_glb = {name!r}"
     path = Path(name)
-    if path.suffix.lower() != ".glb" or not path.is_file():
-        raise ShipModelError(f"{where}: expected an existing .glb file")
+    if path.suffix.lower() != ".glb":
+        raise ShipModelError(f"{where}: expected a .glb file")
     try:
-        mesh = trimesh.load(path, force="mesh", process=False)
+        data = read_input(path, "ship model", MAX_GLB_BYTES, where)
+    except UserError as exc:
+        raise ShipModelError(str(exc)) from None
+    try:
+        mesh = trimesh.load(io.BytesIO(data), file_type="glb", force="mesh", process=False)
     except Exception as exc:  # trimesh raises many kinds on a damaged file
         raise ShipModelError(f"{where}: not a GLB trimesh can read ({type(exc).__name__}: {exc})") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:

@@ -8,6 +8,8 @@ import av
 import numpy as np
 from PIL import Image
 
+from bridge_node.node.output_files import OutputFile
+
 MAX_VIDEO_WIDTH = 1920  # px: wider panoramas are scaled down for the video
 
 
@@ -17,20 +19,23 @@ def side_by_side(images: list[np.ndarray]) -> np.ndarray:
     return np.hstack([np.pad(img, ((0, height - img.shape[0]), (0, 0), (0, 0))) for img in images])
 
 
-def save_png(image: np.ndarray, path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(image).save(path)
-    return path
+def save_png(image: np.ndarray, path: Path, what: str = "image") -> Path:
+    """Write the image as PNG whatever the file name's extension, atomically, replacing
+    only a regular file (``what``: the option or kind of output, for the messages)."""
+    output = OutputFile(path, what)
+    with output as tmp:
+        Image.fromarray(image).save(tmp, format="PNG")
+    return output.path
 
 
 class VideoWriter:
     """H.264 (or MPEG-4 where libx264 is missing) at ``fps``; frames of any size are scaled
     to the first frame's size, at most MAX_VIDEO_WIDTH wide, with even sides."""
 
-    def __init__(self, path: Path, fps: float) -> None:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        self.path, self.fps = path, fps
-        self.container = av.open(str(path), "w")
+    def __init__(self, path: Path, fps: float, what: str = "video") -> None:
+        self.output = OutputFile(path, what)  # written beside, put in place by close()
+        self.path, self.fps = self.output.path, fps
+        self.container = av.open(str(self.output.tmp), "w")
         self.stream = None
         self.frames = 0
 
@@ -50,9 +55,10 @@ class VideoWriter:
         self.frames += 1
 
     def close(self) -> None:
-        """Flush the encoder and close the file; safe to call twice."""
+        """Flush the encoder, close the file and put it in place; safe to call twice."""
         if self.container is not None:
-            if self.stream is not None:
-                self.container.mux(self.stream.encode(None))
-            self.container.close()
-            self.container = None
+            with self.output:
+                if self.stream is not None:
+                    self.container.mux(self.stream.encode(None))
+                self.container.close()
+                self.container = None

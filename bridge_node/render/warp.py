@@ -17,7 +17,13 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
+from bridge_node.node.errors import UserError
+from bridge_node.node.input_files import read_input
+from bridge_node.node.output_files import write_output
 from bridge_node.render import shaders
+
+MAX_NODES = 4096  # grid nodes a side, at most
+MAX_PFM_BYTES = 64 + MAX_NODES * MAX_NODES * 12  # the header, and three float32 a node
 
 
 class WarpError(ValueError):
@@ -29,23 +35,23 @@ def write_pfm(path: Path, grid: np.ndarray) -> None:
     rows, cols = grid.shape[:2]
     data = np.zeros((rows, cols, 3), dtype="<f4")
     data[..., : grid.shape[2]] = grid
-    Path(path).write_bytes(f"PF\n{cols} {rows}\n-1.0\n".encode() + data.tobytes())
+    write_output(path, f"PF\n{cols} {rows}\n-1.0\n".encode() + data.tobytes(), "warp grid file")
 
 
 def read_pfm(path: Path, where: str) -> np.ndarray:
     """The warp grid of a PFM file: (rows, cols, 2) float32 source positions, bottom row
     first. ``where`` names the config key for the messages."""
     try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise WarpError(f"{where}: {exc.strerror or exc}") from None
+        raw = read_input(path, "warp grid file", MAX_PFM_BYTES, where)
+    except UserError as exc:
+        raise WarpError(str(exc)) from None
     head = raw.split(b"\n", 3)
     try:
         kind, (cols, rows), scale = head[0].strip(), map(int, head[1].split()), float(head[2])
     except (IndexError, ValueError):
         raise WarpError(f"{where}: not a PFM file (expected 'PF', 'cols rows', scale lines)") from None
-    if kind != b"PF" or not (2 <= cols <= 4096 and 2 <= rows <= 4096):
-        raise WarpError(f"{where}: expected a 3-channel PFM ('PF') of 2 to 4096 nodes a side, "
+    if kind != b"PF" or not (2 <= cols <= MAX_NODES and 2 <= rows <= MAX_NODES):
+        raise WarpError(f"{where}: expected a 3-channel PFM ('PF') of 2 to {MAX_NODES} nodes a side, "
                         f"got {kind.decode(errors='replace')!r} {cols}x{rows}")
     body = head[3] if len(head) > 3 else b""
     if len(body) != rows * cols * 12:

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from bridge_node.node.errors import UserError
+from bridge_node.node.input_files import LOG_LIMIT, read_input_text
 from bridge_node.node.tick_record import HEADER as TICKS_HEADER
 from bridge_node.node.tick_record import TICKS_FILE
 from bridge_node.replay.csv_track import looks_like_csv_track, read_csv_track, read_gpx
@@ -63,11 +64,9 @@ def _kind(path: Path, lines: list[str], mapping: dict[str, str]) -> str:
 
 
 def read_text(path: Path) -> str:
-    """A log file's text (undecodable bytes replaced); UserError naming it if unreadable."""
-    try:
-        return path.read_bytes().decode("utf-8", errors="replace")
-    except OSError as exc:
-        raise UserError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    """A log file's text (undecodable bytes replaced); UserError naming it if it is not a
+    regular file, is larger than LOG_LIMIT or cannot be read."""
+    return read_input_text(path, "log", LOG_LIMIT, errors="replace")
 
 
 def _session_folder(path: Path) -> tuple[Path, set[str]]:

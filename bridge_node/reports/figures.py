@@ -5,6 +5,8 @@ from pathlib import Path
 
 import matplotlib
 
+from bridge_node.node.output_files import OutputFile
+
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
 
@@ -12,8 +14,12 @@ __all__ = ["plt", "save_figure"]
 
 
 def save_figure(fig, path: Path, dpi: int = 110) -> Path:
-    """Write the figure as PNG (folders created) and close it; returns the path."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    return path
+    """Write the figure as PNG (folders created; atomically, replacing only a regular file)
+    and close it; returns the path."""
+    output = OutputFile(path, "plot")
+    try:
+        with output as tmp:
+            fig.savefig(tmp, dpi=dpi, format="png")
+    finally:
+        plt.close(fig)
+    return output.path
