@@ -129,3 +129,13 @@ def test_prefracture_export_to_a_fifo_a_loop_or_a_full_disk_is_a_clean_error(pla
 ])
 def test_options_that_hung_or_gave_nan_are_range_checked(tmp_path, args, message):
     clean_error(icebridge(*args, "--out", str(tmp_path), timeout=90), message)
+
+
+def test_console_results_never_replace_a_fifo(places):
+    from bridge_node.commands.console import _write_results
+
+    with pytest.raises(UserError, match="--results = .*fifo'.*is a FIFO"):
+        _write_results([], places / "fifo")
+    assert stat.S_ISFIFO(os.lstat(places / "fifo").st_mode)
+    _write_results([], places / "target.json")
+    assert (places / "target.json").read_text() == "[]"

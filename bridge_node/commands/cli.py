@@ -13,6 +13,7 @@ from types import ModuleType
 
 from bridge_node.commands import (
     console,
+    ctl,
     experiment_breaking,
     experiment_transit,
     hil,
@@ -43,6 +44,7 @@ COMMANDS: dict[str, tuple] = {
         "monitor": (links_monitor, "show orders and link health live, publish an open-water ship"),
     }),
     "console": (console, "a software bridge console: play scenario scripts or steer from the keyboard"),
+    "ctl": (ctl, "command a running exercise: freeze, reposition, weather, failures (the instructor's commands)"),
     "hil": ("hardware-in-the-loop tests", {
         "run": (hil, "start the node, play scenarios through the software console, judge the outputs"),
     }),
@@ -73,7 +75,7 @@ def build_parser() -> argparse.ArgumentParser:
 # options naming where a command writes: checked before any work starts
 OUTPUT_DIRS = {"out": "--out", "record": "--record", "cache_dir": "--cache-dir"}
 OUTPUT_FILES = {"export": "--export", "video": "--video", "panorama": "--panorama", "summary": "--summary",
-                "junit": "--junit"}
+                "junit": "--junit", "results": "--results"}
 
 
 def check_outputs(args: argparse.Namespace) -> None:

@@ -23,6 +23,7 @@ from bridge_node.hil.scenario import Fault, load_scenario
 from bridge_node.hil.settings import load_console_config
 from bridge_node.node.config import DEFAULT_CONFIG
 from bridge_node.node.errors import UserError
+from bridge_node.node.output_files import write_output
 from bridge_node.replay.console import KeyReader
 from sim_core.ship.orders import OrderKind
 from sim_core.ship.particulars import TELEGRAPH_POSITIONS
@@ -143,15 +144,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _write_results(results: list[ScenarioResult], path: Path) -> None:
-    """Expectations met per scenario, as JSON (written whole, then renamed into place)."""
+    """Expectations met per scenario, as JSON (written whole, then renamed into place; only
+    over a regular file)."""
     rows = [{"name": r.name, "path": r.path, "passed": r.passed, "met": sum(o.passed for o in r.outcomes),
              "total": len(r.outcomes), "duration_s": r.duration_s} for r in results]
-    part = path.with_name(path.name + ".part")
-    try:
-        part.write_text(json.dumps(rows), encoding="utf-8")
-        part.replace(path)
-    except OSError as exc:
-        raise UserError(f"--results {path}: cannot write it: {exc.strerror or exc}") from None
+    write_output(path, json.dumps(rows), "--results")
 
 
 def _hold(console: Console) -> None:
