@@ -29,6 +29,7 @@ from bench_render import world_with_floes  # noqa: E402
 from conftest import free_port  # noqa: E402
 from links_helpers import console_frame  # noqa: E402
 
+from bridge_node.exercise.listeners import StreamOutput  # noqa: E402
 from bridge_node.links.hub import LinkHub  # noqa: E402
 from bridge_node.node.config import load_config  # noqa: E402
 from bridge_node.node.realtime_loop import run_realtime  # noqa: E402
@@ -118,7 +119,7 @@ def physics_run(seconds: float, renderers: int, folder: Path) -> dict:
                 time.sleep(0.1)
         sender = threading.Thread(target=helm, daemon=True)
         sender.start()
-        stats = run_realtime(model, data, hub, 30.0, seconds, lambda ev, t: pub.publish(ev, t))
+        stats = run_realtime(model, data, hub, 30.0, seconds, [StreamOutput(pub, None, model.origin)])
         stop.set()
         sender.join()
         rendered = procs.stop() if procs else []

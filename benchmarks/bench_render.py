@@ -51,7 +51,8 @@ from sim_core.frames.ship_frame import ship_to_world
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.tiles import break_cells
 from sim_core.scene.scene import update_scene
-from sim_core.world import apply_swaps, snapshot
+from sim_core.scene.switches import apply_swaps
+from sim_core.world import snapshot
 
 
 def world_with_floes(target: int):

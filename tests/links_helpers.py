@@ -41,9 +41,9 @@ def rudder_order_pgn(angle_rad: float, source: int = 0x10) -> can.Message:
 
 
 def tick(hub: LinkHub, state: ShipOutputs, now: float) -> Decision:
-    """One loop tick: poll (phase 1), then publish ``state`` (phase 2)."""
+    """One loop tick: poll (phase 1), then publish ``state`` with the poll's alarm changes (phase 2)."""
     decision = hub.poll(now)
-    hub.publish(state, now)
+    hub.publish(state, now, decision.alarms)
     return decision
 
 

@@ -10,7 +10,7 @@ import serial
 from conftest import REPO, run_cli
 from links_helpers import pty_pair
 
-from bridge_node.links.nmea0183 import PRC, ROR
+from bridge_node.links.nmea0183 import PRC, ROR, checksum
 
 
 def write_config(tmp_path, port: str, udp_port: int | None = None) -> str:
@@ -63,6 +63,31 @@ def test_monitor_json_summary(tmp_path):
     # turning back to midships since the fail-safe
     assert 0.5 < s["ship"]["rudder_deg"] < 20.0
     assert any(a["number"] == 111 and a["active"] for a in s["alarms"])  # console went silent: fail-safe
+
+
+def test_searchlight_orders_act_under_the_monitor(tmp_path):
+    """The monitor steps the exercise's one tick, so a searchlight order from the console
+    reaches the ship's light (it used to be shown and dropped)."""
+    with pty_pair(tmp_path) as (node_end, console_end):
+        cfg = tmp_path / "light.toml"
+        cfg.write_text(open(write_config(tmp_path, node_end)).read() +
+                       '[[render.searchlights]]\nposition = [20.0, 0.0, 30.0]\ndepression_deg = 10.0\n'
+                       'train_range_deg = [-90.0, 90.0]\non = false\n')
+        record = tmp_path / "rec"
+        proc = start_monitor(str(cfg), record, "--duration", "4", "--json")
+        wait_ready(record, proc)
+        port = serial.Serial(console_end, 38400, timeout=0)
+        body = "PICBSL,0,A,45.0,-5.0"
+        for _ in range(10):
+            port.write(f"${body}*{checksum(body):02X}\r\n".encode())
+            time.sleep(0.1)
+        out, err = proc.communicate(timeout=30)
+        port.close()
+    assert proc.returncode == 0, err
+    s = json.loads(out)
+    assert s["orders"]["console/searchlight/0"]["count"] == 10
+    assert s["searchlights"] == [{"on": True, "bearing_deg": 45.0, "elevation_deg": -5.0}]
+    assert s["orders_rejected"] == {}
 
 
 def test_session_record_readable_after_kill(tmp_path):

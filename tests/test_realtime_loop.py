@@ -46,7 +46,7 @@ def test_console_steers_the_ship_in_real_time(tmp_path):
         sender.start()
         try:
             psi0 = data.ship.eta[5]
-            stats = run_realtime(model, data, hub, 30.0, None, lambda events, _: seen.append(events),
+            stats = run_realtime(model, data, hub, 30.0, None, [lambda outcome: seen.append(outcome.events)],
                                  should_stop=lambda: data.time >= 3.0 - 1e-9)  # 3 simulated seconds
         finally:
             stop.set()
@@ -101,11 +101,11 @@ def test_the_loop_ticks_on_while_a_lost_slcan_adapter_reopens(tmp_path):
             assert link.health().connected
             threading.Thread(target=unplug_and_replug, daemon=True).start()
 
-            def on_events(events, _) -> None:
+            def on_step(_) -> None:
                 h = link.health()
                 states.append((h.opening, h.connected))
             reopened = lambda: (True, False) in states and states[-1] == (False, True)  # noqa: E731
-            stats = run_realtime(model, data, hub, 30.0, None, on_events, should_stop=lambda: reopened()
+            stats = run_realtime(model, data, hub, 30.0, None, [on_step], should_stop=lambda: reopened()
                                  or len(states) > 900)
             stop.set()
             health = link.health()
@@ -128,15 +128,15 @@ def test_sigterm_ends_the_loop_after_the_tick_in_hand(tmp_path):
     data = start_world(model, cfg)
     seen = []
 
-    def on_events(events, _) -> None:
-        seen.append(events)
+    def on_step(outcome) -> None:
+        seen.append(outcome.events)
         if len(seen) == 5:
             os.kill(os.getpid(), signal.SIGTERM)  # delivered now, inside the tick
             seen.append("after the signal")  # the tick goes on: nothing was raised
 
     before = signal.getsignal(signal.SIGTERM)
     with LinkHub(cfg.links, cfg.arbitration) as hub:
-        stats = run_realtime(model, data, hub, 30.0, None, on_events)
+        stats = run_realtime(model, data, hub, 30.0, None, [on_step])
     assert seen[5] == "after the signal" and len(seen) == 6  # ended after that tick, not in it
     assert stats.ticks == 5 and data.time == pytest.approx(5 / 30.0)
     assert signal.getsignal(signal.SIGTERM) is before

@@ -56,10 +56,19 @@ def render(ctx, model, data, channels, visibility=8000.0, blended=True, view=Non
     look: more render settings."""
     if not blended:
         channels = [c.model_copy(update={"blend_left_deg": 0.0, "blend_right_deg": 0.0}) for c in channels]
-    settings = RenderSettings(channels=channels, visibility_m=visibility, **look)
+    settings = RenderSettings(channels=channels, **look)
+    view = view or view_of(model, data)
+    at_start(view, visibility, settings.start_utc)
     cs = ChannelSet(SceneRenderer(ctx, model, settings), channels)
-    cs.render(view or view_of(model, data))
+    cs.render(view)
     return [t.image() for t in cs.targets]
+
+
+def at_start(view: WorldView, visibility: float, start_utc) -> None:
+    """The view's environment and exercise clock as a world started with this visibility
+    (m) and date and time would publish them (the channels draw what the world publishes)."""
+    view.environment = dataclasses.replace(view.environment, visibility=visibility)
+    view.ship = dataclasses.replace(view.ship, utc=start_utc.timestamp() + view.time)
 
 
 def is_sky(px):

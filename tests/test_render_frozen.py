@@ -15,7 +15,8 @@ from bridge_node.render.settings import ChannelSettings, RenderSettings
 from bridge_node.stream.world_view import WorldView
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.tiles import break_cells, freeze_tile, thaw_tile
-from sim_core.world import FROZEN_FLOE_EVENT, snapshot, step
+from sim_core.scene.switches import FROZEN_FLOE_EVENT
+from sim_core.world import snapshot, step
 
 W, H = 256, 160
 

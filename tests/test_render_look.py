@@ -16,6 +16,7 @@ import pytest
 from conftest import REPO, exercise_config, run_cli
 from PIL import Image
 from scipy.ndimage import binary_dilation, gaussian_filter
+from test_render import at_start
 
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, create_context
@@ -39,7 +40,11 @@ DUSK = datetime.fromisoformat("2026-04-10T21:00:00+00:00")  # the sun 6 deg belo
 NIGHT = datetime.fromisoformat("2026-12-21T22:00:00+00:00")  # polar night, the sun 35 deg below
 SEARCHLIGHT = SearchlightSettings(position=[20.0, 0.0, 30.0], depression_deg=10.0)  # ahead, 170 m out
 REFERENCES = REPO / "docs" / "images"
-SSIM_MIN = 0.95
+# The floes of the broken channel come out of 70 s of contact physics, which is not bit for bit
+# the same on every CPU: on another machine the same look scored 0.926 (day) and 0.932 (fog)
+# against its reference, floes lying differently in the same channel. Between two different
+# looks the highest score is 0.79 (day against fog), so 0.90 still tells every look apart.
+SSIM_MIN = 0.90
 
 
 @pytest.fixture(scope="module")
@@ -76,7 +81,9 @@ def render(ctx, world, channel: ChannelSettings, ship: dict | None = None, later
     if traffic is not None:
         view.traffic = np.array(traffic, dtype=TRAFFIC_DTYPE)
     view.ship = dataclasses.replace(view.ship, **(ship or {}))
-    cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=[channel], **look)), [channel])
+    settings = RenderSettings(channels=[channel], **look)
+    at_start(view, settings.visibility_m, settings.start_utc)
+    cs = ChannelSet(SceneRenderer(ctx, model, settings), [channel])
     cs.render(view)
     return cs.images()[0]
 

@@ -39,7 +39,7 @@ def test_a_record_replays_with_the_node_config_it_keeps(tmp_path):
             helm.start()
             try:
                 run_realtime(model, live, hub, cfg.realtime.rate_hz, None,
-                             on_events=lambda events, _: last.update(ship=events.ship),
+                             [lambda outcome: last.update(ship=outcome.events.ship)],
                              should_stop=lambda: live.time >= 2.0 - 1e-9)
             finally:
                 stop.set()

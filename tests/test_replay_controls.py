@@ -14,7 +14,7 @@ from bridge_node.links.hub import LinkHub
 from bridge_node.links.record_reader import read_nmea_log
 from bridge_node.node.render_processes import open_stream
 from bridge_node.node.world_setup import build_world
-from bridge_node.replay.engine import MAX_SPEED, Outputs, Playback, run_replay
+from bridge_node.replay.engine import MAX_SPEED, Playback, run_replay
 from bridge_node.replay.inputs import load_inputs
 from bridge_node.replay.track import TrackPath, TrackSource, clean
 from bridge_node.stream.settings import StreamSettings
@@ -64,7 +64,7 @@ def test_a_seek_runs_ahead_without_outputs_and_a_pause_holds(tmp_path):
 
     stream = StreamSettings(publish=f"tcp://127.0.0.1:{free_port()}", snapshot=f"tcp://127.0.0.1:{free_port()}")
     with open_stream(stream) as publisher, LinkHub(cfg.links, cfg.arbitration, tmp_path / "sent") as hub:
-        stats = run_replay(model, data, source, Playback(100.0), Outputs(hub, publisher, model.origin), keys)
+        stats = run_replay(model, data, source, Playback(100.0), hub, publisher, keys)
     assert stats.steps == source.steps == 240  # every step simulated, the seek's included
     assert stats.distance > 300.0 and stats.broken_by_hull > 0  # the ice along the skipped minute broke
     published = source.steps - 120

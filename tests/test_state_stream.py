@@ -238,10 +238,10 @@ def test_a_slow_renderer_never_holds_the_physics_back(exercise, tmp_path):
             assert slow.poll() is None, slow.communicate()
             time.sleep(0.1)
 
-        def on_events(events, input_time):
-            seqs.append(events.seq)
-            publisher.publish(events, input_time)
-        stats = run_realtime(model, data, hub, 30.0, 3.0, on_events)
+        def on_step(outcome):
+            seqs.append(outcome.events.seq)
+            publisher.publish(outcome.events, outcome.input_time)
+        stats = run_realtime(model, data, hub, 30.0, 3.0, [on_step])
         assert slow.wait(120) == 0, slow.stderr.read()
     summary = json.loads((tmp_path / "slow.json").read_text())
     assert seqs == list(range(1, stats.ticks + 1))  # no step skipped

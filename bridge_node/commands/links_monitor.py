@@ -1,8 +1,10 @@
 """``icebridge links monitor``: commission a console without the ice scene.
 
 Opens the configured links, shows each decoded order and each link's health live, runs the
-ship model in open water on the orders it receives, and publishes that ship's state on the
-configured outputs. ``--json`` ends with one JSON object: orders per source (last value,
+exercise's one tick (``bridge_node.exercise.tick``) at 20 Hz with the ship in open water
+(the configured exercise without its ice field) on the orders it receives, searchlights
+included, and publishes that ship's state on the configured outputs. The session record
+holds a tick log, as a run's does, so a commissioning session can be re-simulated. ``--json`` ends with one JSON object: orders per source (last value,
 count), errors by kind, alarms raised, outputs sent.
 """
 from __future__ import annotations
@@ -18,17 +20,19 @@ from rich.console import Console
 from rich.live import Live
 from rich.table import Table
 
+from bridge_node.exercise.tick import StepListener, TickOutcome
 from bridge_node.links.hub import LinkHub
-from bridge_node.node.config import load_config, load_ship, new_session_dir
+from bridge_node.node.config import load_config, new_session_dir
 from bridge_node.node.errors import UserError
 from bridge_node.node.order_refusals import OrderRefusals
+from bridge_node.node.realtime_loop import run_realtime
+from bridge_node.node.world_setup import open_water_world
 from sim_core.frames.units import KNOT
-from sim_core.ship.model import ShipData, ShipModel, compile_ship, new_ship_data, step
+from sim_core.ship.model import ShipData
 from sim_core.ship.orders import OrderKind
-from sim_core.ship.outputs import ship_outputs
-from sim_core.world import apply_controls
+from sim_core.world import WorldEvents
 
-TICK_S = 0.05  # 20 Hz
+RATE_HZ = 20.0  # the monitor's ticks per second
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -39,17 +43,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _value(order) -> str:
-    if order.kind == "rudder":
+    if order.kind == OrderKind.RUDDER:
         return f"{math.degrees(order.value):+.1f} deg"
     if order.kind == OrderKind.SEARCHLIGHT:
         v = order.value
         aim = [f"{what} {math.degrees(a):+.1f} deg" for what, a in (("bearing", v.bearing), ("elevation", v.elevation))
                if a is not None]
         return ", ".join([f"light {v.index}", *([] if v.on is None else ["on" if v.on else "off"]), *aim])
-    return f"{order.value:+.0f} %" if order.kind == "lever" else str(order.value)
+    return f"{order.value:+.0f} %" if order.kind == OrderKind.LEVER else str(order.value)
 
 
-def _view(hub: LinkHub, ship, now: float) -> Table:
+def _view(hub: LinkHub, ship: ShipData, now: float) -> Table:
     table = Table(title=f"icebridge links monitor: rudder {math.degrees(ship.rudder):+.1f} deg, "
                         f"shaft {ship.rps * 60:+.0f} rpm, speed {ship.nu[0] / KNOT:.1f} kn")
     for col in ("source/order/engine", "value", "age, s"):
@@ -66,23 +70,17 @@ def _view(hub: LinkHub, ship, now: float) -> Table:
     return table
 
 
-def _monitor(hub: LinkHub, ship: ShipModel, data: ShipData, origin: tuple[float, float], duration: float | None,
-             live: Live | None, refusals: OrderRefusals) -> None:
-    """Tick at 20 Hz until the duration: poll and decide, obey, step the ship, publish."""
-    start = next_tick = time.monotonic()
-    sim_time = 0.0
-    while duration is None or time.monotonic() - start < duration:
-        now = time.monotonic()
-        decision = hub.poll(now)
-        for alarm in refusals.note(tuple(apply_controls(ship, data, decision.controls)), now):
-            hub.raise_alarm(alarm, now)
-        step(ship, data, TICK_S)
-        sim_time += TICK_S
-        hub.publish(ship_outputs(data, sim_time, *origin, time.time()), now)
-        if live is not None:
-            live.update(_view(hub, data, now))
-        next_tick += TICK_S
-        time.sleep(max(0.0, next_tick - time.monotonic()))
+class _LiveView(StepListener):
+    """The live table, four times a second; keeps the last events for the summary."""
+
+    def __init__(self, hub: LinkHub, ship: ShipData, live: Live | None) -> None:
+        self.hub, self.ship, self.live, self.last, self._shown = hub, ship, live, None, 0.0
+
+    def on_step(self, outcome: TickOutcome) -> None:
+        self.last = outcome.events
+        if self.live is not None and outcome.now - self._shown >= 0.25:
+            self._shown = outcome.now
+            self.live.update(_view(self.hub, self.ship, outcome.now))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -91,31 +89,29 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(f"--duration {args.duration} s is outside the allowed range (0, 86400]")
     if not cfg.links:
         raise UserError(f"{args.config or 'default config'}: no [[links]] configured; nothing to monitor")
-    ship = compile_ship(load_ship(cfg.ship.name, args.config), cfg.ice_material)
-    data = new_ship_data(ship, 0.0, rps=0.0)
-    origin = math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg)
+    console = Console(stderr=True)
+    with console.status("loading the ship"):
+        model, data = open_water_world(cfg, args.config)
     record = None
     if not args.no_record:
         record = Path(args.record) if args.record else new_session_dir(cfg, args.config)
-    console = Console(stderr=True)
     start = time.monotonic()
-    refusals = OrderRefusals()
-    with LinkHub(cfg.links, cfg.arbitration, record) as hub:
-        try:
-            with Live(console=console, refresh_per_second=4, transient=True) as live:
-                _monitor(hub, ship, data, origin, args.duration, None if args.json else live, refusals)
-        except KeyboardInterrupt:
-            pass
-        summary = _summary(hub, data, start, refusals, record)
+    with LinkHub(cfg.links, cfg.arbitration, record) as hub, \
+            Live(console=console, refresh_per_second=4, transient=True) as live:
+        view = _LiveView(hub, data.ship, None if args.json else live)
+        stats = run_realtime(model, data, hub, RATE_HZ, args.duration, [view])
+        summary = _summary(hub, data.ship, view.last, start, stats.refusals, record)
     if args.json:
         print(json.dumps(summary))
     else:
-        console.print(_view(hub, data, time.monotonic()))
+        console.print(_view(hub, data.ship, time.monotonic()))
         console.print(f"session record: {record}" if record else "not recorded")
     return 0
 
 
-def _summary(hub: LinkHub, data: ShipData, start: float, refusals: OrderRefusals, record: Path | None) -> dict:
+def _summary(hub: LinkHub, ship: ShipData, last: WorldEvents | None, start: float, refusals: OrderRefusals,
+             record: Path | None) -> dict:
+    lights = last.ship.searchlights if last is not None else ()
     return {
         "duration_s": round(time.monotonic() - start, 2),
         "orders": {key: {"last": dataclasses.asdict(o.value) if o.kind == OrderKind.SEARCHLIGHT else o.value,
@@ -127,8 +123,10 @@ def _summary(hub: LinkHub, data: ShipData, start: float, refusals: OrderRefusals
                    for t, a in hub.alarm_log],
         "outputs": {link.name: link.health().outputs for link in hub.links},
         "links": [link.health().as_dict() for link in hub.links],
-        "ship": {"rudder_deg": round(math.degrees(data.rudder), 2), "shaft_rpm": round(data.rps * 60, 1),
-                 "speed_kn": round(data.nu[0] / KNOT, 2)},
+        "ship": {"rudder_deg": round(math.degrees(ship.rudder), 2), "shaft_rpm": round(ship.rps * 60, 1),
+                 "speed_kn": round(ship.nu[0] / KNOT, 2)},
+        "searchlights": [{"on": s.on, "bearing_deg": round(math.degrees(s.bearing), 2),
+                          "elevation_deg": round(math.degrees(s.elevation), 2)} for s in lights],
         "orders_rejected": dict(refusals.counts),
         "record": str(record) if record else None,
     }

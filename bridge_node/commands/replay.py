@@ -15,7 +15,6 @@ import dataclasses
 import datetime as dt
 import json
 import math
-import time
 from contextlib import nullcontext
 from pathlib import Path
 
@@ -27,14 +26,14 @@ from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig, load_config
 from bridge_node.node.errors import UserError
 from bridge_node.node.render_processes import RenderProcesses, open_stream, wait_for_renderers
-from bridge_node.node.world_setup import build_world, start_position, start_world, warm_up
+from bridge_node.node.world_setup import build_world, start_exercise, start_position, start_world, warm_up
 from bridge_node.replay.console import KeyReader, ReplayProgress, logged_text
 from bridge_node.replay.csv_track import parse_mapping
-from bridge_node.replay.engine import MAX_SPEED, MIN_SPEED, Outputs, Playback, ReplayStats, Source, run_replay
+from bridge_node.replay.engine import MAX_SPEED, MIN_SPEED, Playback, ReplayStats, Source, run_replay
 from bridge_node.replay.inputs import LOOKED_FOR, VesselChoice, load_inputs
 from bridge_node.replay.session import RecordedSession, SessionSource, recorded_config
-from bridge_node.replay.track import Track, TrackLog, TrackPath, TrackSource, clean, origin_under
-from bridge_node.reports.replay import plot_replay
+from bridge_node.replay.track import Track, TrackLog, TrackPath, TrackSource, clean_for, origin_under
+from bridge_node.reports.replay import gap_summary, plot_replay
 from bridge_node.reports.summary import print_summary
 from bridge_node.traffic.sources import replay_traffic
 from sim_core.frames.units import KNOT
@@ -125,7 +124,7 @@ def _track_replay(cfg: NodeConfig, args: argparse.Namespace, log: TrackLog, orig
                   model: WorldModel) -> _Prepared:
     """A track log cleaned, cut to --from/--to, the field placed under it."""
     r = cfg.replay
-    track = clean(log, r.max_gap_s, r.max_speed_kn * KNOT)
+    track = clean_for(log, r)
     if track is None or len(track.t) < 2:
         raise UserError(f"{', '.join(log.files)}: no usable track: {0 if track is None else 1} fix left after "
                         f"cleaning (a track needs two; looked for {LOOKED_FOR})")
@@ -142,11 +141,12 @@ def _track_replay(cfg: NodeConfig, args: argparse.Namespace, log: TrackLog, orig
     source = TrackSource(path, t0, t1, r.step_s)
     pose = path.pose(t0, r.step_s)
     data = new_world_data(model, pose.north, pose.east, pose.heading, pose.surge)
-    data.epoch = t0 if log.absolute else time.time()  # the outputs carry the logged UTC where the log has it
+    start_exercise(data, cfg)
+    if log.absolute:  # the outputs and the sky carry the logged UTC where the log has it
+        data.epoch = t0
     info = {"kind": "track", "files": log.files, "vessel": log.vessel, "heading_from": track.heading_source,
             "records_read": dict(log.read), "records_ignored": dict(log.ignored), "bad_data": dict(log.bad),
-            "gaps_held": [{"from": logged_text(g.start, log.absolute), "to": logged_text(g.end, log.absolute),
-                           "s": round(g.end - g.start, 1)} for g in track.gaps],
+            **gap_summary(track),
             "jumps_skipped": [{"at": logged_text(j.time, log.absolute), "distance_m": round(j.distance, 1),
                                "speed_kn": round(j.speed / KNOT, 1)} for j in track.jumps],
             "field_origin": {"latitude_deg": round(math.degrees(origin[0]), 7),
@@ -176,8 +176,7 @@ def _session_replay(cfg: NodeConfig, args: argparse.Namespace, session: Recorded
     info = {"kind": "session", "files": [str(session.folder / f) for f in session.files],
             "ticks": len(session.ticks), "exact": session.exact, "inputs_read": dict(session.reads),
             "bad_data": dict(session.bad)}
-    data = start_world(model, cfg)
-    data.epoch = session.ticks[0].unix  # the outputs carry the recorded run's UTC
+    data = start_world(model, cfg)  # the recorded run's exercise clock and environment (its node.toml)
     return _Prepared(model, data, source, seek, info)
 
 
@@ -232,8 +231,7 @@ def _play(cfg: NodeConfig, args: argparse.Namespace, prep: _Prepared, playback: 
                     session, KeyReader() as keys, ReplayProgress(console, prep.source, keys) as progress:
                 publisher.publish(snapshot(prep.model, prep.data))
                 wait_for_renderers(renderers, publisher, 300.0)
-                outputs = Outputs(hub, publisher, prep.model.origin)
-                stats = run_replay(prep.model, prep.data, prep.source, playback, outputs, progress)
+                stats = run_replay(prep.model, prep.data, prep.source, playback, hub, publisher, progress)
                 links = [link.health().as_dict() for link in hub.links]
                 alarms = [a.text for a in hub.active_alarms.values()]
         finally:

@@ -20,6 +20,11 @@ from pathlib import Path
 from rich.console import Console
 from rich.live import Live
 
+from bridge_node.control.endpoint import ControlEndpoint
+from bridge_node.control.queue import CommandQueue
+from bridge_node.control.status import exercise_status
+from bridge_node.exercise.listeners import StreamOutput
+from bridge_node.exercise.tick import StepListener, TickOutcome
 from bridge_node.hil.run_console import RunConsole
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config, new_session_dir
@@ -72,27 +77,37 @@ def _check(args: argparse.Namespace, rate: float) -> None:
         raise UserError(f"--frames-every {args.frames_every} s is outside the allowed range [0.1, 3600]")
 
 
+class _StatusLine(StepListener):
+    """The live display's line, four times a second; keeps the last events for the summary."""
+
+    def __init__(self, live: Live, hub: LinkHub, first: WorldEvents) -> None:
+        self.live, self.hub, self.last, self._shown = live, hub, first, 0.0
+
+    def on_step(self, outcome: TickOutcome) -> None:
+        self.last = outcome.events
+        if time.monotonic() - self._shown > 0.25:
+            self._shown = time.monotonic()
+            self.live.update(status_line(outcome.events, len(self.hub.active_alarms)))
+
+
 def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, renderers, record, console,
           traffic: TrafficPicture) -> tuple:
     """The real-time loop with its live status line; returns the statistics, the last
     events, the links' health and the active alarms."""
-    last: list[WorldEvents] = [snapshot(model, data)]
-    shown = [0.0]
+    first = snapshot(model, data)
     with LinkHub(cfg.links, cfg.arbitration, record, traffic) as hub, \
             Live(console=console, refresh_per_second=4, transient=True) as live:
-        publisher.publish(last[0])
+        publisher.publish(first)
         live.update("starting the render processes")
         wait_for_renderers(renderers, publisher, 300.0)
-
-        def on_events(events: WorldEvents, input_time: float | None) -> None:
-            last[0] = events
-            publisher.publish(events, input_time, traffic.table(model.origin))
-            if time.monotonic() - shown[0] > 0.25:
-                shown[0] = time.monotonic()
-                live.update(status_line(events, len(hub.active_alarms)))
-        stats = run_realtime(model, data, hub, rate, args.duration, on_events)
-        return (stats, last[0], [link.health().as_dict() for link in hub.links],
-                [a.text for a in hub.active_alarms.values()])
+        status = _StatusLine(live, hub, first)
+        queue = CommandQueue(cfg.control.queue, cfg.control.per_tick)
+        with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last)) as control:
+            stats = run_realtime(model, data, hub, rate, args.duration,
+                                 [StreamOutput(publisher, traffic, model.origin), status], commands=queue)
+        return (stats, status.last, [link.health().as_dict() for link in hub.links],
+                [a.text for a in hub.active_alarms.values()],
+                {"endpoint": cfg.control.endpoint, "requests": dict(control.counts)})
 
 
 def run(args: argparse.Namespace) -> int:
@@ -115,8 +130,8 @@ def run(args: argparse.Namespace) -> int:
                 model = build_world(cfg, args.config)
                 warm_up(model, cfg)
                 data = start_world(model, cfg)
-            stats, last, links, alarms = _loop(cfg, args, rate, model, data, publisher, renderers, record, console,
-                                               traffic)
+            stats, last, links, alarms, control = _loop(cfg, args, rate, model, data, publisher, renderers, record,
+                                                        console, traffic)
         finally:
             if renderers:  # before the stream closes, so that they draw the last state
                 rendered = renderers.stop()
@@ -127,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
         "render_processes": rendered, "frames_rendered": sum(r.get("png_frames", 0) for r in rendered),
         "video": [r["video"] for r in rendered if "video" in r],
         "panorama": [r["panorama"] for r in rendered if "panorama" in r],
-        "record": str(record) if record else None, "console": run_console.summary(),
+        "record": str(record) if record else None, "console": run_console.summary(), "control": control,
     }
     try:  # a finished run's summary is never lost to a plotting error
         summary["plot"] = str(plot_run(stats, out / "run.png"))

@@ -1,10 +1,12 @@
 """All configured links together, fanned out like python-can's ``Notifier``.
 
-Each tick has two phases. ``poll`` polls every link, arbitrates the orders, and collects the
-alarm changes (the arbiter's, and a link-down alarm per link). ``publish`` sends the ship
-state and the other vessels the links hear of (from DIS) on every link, announces the
-pending alarm changes (and every active alarm again each ``ALARM_REPEAT_S``), and flushes
-the listeners. The links' raw traffic goes to the hub's
+Each tick has two phases. ``poll`` polls every link, arbitrates the orders, and returns
+them with the alarm changes they bring (the arbiter's, and a link-down alarm per link): an
+order source of the exercise's one tick (``bridge_node.exercise.tick``), which gathers every
+alarm change of a step. ``publish`` raises the tick's alarm changes, sends the ship state
+and the other vessels the links hear of (from DIS) on every link, announces the pending
+alarm changes (and every active alarm again each ``ALARM_REPEAT_S``), and flushes the
+listeners. The links' raw traffic goes to the hub's
 listeners; given a record folder, the hub adds a ``SessionRecord``.
 """
 from __future__ import annotations
@@ -17,7 +19,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from bridge_node.links.arbiter import Decision, OrderArbiter
-from bridge_node.links.base import OPEN_WAIT_S, Alarm, ControlInput, Listener
+from bridge_node.links.base import OPEN_WAIT_S, Alarm, ControlInput, Link, Listener
 from bridge_node.links.registry import make_link
 from bridge_node.links.session_record import SessionRecord
 from bridge_node.links.settings import ArbitrationSettings, LinkSettings
@@ -34,8 +36,12 @@ class LinkHub:
     """The node's links, the arbiter, the alarms and the traffic listeners."""
 
     def __init__(self, links: Sequence[LinkSettings], arbitration: ArbitrationSettings,
-                 record_dir: Path | None = None, traffic: TrafficPicture | None = None) -> None:
-        self.links = [make_link(s) for s in links]
+                 record_dir: Path | None = None, traffic: TrafficPicture | None = None,
+                 made: Sequence[Link] | None = None) -> None:
+        """The links made from ``links``' settings, or ``made``: links already made (a
+        session re-simulation's, which read a record; the settings then give the
+        arbitration its sources' timeouts)."""
+        self.links = list(made) if made is not None else [make_link(s) for s in links]
         self.traffic = traffic or TrafficPicture()
         self.arbiter = OrderArbiter(arbitration, {s.name: s.timeout_s for s in links})
         self.record_dir = record_dir
@@ -46,6 +52,7 @@ class LinkHub:
         self.last_orders: dict[str, ControlInput] = {}  # "source/kind/engine" -> latest order
         self.order_counts: Counter = Counter()  # "source/kind/engine" -> orders received
         self._pending: list[Alarm] = []  # alarm changes not yet announced
+        self._down: set[int] = set()  # link-down alarms this hub's polls have raised
         self._last_announce = -math.inf
 
     def add_listener(self, listener: Listener) -> None:
@@ -101,12 +108,11 @@ class LinkHub:
                 self.order_counts[key] += 1
         self.arbiter.feed(inputs)
         decision = self.arbiter.decide(now)
-        for alarm in decision.alarms:
-            self.raise_alarm(alarm, now)
         for i, link in enumerate(self.links):  # raised only after a real failure, not while a link starts
             number, down = LINK_DOWN_ALARM + i, link.failed
-            if down != (number in self.active_alarms):
-                self.raise_alarm(Alarm(number, link.down_text() if down else f"link {link.name} up", down), now)
+            if down != (number in self._down):
+                self._down.symmetric_difference_update({number})
+                decision.alarms.append(Alarm(number, link.down_text() if down else f"link {link.name} up", down))
         return decision
 
     def raise_alarm(self, alarm: Alarm, now: float) -> None:
@@ -120,9 +126,14 @@ class LinkHub:
             self.active_alarms.pop(alarm.number, None)
             log.info("alarm %03d cleared: %s", alarm.number, alarm.text)
 
-    def publish(self, state: ShipOutputs, now: float) -> None:
-        """Phase 2 at ``now`` (monotonic s): send the state and the alarm changes on every
-        link, and flush the listeners."""
+    def publish(self, state: ShipOutputs | None, now: float, alarms: Sequence[Alarm] = ()) -> None:
+        """Phase 2 at ``now`` (monotonic s): raise ``alarms`` (the tick's alarm changes), send
+        the state (None: nothing but the alarms, as while a replay runs ahead) and the alarm
+        changes on every link, and flush the listeners."""
+        for alarm in alarms:
+            self.raise_alarm(alarm, now)
+        if state is None:
+            return
         changes, self._pending = self._pending, []
         if now - self._last_announce >= ALARM_REPEAT_S:
             self._last_announce = now

@@ -14,6 +14,7 @@ from typing import Literal
 import cantools
 from pydantic import Field, ValidationError, field_validator, model_validator
 
+from bridge_node.control.settings import ControlSettings
 from bridge_node.links.settings import ArbitrationSettings, LinkSettings
 from bridge_node.node.errors import UserError
 from bridge_node.node.input_files import DBC_LIMIT, TOML_LIMIT, read_input, read_input_text
@@ -57,10 +58,12 @@ class ShipChoice(Params):
 
 
 class ExerciseSettings(Params):
-    """Where the exercise takes place and how the ship starts. The local north/east frame
-    has its origin at the ice field's south-west corner, at the given latitude/longitude.
-    Unset start positions put the ship one ship length south of the ice edge, on the centre
-    line of the middle tile column."""
+    """Where the exercise takes place, how the ship starts, and the wind and current at the
+    start (the instructor changes them as it runs). The local north/east frame has its
+    origin at the ice field's south-west corner, at the given latitude/longitude. Unset
+    start positions put the ship one ship length south of the ice edge, on the centre line
+    of the middle tile column. The exercise's date and time and its visibility at the start
+    are ``render.start_utc`` and ``render.visibility_m``."""
 
     origin_latitude_deg: float = Field(74.0, ge=-89.0, le=89.0)
     origin_longitude_deg: float = Field(20.0, ge=-180.0, le=180.0)
@@ -69,6 +72,10 @@ class ExerciseSettings(Params):
     start_heading_deg: float = Field(0.0, ge=0.0, lt=360.0, description="true heading, deg")
     start_speed_kn: float = Field(6.0, ge=0.0, le=25.0, description="speed through the water, kn")
     start_telegraph: Literal[TELEGRAPH_POSITIONS] | None = Field("full_ahead", description="engine order at the start")
+    wind_speed_kn: float = Field(0.0, ge=0.0, le=100.0, description="true wind at the start, kn")
+    wind_from_deg: float = Field(0.0, ge=0.0, lt=360.0, description="where the wind blows from, deg true")
+    current_speed_kn: float = Field(0.0, ge=0.0, le=10.0, description="surface current at the start, kn")
+    current_to_deg: float = Field(0.0, ge=0.0, lt=360.0, description="where the current sets to, deg true")
 
 
 class RealtimeSettings(Params):
@@ -102,6 +109,7 @@ class NodeConfig(Params):
     replay: ReplaySettings = ReplaySettings()
     render: RenderSettings = RenderSettings()
     stream: StreamSettings = StreamSettings()
+    control: ControlSettings = ControlSettings()
     links: list[LinkSettings] = Field(default_factory=list)
     arbitration: ArbitrationSettings = ArbitrationSettings()
     traffic: TrafficSettings = TrafficSettings()

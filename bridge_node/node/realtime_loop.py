@@ -1,16 +1,15 @@
-"""The node's real-time loop: links -> orders -> world step -> outputs, at a fixed rate.
+"""The node's real-time loop: the exercise's one tick (``bridge_node.exercise.tick``) at a
+fixed rate, paced by the one pacer, with the live links as its order source.
 
 Each tick polls the links and arbitrates (``LinkHub.poll``), steps the world by the tick's
-period with the decided orders, notes the orders the ship refused, publishes the new ship
-state on every link (``LinkHub.publish``) and hands the step's ``WorldEvents`` to the
-listener (the state stream, the status display) with the time the newest order that went
-into it was read. The delay from reading an order to publishing the state made with it
-is the input-to-outputs transport delay. A tick that overruns its period is
-counted; the loop never catches up in a burst: tick k never starts before k periods after
-the start, and if the loop falls more than a period behind, the schedule restarts from
-now, so simulated time runs slower than real time and the real-time factor reports it.
-Simulated time is always ticks x period. With a session record, the loop also writes its
-tick log (``tick_record``): what each tick read, so that the run can be re-simulated.
+period with the decided orders, notes the orders the ship refused, and hands the outcome to
+the listeners: first the session record's tick log (``tick_record``: what each tick read,
+so that the run can be re-simulated), then the links (``LinkOutputs``: the alarm changes
+and the new ship state), then the caller's (the state stream, the status display). The
+delay from reading an order to the end of the tick that published the state made with it
+is the input-to-outputs transport delay. Pacing (``Pacer``): a tick that overruns its
+period is counted; the loop never catches up in a burst, so simulated time runs slower
+than real time and the real-time factor reports it. Simulated time is always ticks x period.
 Every few seconds, in a tick that has at least half a period left, the loop gives the C
 heap's free pages back to the system (``c_heap``), so that the node's resident memory
 follows what it keeps and not the free chunks its per-step temporaries leave. (A loop
@@ -30,11 +29,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bridge_node.control.command_log import CommandLog
+from bridge_node.control.queue import CommandSource
+from bridge_node.exercise.listeners import LinkOutputs
+from bridge_node.exercise.pacer import Pacer
+from bridge_node.exercise.tick import ExerciseTick, StepListener, TickOutcome
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.c_heap import give_back_free_pages, heap_in_use_mib
 from bridge_node.node.order_refusals import OrderRefusals
 from bridge_node.node.tick_record import TickRecord
-from sim_core.world import WorldData, WorldEvents, WorldModel, step
+from sim_core.world import WorldData, WorldModel
 
 TRIM_EVERY_S = 5.0  # s of wall time between the C heap's page give-backs (c_heap.py)
 TRIM_SLACK = 0.5  # periods a tick must have left over for a give-back to go in its slack
@@ -102,22 +106,6 @@ def distribution(ms: Sequence[float]) -> dict:
             "p99": round(float(np.percentile(a, 99)), 2) if len(a) else None}
 
 
-def _tick(model: WorldModel, data: WorldData, hub: LinkHub, period: float, stats: LoopStats,
-          ticks: TickRecord | None) -> tuple[WorldEvents, float | None]:
-    """One tick: poll and decide, step, note refusals, publish."""
-    now = time.monotonic()
-    decision = hub.poll(now)
-    if ticks is not None:
-        ticks.polled(data.seq, now)
-    events = step(model, data, period, decision.controls)
-    for alarm in stats.refusals.note(events.rejected, now):
-        hub.raise_alarm(alarm, now)
-    hub.publish(events.ship, now)
-    if decision.input_time is not None:
-        stats.input_to_outputs_ms.append((time.monotonic() - decision.input_time) * 1e3)
-    return events, decision.input_time
-
-
 @dataclass
 class _StopRequest:
     """Set by Ctrl-C or SIGTERM; the loop looks at it between ticks."""
@@ -150,50 +138,63 @@ def _stop_between_ticks() -> Iterator[_StopRequest]:
             signal.signal(sig, handler)
 
 
-def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float, duration: float | None,
-                 on_events: Callable[[WorldEvents, float | None], None] | None = None,
-                 should_stop: Callable[[], bool] = lambda: False) -> LoopStats:
-    """Run at ``rate_hz`` until ``duration`` wall seconds have passed (None: until
-    should_stop(), Ctrl-C or SIGTERM, which end the loop after the tick in hand);
-    ``on_events`` gets every step's events and input time."""
-    period = 1.0 / rate_hz
-    stats = LoopStats()
-    ticks = None
+def live_tick(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float,
+              listeners: Sequence[StepListener | Callable[[TickOutcome], None]] = (),
+              commands: CommandSource | None = None) -> ExerciseTick:
+    """The tick of a live exercise: orders from the hub's links, the instructor's
+    ``commands``, outcomes to the session record's tick and command logs (where the hub
+    records), the links, then ``listeners``."""
+    records = []
     if hub.record is not None:
-        ticks = TickRecord(hub.record.folder, period)
-        hub.add_listener(ticks)  # stopped with the hub's other listeners
+        ticks = TickRecord(hub.record.folder, 1.0 / rate_hz)
+        hub.add_listener(ticks)  # it counts the links' reads; stopped with the hub's other listeners
+        records = [ticks, CommandLog(hub.record.folder)]
+    return ExerciseTick(model, data, hub, [*records, LinkOutputs(hub), *listeners], commands)
+
+
+def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float, duration: float | None,
+                 listeners: Sequence[StepListener | Callable[[TickOutcome], None]] = (),
+                 should_stop: Callable[[], bool] = lambda: False,
+                 commands: CommandSource | None = None) -> LoopStats:
+    """Run the live tick (``live_tick``) at ``rate_hz`` until ``duration`` wall seconds
+    have passed (None: until should_stop(), Ctrl-C or SIGTERM, which end the loop after
+    the tick in hand); ``listeners`` get every tick's outcome; ``commands`` are the
+    instructor's."""
+    period = 1.0 / rate_hz
+    tick = live_tick(model, data, hub, rate_hz, listeners, commands)
+    stats = LoopStats(refusals=tick.refusals)
     # Everything made so far (modules, models, kernels) lives for the whole run. Moved out of
     # the collector's generations, a full collection no longer walks it: that walk, some
     # hundred thousand objects, was a tick of a tenth of a second every few minutes.
     gc.collect()
     gc.freeze()
-    start = time.monotonic()
-    next_tick = last_trim = start
+    pacer = Pacer(period)
+    start = last_trim = time.monotonic()
     with _stop_between_ticks() as stop:
         while (duration is None or time.monotonic() - start < duration) and not should_stop() and not stop.requested:
             t0 = time.monotonic()
-            events, input_time = _tick(model, data, hub, period, stats, ticks)
-            if on_events:
-                on_events(events, input_time)
-            stats.ticks += 1
-            stats.sim_s = stats.ticks * period
-            stats.step_ms.append((time.monotonic() - t0) * 1e3)
-            if stats.ticks % max(1, round(rate_hz)) == 0:
-                s = events.ship
-                stats.track.append((events.time, s.north, s.east, s.speed_over_ground, events.floes_free))
-                stats.memory.append((events.time, events.floes_frozen, resident_mib(), heap_in_use_mib()))
-            next_tick += period
-            now = time.monotonic()
-            if now - last_trim >= TRIM_EVERY_S and next_tick - now >= TRIM_SLACK * period:
-                last_trim = now
+            outcome = tick(period, t0)
+            _note(stats, outcome, rate_hz, (time.monotonic() - t0) * 1e3)
+            pacer.advance()
+            if time.monotonic() - last_trim >= TRIM_EVERY_S and pacer.slack() >= TRIM_SLACK * period:
+                last_trim = time.monotonic()
                 if give_back_free_pages():
-                    stats.trim_ms.append((time.monotonic() - now) * 1e3)
-                now = time.monotonic()
-            if now > next_tick:
-                stats.overruns += 1
-                if now - next_tick > period:
-                    next_tick = now  # fell behind: restart the schedule rather than burst
-            else:
-                time.sleep(next_tick - now)
+                    stats.trim_ms.append((time.monotonic() - last_trim) * 1e3)
+            pacer.wait()
+    stats.overruns = pacer.overruns
     stats.wall_s = time.monotonic() - start
     return stats
+
+
+def _note(stats: LoopStats, outcome: TickOutcome, rate_hz: float, tick_ms: float) -> None:
+    """Count one tick: its wall time, its transport delay, and once a simulated second the
+    ship's track and the memory."""
+    stats.ticks += 1
+    stats.sim_s = stats.ticks / rate_hz
+    stats.step_ms.append(tick_ms)
+    if outcome.input_time is not None:
+        stats.input_to_outputs_ms.append((time.monotonic() - outcome.input_time) * 1e3)
+    if stats.ticks % max(1, round(rate_hz)) == 0:
+        events, s = outcome.events, outcome.events.ship
+        stats.track.append((events.time, s.north, s.east, s.speed_over_ground, events.floes_free))
+        stats.memory.append((events.time, events.floes_frozen, resident_mib(), heap_in_use_mib()))

@@ -16,6 +16,7 @@ from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
+from bridge_node.exercise.tick import StepListener
 from bridge_node.links.base import Listener, Traffic
 from bridge_node.links.record_reader import complete_lines
 from bridge_node.links.session_record import FLUSH_PERIOD, cut_torn_tail
@@ -37,9 +38,10 @@ class Tick:
     reads: tuple[int, ...]
 
 
-class TickRecord(Listener):
+class TickRecord(Listener, StepListener):
     """Writes ``ticks.log`` in a session folder; a listener of the hub, so that it counts
-    every input the links report."""
+    every input the links report, and of the exercise's tick, so that it writes a line as
+    each tick has polled."""
 
     def __init__(self, folder: Path, period: float) -> None:
         path = Path(folder) / TICKS_FILE
@@ -53,7 +55,7 @@ class TickRecord(Listener):
         if READS.get(traffic.protocol) == traffic.direction:
             self._reads[traffic.protocol] += 1
 
-    def polled(self, seq: int, now: float) -> None:
+    def on_polled(self, seq: int, now: float) -> None:
         """The tick of step ``seq`` has polled the links at ``now`` (monotonic s)."""
         counts = " ".join(str(self._reads[p]) for p in PROTOCOLS)
         self._file.write(f"{seq} {now:.6f} {time.time():.6f} {counts}\n")

@@ -5,8 +5,8 @@ shown by the caller's ``rich`` progress bar when one is given).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
-import time
 from pathlib import Path
 
 import numpy as np
@@ -16,10 +16,11 @@ from bridge_node.library.templates import library_template
 from bridge_node.node.config import NodeConfig, load_ship, resolve_path
 from bridge_node.node.errors import UserError
 from bridge_node.node.paths import writable_dir
+from sim_core.environment import Environment
 from sim_core.frames.units import KNOT
 from sim_core.ice.model import compile_ice_model
 from sim_core.scene.field import tile_classes
-from sim_core.scene.scene import compile_scene
+from sim_core.scene.scene import compile_scene, open_water
 from sim_core.ship.model import compile_ship
 from sim_core.world import WorldData, WorldModel, compile_world, new_world_data, step
 
@@ -85,11 +86,33 @@ def start_position(model: WorldModel, cfg: NodeConfig) -> tuple[float, float]:
     return north, east
 
 
+def open_water_world(cfg: NodeConfig, config_path: str | None) -> tuple[WorldModel, WorldData]:
+    """The configured exercise without its ice field, the ship at rest at the exercise's
+    origin, engine stopped, the exercise's clock and environment at the start: a console
+    commissioned in open water (``icebridge links monitor``)."""
+    model = build_world(cfg, config_path)
+    model = dataclasses.replace(model, scene=open_water(model.scene))
+    data = new_world_data(model, 0.0, 0.0, 0.0, 0.0)
+    start_exercise(data, cfg)
+    return model, data
+
+
+def start_exercise(data: WorldData, cfg: NodeConfig) -> None:
+    """Set the exercise clock (time 0 at ``render.start_utc``) and the environment at the
+    start (``render.visibility_m``; the wind and current of ``[exercise]``)."""
+    ex = cfg.exercise
+    data.epoch = cfg.render.start_utc.timestamp()
+    data.environment = Environment(
+        visibility=cfg.render.visibility_m, wind_speed=ex.wind_speed_kn * KNOT,
+        wind_from=math.radians(ex.wind_from_deg), current_speed=ex.current_speed_kn * KNOT,
+        current_to=math.radians(ex.current_to_deg))
+
+
 def start_world(model: WorldModel, cfg: NodeConfig) -> WorldData:
     """World data at the configured start (``start_position``), heading, speed and
-    telegraph order, its exercise clock starting at the wall clock's UTC now."""
+    telegraph order, with the exercise's clock and environment at the start (``start_exercise``)."""
     ex = cfg.exercise
     data = new_world_data(model, *start_position(model, cfg), math.radians(ex.start_heading_deg),
                           ex.start_speed_kn * KNOT, ex.start_telegraph)
-    data.epoch = time.time()
+    start_exercise(data, cfg)
     return data

@@ -29,7 +29,7 @@ and the ship's place.
 from __future__ import annotations
 
 import math
-from datetime import timedelta
+from datetime import datetime, timezone
 
 import moderngl
 import numpy as np
@@ -288,7 +288,7 @@ class SceneRenderer:
         rows that changed; and take the sky of the view's time and place."""
         changes = view.take_changes()
         lat, lon = local_to_geodetic(view.ship.north, view.ship.east, *self.model.origin)
-        self.sky = sky_for(self.settings.start_utc + timedelta(seconds=view.time), lat, lon)
+        self.sky = sky_for(datetime.fromtimestamp(view.ship.utc, timezone.utc), lat, lon)  # the exercise clock
         for k in changes.frozen:
             self._freeze(view, k)
         for k in changes.placements:
@@ -479,8 +479,8 @@ class SceneRenderer:
         vp = cam.view_proj
         half = math.radians(channel.hfov_deg) / 2
         sky = self.sky
-        common = {"eye": tuple(cam.eye), "visibility": s.visibility_m, "sun": sky.sun, "direct": sky.direct,
-                  "ambient": sky.ambient, "zenith_colour": sky.zenith, "horizon_colour": sky.horizon,
+        common = {"eye": tuple(cam.eye), "visibility": view.environment.visibility, "sun": sky.sun,
+                  "direct": sky.direct, "ambient": sky.ambient, "zenith_colour": sky.zenith, "horizon_colour": sky.horizon,
                   "noise": NOISE_UNIT, "water_colour": WATER,
                   "relief_reach": s.relief_reach_m, "time": view.time, **self._searchlights(view.ship)}
         ctx.clear(*sky.horizon, depth=1.0)
@@ -522,7 +522,7 @@ class SceneRenderer:
             self.sky_vao.render(vertices=len(above), first=len(ground))
         if tiles:
             self._draw_reflections(view, tiles)
-        self._draw_nav_lights(ships, cam, channel.height)
+        self._draw_nav_lights(ships, cam, channel.height, view.environment.visibility)
         self._blend_bands(channel, blend)
         return cam
 
@@ -634,9 +634,9 @@ class SceneRenderer:
             out.append(ship_matrix(traffic["y"][k], traffic["x"][k], traffic["heading"][k]) @ scale)
         return out
 
-    def _draw_nav_lights(self, matrices: list[np.ndarray], cam: Camera, height: int) -> None:
+    def _draw_nav_lights(self, matrices: list[np.ndarray], cam: Camera, height: int, visibility: float) -> None:
         """The ships' navigation lights, added where their sectors face the eye, as strong
-        as the daylight leaves them (full below NAV_LIGHT_LUX)."""
+        as the daylight leaves them (full below NAV_LIGHT_LUX), fogged by the visibility (m)."""
         strength = min(NAV_LIGHT_LUX / max(self.sky.illuminance, 1e-6), 1.0)
         if strength < 0.01:
             return
@@ -644,7 +644,7 @@ class SceneRenderer:
         ctx.enable(moderngl.PROGRAM_POINT_SIZE | moderngl.BLEND)
         ctx.blend_func = moderngl.ONE, moderngl.ONE
         ctx.depth_mask = False
-        self._set(self.nav, view_proj=cam.view_proj, eye=tuple(cam.eye), visibility=self.settings.visibility_m,
+        self._set(self.nav, view_proj=cam.view_proj, eye=tuple(cam.eye), visibility=visibility,
                   point_px=max(3.0, 6.0 * height / 720), strength=strength)
         for m in matrices:
             set_matrix(self.nav["ship_to_world"], m)

@@ -113,11 +113,14 @@ class RenderSettings(Params):
     """The projection system and the environment's look."""
 
     channels: list[ChannelSettings] = Field(default_factory=_front_channels, min_length=1)
-    visibility_m: float = Field(8000.0, ge=50.0, le=100_000.0, description="meteorological visibility")
+    visibility_m: float = Field(8000.0, ge=50.0, le=100_000.0,
+                                description="meteorological visibility at the start (the instructor changes it; the "
+                                            "channels draw the world's, as published)")
     far_m: float = Field(20_000.0, ge=500.0, le=200_000.0, description="far clip distance")
     start_utc: AwareDatetime = Field(datetime.fromisoformat("2026-04-10T10:40:00+00:00"),
-                                     description="date and time (with its UTC offset) the exercise starts at: "
-                                                 "with the position, it sets the sun and the sky")
+                                     description="date and time (with its UTC offset) the exercise starts at: the "
+                                                 "world's exercise clock, which the outputs carry and which, with "
+                                                 "the position, sets the sun and the sky")
     searchlights: list[SearchlightSettings] = Field(
         default_factory=list, max_length=MAX_SEARCHLIGHTS,
         description="the own ship's searchlights, in the console's light order 0..3; the console switches and trains them")

@@ -2,10 +2,11 @@
 session re-simulated), paced to a speed factor of logged time or as fast as possible,
 with pause, faster, slower and seek forward, and the outputs of a run.
 
-Every step's ship state goes to the configured links (their output rates follow the
-logged clock) and every step's events to the state stream the render processes draw.
-A seek runs the world ahead to its target without outputs, so the ice there is what the
-voyage left, then sends the render processes a snapshot.
+Each step is the exercise's one tick (``bridge_node.exercise.tick``) with the source as its
+order source, paced by the one pacer. Every step's ship state goes to the configured links
+(their output rates follow the logged clock) and every step's events to the state stream
+the render processes draw. A seek runs the world ahead to its target without outputs, so
+the ice there is what the voyage left, then sends the render processes a snapshot.
 """
 from __future__ import annotations
 
@@ -20,6 +21,10 @@ from typing import Protocol
 
 import numpy as np
 
+from bridge_node.exercise.listeners import ReplayLinkOutputs, StreamOutput
+from bridge_node.exercise.pacer import Pacer
+from bridge_node.exercise.tick import ExerciseTick, TickOutcome
+from bridge_node.links.arbiter import Decision
 from bridge_node.links.base import Alarm
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.order_refusals import OrderRefusals
@@ -29,7 +34,8 @@ from sim_core.frames.units import KNOT
 from sim_core.ice.floes import BreakCause
 from sim_core.ice.tiles import broken_counts
 from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
-from sim_core.world import Controls, WorldData, WorldEvents, WorldModel, snapshot, step
+from sim_core.instructor import Command
+from sim_core.world import Controls, WorldData, WorldEvents, WorldModel, snapshot
 
 MIN_SPEED, MAX_SPEED = 1.0, 1000.0  # speed factors of logged time a paced replay allows
 SEEK_STEPS_S = {"f": 60.0, "F": 600.0, "right": 60.0}  # key -> logged seconds a seek jumps ahead
@@ -49,6 +55,8 @@ class Source(Protocol):
     def logged_time(self, k: int) -> float: ...
 
     def inputs(self, k: int) -> tuple[Controls | None, list[Alarm], float]: ...
+
+    def commands(self, k: int) -> tuple[Command, ...]: ...
 
 
 @dataclass
@@ -113,39 +121,39 @@ class ReplayStats:
         return path
 
 
-class Outputs:
-    """The replay's outputs: the configured links (polled only to keep them up; a live
-    console's orders are counted and ignored) and the state stream. The links run on the
-    source's clock, moved to start at this process's monotonic clock (their own timers,
-    a serial line's budget say, started on it). The hub's traffic picture goes on the
-    stream too, placed on the field whose corner is at ``origin`` (latitude, longitude rad)."""
+class _StepOrders:
+    """A replay source as the tick's order and command source: ``clock`` reads step k's
+    inputs and returns its clock, then ``poll`` and ``take`` hand the tick its orders and
+    commands, and it moves on to step k+1."""
 
-    def __init__(self, hub: LinkHub | None, publisher: StatePublisher | None,
-                 origin: tuple[float, float]) -> None:
-        self.hub, self.publisher, self.origin = hub, publisher, origin
-        self._offset: float | None = None  # monotonic s - source clock s
+    def __init__(self, source: Source) -> None:
+        self.source, self.k = source, 0
+        self._next = Decision(Controls(), [], {})
+        self._commands: tuple[Command, ...] = ()
 
-    def publish(self, events: WorldEvents, clock: float, alarms: list[Alarm], stats: ReplayStats,
-                send: bool = True) -> None:
-        """One step's alarm changes, and unless not ``send`` (a seek) its events, out at the
-        source's clock (s)."""
-        if self._offset is None:
-            self._offset = time.monotonic() - clock
-        now = clock + self._offset
-        if self.hub is not None:
-            for alarm in alarms:  # raised while seeking too: announced once it ends
-                self.hub.raise_alarm(alarm, now)
-            if send:
-                for link in self.hub.links:
-                    stats.console_orders_ignored += len(link.poll(now))
-                self.hub.publish(events.ship, now)
-        if self.publisher is not None and send:
-            self.publisher.publish(events, traffic=self.hub.traffic.table(self.origin) if self.hub else None)
+    def clock(self) -> float:
+        """Read the next step's inputs; its clock, s."""
+        controls, alarms, now = self.source.inputs(self.k)
+        self._next = Decision(controls or Controls(), list(alarms), {})
+        self._commands = self.source.commands(self.k)
+        return now
 
-    def resync(self, model: WorldModel, data: WorldData) -> None:
-        """After a seek: the whole state to the stream (render processes take it as a snapshot)."""
-        if self.publisher is not None:
-            self.publisher.publish(snapshot(model, data))
+    def poll(self, now: float) -> Decision:
+        self.k += 1
+        return self._next
+
+    def take(self, model: WorldModel, data: WorldData) -> tuple[Command, ...]:
+        return self._commands
+
+
+def _stats_listener(stats: ReplayStats, model: WorldModel, data: WorldData,
+                    orders: _StepOrders) -> Callable[[TickOutcome], None]:
+    """A listener adding each step to ``stats`` (logged time at the step's end)."""
+    source = orders.source
+
+    def note(outcome: TickOutcome) -> None:
+        _note(stats, model, data, outcome.events, source.logged_time(orders.k - 1) + source.dt, source.dt)
+    return note
 
 
 def _note(stats: ReplayStats, model: WorldModel, data: WorldData, events: WorldEvents, logged: float,
@@ -163,52 +171,50 @@ def _note(stats: ReplayStats, model: WorldModel, data: WorldData, events: WorldE
         stats.off_field.append([logged, logged])
 
 
-def run_replay(model: WorldModel, data: WorldData, source: Source, playback: Playback, outputs: Outputs,
+def run_replay(model: WorldModel, data: WorldData, source: Source, playback: Playback, hub: LinkHub | None,
+               publisher: StatePublisher | None,
                show: Callable[[int, ReplayStats, Playback], list[str]] | None = None) -> ReplayStats:
-    """Step the world along the source until its end, ``playback.stop`` or Ctrl-C. Steps
+    """Step the world along the source until its end, ``playback.stop`` or Ctrl-C, its
+    state out on ``hub``'s links and ``publisher``'s stream (either may be None). Steps
     before ``playback.seek_to`` run ahead without outputs. ``show(k, stats, playback)``
     is called about every 0.2 s of wall time (and while paused) and returns the keys
     pressed since."""
     stats = ReplayStats()
-    start = anchor_wall = time.monotonic()
-    anchor_k, anchor_speed, shown, seeking = 0, playback.speed, 0.0, playback.seek_to > 0
-    k = 0
+    orders = _StepOrders(source)
+    links = ReplayLinkOutputs(hub) if hub is not None else None
+    stream = StreamOutput(publisher, hub.traffic if hub else None, model.origin) if publisher is not None else None
+    tick = ExerciseTick(model, data, orders, [_stats_listener(stats, model, data, orders),
+                                               *(x for x in (links, stream) if x is not None)], orders)
+    stats.refusals = tick.refusals
+    pacer = Pacer(source.dt / (playback.speed or 1.0), BEHIND_S)
+    start, shown, seeking, speed = time.monotonic(), 0.0, playback.seek_to > 0, playback.speed
     try:
-        while k < source.steps and not playback.stop:
-            now_wall = time.monotonic()
-            if show is not None and (now_wall - shown >= 0.2 or playback.paused):
-                shown = now_wall
+        while orders.k < source.steps and not playback.stop:
+            k = orders.k
+            if show is not None and (time.monotonic() - shown >= 0.2 or playback.paused):
+                shown = time.monotonic()
                 for key in show(k, stats, playback):
                     playback.key(key, k, source.dt)
             if playback.paused:
                 time.sleep(0.05)
-                anchor_wall, anchor_k = time.monotonic(), k
+                pacer.restart()
                 continue
             if seeking and k >= playback.seek_to:  # arrived: the render processes resynchronise
-                outputs.resync(model, data)
-                anchor_wall, anchor_k = time.monotonic(), k
+                if publisher is not None:
+                    publisher.publish(snapshot(model, data))
+                pacer.restart()
             seeking = k < playback.seek_to
-            if playback.speed != anchor_speed:
-                anchor_wall, anchor_k, anchor_speed = time.monotonic(), k, playback.speed
-            controls, alarms, now = source.inputs(k)
-            events = step(model, data, source.dt, controls)
-            logged = source.logged_time(k) + source.dt
-            _note(stats, model, data, events, logged, source.dt)
-            alarms = alarms + stats.refusals.note(events.rejected, now)
-            k += 1
-            outputs.publish(events, now, alarms, stats, send=not seeking)
-            if seeking:
-                continue
-            if playback.speed is not None:
-                due = anchor_wall + (k - anchor_k) * source.dt / playback.speed
-                wait = due - time.monotonic()
-                if wait > 0.0:
-                    time.sleep(wait)
-                elif wait < -BEHIND_S:  # fell behind: restart the schedule rather than burst
-                    anchor_wall, anchor_k = time.monotonic(), k
+            if playback.speed != speed:
+                speed = playback.speed
+                pacer.retime(source.dt / (speed or 1.0))
+            tick(source.dt, orders.clock(), send=not seeking)
+            pacer.advance()
+            if not seeking and playback.speed is not None:
+                pacer.wait()
     except KeyboardInterrupt:
         pass
-    stats.steps, stats.sim_s, stats.wall_s = k, k * source.dt, time.monotonic() - start
+    stats.steps, stats.sim_s, stats.wall_s = orders.k, orders.k * source.dt, time.monotonic() - start
+    stats.console_orders_ignored = links.console_orders_ignored if links is not None else 0
     broken = broken_counts(data.ice)
     stats.broken_by_hull, stats.broken_by_contact = int(broken[BreakCause.HULL]), int(broken[BreakCause.CONTACT])
     return stats

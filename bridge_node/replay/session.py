@@ -20,14 +20,16 @@ from pathlib import Path
 
 import can
 
-from bridge_node.links.arbiter import OrderArbiter
+from bridge_node.control.command_log import COMMANDS_FILE, read_commands
 from bridge_node.links.base import Alarm, ControlInput, Link
 from bridge_node.links.can_link import CanLink
+from bridge_node.links.hub import LinkHub
 from bridge_node.links.modbus_link import register_order
 from bridge_node.links.nmea_link import NmeaLink
 from bridge_node.links.record_reader import read_can_log, read_modbus_csv, read_nmea_log
 from bridge_node.node.config import NodeConfig
 from bridge_node.node.tick_record import PROTOCOLS, TICKS_FILE, Tick, read_ticks
+from sim_core.instructor import Command
 from sim_core.world import Controls
 
 RECORD_FILES = {"nmea0183": "nmea.log", "can": "can.log", "modbus": "modbus.csv"}  # protocol -> file
@@ -48,6 +50,7 @@ class RecordedSession:
     inputs: list[dict[str, list]]
     exact: bool
     bad: Counter = field(default_factory=Counter)
+    commands: dict[int, list[Command]] = field(default_factory=dict)  # step -> instructor commands applied
 
     @property
     def reads(self) -> Counter:
@@ -107,7 +110,11 @@ def read_session(folder: Path, names: set[str], period: float) -> RecordedSessio
         for p in PROTOCOLS:
             if len(received[p]) > taken[p]:  # recorded after the last tick line was written
                 bad[f"{RECORD_FILES[p]} after the last tick"] += len(received[p]) - taken[p]
-        return RecordedSession(folder, sorted(names), period, ticks, inputs, True, bad)
+        commands = {}
+        if (folder / COMMANDS_FILE).is_file():
+            commands, counts = read_commands(folder / COMMANDS_FILE)
+            bad.update({f"{COMMANDS_FILE} {k}": n for k, n in counts.items() if n})
+        return RecordedSession(folder, sorted(names), period, ticks, inputs, True, bad, commands)
     times = [t for p in PROTOCOLS for t in line_times[p]]
     if not times:
         return RecordedSession(folder, sorted(names), period, [], [], False, bad)
@@ -154,29 +161,35 @@ class _RecordedModbus(Link):
 
 
 class SessionSource:
-    """A replay source: the recorded run's console links, fed its inputs tick by tick, and
-    the arbitration give the orders of each step. Use as a context manager."""
+    """A replay source: the recorded run's console links, fed its inputs tick by tick, polled
+    and arbitrated by a ``LinkHub`` as the live run's were (link-down alarms included), give
+    the orders of each step. Use as a context manager."""
 
     absolute = True  # logged times are the ticks' unix times
 
     def __init__(self, cfg: NodeConfig, session: RecordedSession) -> None:
         self.session = session
         self.dt, self.steps = session.period, len(session.ticks)
-        self.arbiter = OrderArbiter(cfg.arbitration, {s.name: s.timeout_s for s in cfg.links})
-        self.links: list[Link] = []
+        links: list[Link] = []
         self.feeds: dict[str, can.BusABC] = {}  # CAN link name -> the bus its recorded frames are sent on
         self._can_channels: dict[str, Link] = {}  # recorded channel -> CAN link
-        self.orders: Counter = Counter()  # "link/kind/engine" -> orders decoded
         for s in cfg.links:
             if s.type == "nmea0183":
-                self.links.append(NmeaLink(s.model_copy(update={"port": "loop://", "udp_output": False})))
+                links.append(NmeaLink(s.model_copy(update={"port": "loop://", "udp_output": False})))
             elif s.type == "can":
                 channel = f"icebridge-replay-{next(_channels)}"
-                self.links.append(CanLink(s.model_copy(update={"interface": "virtual", "channel": channel})))
+                links.append(CanLink(s.model_copy(update={"interface": "virtual", "channel": channel})))
                 self.feeds[s.name] = can.Bus(interface="virtual", channel=channel)
-                self._can_channels[s.channel] = self.links[-1]
+                self._can_channels[s.channel] = links[-1]
             elif s.type == "modbus":
-                self.links.append(_RecordedModbus(s))
+                links.append(_RecordedModbus(s))
+        self.hub = LinkHub(cfg.links, cfg.arbitration, made=links)
+        self.links = self.hub.links
+
+    @property
+    def orders(self) -> Counter:
+        """Orders decoded, by "link/kind/engine"."""
+        return self.hub.order_counts
 
     def __enter__(self) -> SessionSource:
         for link in self.links:  # in-process ports and buses: fed at once, so opened before the first tick
@@ -184,8 +197,7 @@ class SessionSource:
         return self
 
     def __exit__(self, *exc) -> None:
-        for link in self.links:
-            link.close()
+        self.hub.close()
         for bus in self.feeds.values():
             bus.shutdown()
 
@@ -208,23 +220,20 @@ class SessionSource:
         """Unix time of tick k's poll, s."""
         return self.session.ticks[k].unix
 
+    def commands(self, k: int) -> tuple[Command, ...]:
+        """The instructor's commands the recorded run applied at tick k's step."""
+        return tuple(self.session.commands.get(self.session.ticks[k].seq + 1, ()))
+
     def inputs(self, k: int) -> tuple[Controls, list[Alarm], float]:
         """Tick k: its inputs read by the links, the orders arbitrated; returns the
         controls for the step, the alarm changes and the tick's clock (monotonic s)."""
         tick = self.session.ticks[k]
         now = tick.monotonic
         self._feed(tick, self.session.inputs[k])
-        inputs = []
-        for link in self.links:
-            got = link.poll(now)
-            inputs += got
-            for order in got:
-                self.orders[f"{order.source}/{order.kind}/{order.engine}"] += 1
+        decision = self.hub.poll(now)
         for bus in self.feeds.values():  # what the CAN links sent (address claims): not needed
             while bus.recv(0.0) is not None:
                 pass
-        self.arbiter.feed(inputs)
-        decision = self.arbiter.decide(now)
         return decision.controls, decision.alarms, now
 
     def errors(self) -> dict[str, dict]:

@@ -8,17 +8,14 @@ frame (Fritsch & Carlson, "Monotone piecewise cubic interpolation", SIAM J. Nume
 gave there (speed over ground along the course over ground); where it gave none, the
 derivative of the parabola through the fix and its neighbours (three-point formula, de
 Boor, "A Practical Guide to Splines", 1978, ch. IV). A sparse log (AIS archives, one report
-a minute) so replays as a ship moving between its fixes, not one that waits and jumps.
-
-Fixes further apart than ``max_gap`` are a gap, interpolated like any other interval unless
+a minute) so replays as a ship moving between its fixes, not one that waits and jumps. Fixes further apart than ``max_gap`` are a gap, interpolated like any other interval unless
 it is long for the vessel's speed (it would run over ``max_run`` m through it) or the data
 contradicts itself there (the curve's speed leaves the logged speeds at its ends by more
 than the tolerance and the noise allow: the fixes' distance is impossible at the logged
 speeds). Such a gap is held (the ship waits at the last fix, at rest, until the next) and
 listed with the reason. Heading comes from the log's heading (HDT, THS, HDG, AIS, a CSV
 column), failing that its course over ground, failing that the track's own velocity; it is
-interpolated linearly on the circle (the shorter way round) and held through held gaps.
-"""
+interpolated linearly on the circle (the shorter way round) and held through held gaps."""
 from __future__ import annotations
 
 import math
@@ -398,3 +395,6 @@ class TrackSource:
     def inputs(self, k: int) -> tuple[Controls, list, float]:
         t = self.t0 + (k + 1) * self.dt
         return Controls(kinematic=self.path.pose(t, self.dt)), [], t
+
+    def commands(self, k: int) -> tuple:
+        return ()  # a track log holds no instructor commands

@@ -11,13 +11,17 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 
 import numpy as np
 
+from bridge_node.control.commands import CommandError, command_from_record, command_record
 from bridge_node.stream.world_view import TRAFFIC_DTYPE
+from sim_core.environment import Environment
 from sim_core.ship.model import OrderRejection
 from sim_core.ship.outputs import ShipOutputs
-from sim_core.world import FROZEN_FLOE_EVENT, PlacedTiles, WorldEvents
+from sim_core.scene.switches import FROZEN_FLOE_EVENT, PlacedTiles
+from sim_core.world import WorldEvents
 
 TOPIC = b"w"
 HEARTBEAT = b"h"  # [HEARTBEAT, b"<seq>"]: the last sequence number published
@@ -41,9 +45,24 @@ def encode(events: WorldEvents, input_time: float | None = None, traffic: np.nda
         "seq": events.seq, "time": events.time, "snapshot": events.snapshot, "input_time": input_time,
         "ship": dataclasses.asdict(events.ship), "floes_free": events.floes_free,
         "floes_frozen": events.floes_frozen, "rejected": [dataclasses.asdict(r) for r in events.rejected],
+        "environment": dataclasses.asdict(events.environment),
+        "commands": [command_record(c) for c in events.commands],
         "arrays": [[a.dtype.str, list(a.shape)] for a in arrays],
     }
     return [TOPIC, json.dumps(header).encode(), *(a.tobytes() for a in arrays), traffic.tobytes()]
+
+
+def _environment(fields: dict) -> Environment:
+    """The environment a header carries; CodecError for a field missing, unknown or out of
+    its range (a visibility that is no positive distance, a speed below zero, a non-finite
+    number)."""
+    environment = Environment(**fields)
+    numbers = [v for k, v in fields.items() if k != "frozen"]
+    if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in numbers) or \
+            not isinstance(environment.frozen, bool) or environment.visibility <= 0.0 or \
+            environment.wind_speed < 0.0 or environment.current_speed < 0.0:
+        raise CodecError(f"malformed state message: environment {fields}")
+    return environment
 
 
 def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
@@ -65,10 +84,14 @@ def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
             seq=int(header["seq"]), time=float(header["time"]), ship=ShipOutputs.from_dict(header["ship"]), placed=placed,
             floes_free=int(header["floes_free"]), floes_frozen=int(header["floes_frozen"]),
             rejected=tuple(OrderRejection(**r) for r in header["rejected"]), snapshot=bool(header["snapshot"]),
+            environment=_environment(header["environment"]),
+            commands=tuple(command_from_record(c) for c in header["commands"]),
             **{k: (v.astype(np.int64) if k in _WIRE and v.dtype.kind == "i" else v) for k, v in named.items()})
         input_time = header["input_time"]
     except CodecError:
         raise
+    except CommandError as exc:
+        raise CodecError(f"malformed state message: {exc}") from None
     except (ValueError, KeyError, TypeError, IndexError) as exc:
         raise CodecError(f"malformed state message: {exc}") from None
     return events, input_time, traffic

@@ -21,7 +21,9 @@ import numpy as np
 
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ship.outputs import ShipOutputs
-from sim_core.world import FROZEN_FLOE_EVENT, PlacedTiles, WorldEvents
+from sim_core.environment import Environment
+from sim_core.scene.switches import FROZEN_FLOE_EVENT, PlacedTiles
+from sim_core.world import WorldEvents
 
 # The other vessels (AIS, DIS, scripted), one row each: MMSI; x east and y north in world m
 # (the frame of ``ship.east``/``ship.north``); true heading in rad, clockwise from north (as
@@ -59,7 +61,9 @@ class WorldView:
     """The last published state. ``pose`` is (rows, 6): x, y, heave, yaw, roll, pitch in
     world m and rad; ``status`` the FloeStatus of each row; ``frozen_floes`` each frozen
     placement's floes (``FROZEN_FLOE_EVENT`` records); ``traffic`` the other vessels as
-    last published (``TRAFFIC_DTYPE`` rows, shape (0,) when there are none)."""
+    last published (``TRAFFIC_DTYPE`` rows, shape (0,) when there are none); ``environment``
+    the instructor's (``sim_core.environment``) and ``ship.utc`` the exercise clock, as
+    last published."""
 
     def __init__(self) -> None:
         self.seq = -1
@@ -72,6 +76,7 @@ class WorldView:
         self.status = np.zeros(0, dtype=np.uint8)
         self.cause = np.zeros(0, dtype=np.uint8)
         self.ice_load = np.zeros(3)
+        self.environment = Environment()  # visibility, wind, current, freeze: as last published
         self.traffic = np.zeros(0, dtype=TRAFFIC_DTYPE)
         self._blend: tuple | None = None  # (rows, pose before, pose after, ship before, ship after)
         self._new: list[int] = []
@@ -101,6 +106,7 @@ class WorldView:
         self._unblend()
         before_ship, known_rows = self.ship, self.rows
         self.seq, self.time, self.ship, self.ice_load = events.seq, events.time, events.ship, events.ice_load
+        self.environment = events.environment
         frozen = set(events.frozen.tolist())
         held = self.frozen_floes
         if events.snapshot:  # every frozen tile with all its floes; rows it does not name belong to no tile

@@ -26,7 +26,7 @@ from bridge_node.replay.sentences import SentenceLog
 from bridge_node.replay.sentences import Vessel as LoggedVessel
 from bridge_node.replay.session import SessionSource
 from bridge_node.replay.settings import ReplaySettings
-from bridge_node.replay.track import TrackPath, TrackSource, clean
+from bridge_node.replay.track import TrackPath, TrackSource, clean_for
 from bridge_node.traffic.picture import TrafficPicture, VesselSource
 from bridge_node.traffic.settings import ScriptedVessel
 from sim_core.frames.geodesy import local_to_geodetic
@@ -104,7 +104,7 @@ class AisLogTraffic(_Clock):
         self.origin, self.max_gap = origin, replay.max_gap_s
         self.paths = []
         for v in logged:
-            track = clean(v.track([], Counter()), replay.max_gap_s, replay.max_speed_kn * KNOT)
+            track = clean_for(v.track([], Counter()), replay)
             if track is not None:
                 self.paths.append((v, TrackPath(track, origin, replay.max_gap_s)))
         self.t0 = start if start is not None else min((path.track.start for _, path in self.paths), default=0.0)

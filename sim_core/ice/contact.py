@@ -699,6 +699,18 @@ class ContactSpace:
                                tl.row_count, self._sides, self._pad, *self._grid[:5])
         return np.sort(found)
 
+    def set_water_velocity(self, velocity: np.ndarray, dt: float) -> None:
+        """Let the water move at ``velocity`` (world x east, y north, m/s) over the next step
+        of dt (s): the floes' planar drag then pulls them towards it rather than to rest.
+        Chipmunk's damping decays a body's velocity to zero (v <- v d + g dt, d = damping ** dt);
+        a uniform acceleration g = v_w (1 - d) / dt, given as the space's gravity (which
+        acts on the moving floes only, not on the kinematic hull or floes at rest), makes
+        v_w the steady state: the same linear drag, relative to the water."""
+        d = self.space.damping ** dt
+        gx, gy = (float(c) * (1.0 - d) / dt for c in velocity)
+        if (gx, gy) != tuple(self.space.gravity):
+            self.space.gravity = (gx, gy)
+
     def step(self, dt: float) -> None:
         """Switch the step's share of tile objects in or out, then step the engine by dt (s)."""
         self._swap_work()

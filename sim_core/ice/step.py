@@ -216,9 +216,12 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
         space.set_submerged(st, up, False)
 
 
-def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> IceStepReport:
-    """Advance the breakable ice by dt seconds with the hull moving as given."""
+def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
+             water: np.ndarray | None = None) -> IceStepReport:
+    """Advance the breakable ice by dt seconds with the hull moving as given, in water
+    moving at ``water`` (world x east, y north, m/s; None: still)."""
     st, space = data.state, data.contacts
+    space.set_water_velocity(np.zeros(2) if water is None else water, dt)
     rest = model.settings.rest_far_floes
     space.set_hull(hull.xy, hull.angle, hull.velocity, hull.angular_velocity)
     if rest:

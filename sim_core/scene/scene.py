@@ -15,7 +15,7 @@ index, so neighbours do not repeat and a rerun lays out the same field.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import IntEnum
 from typing import Literal
 
@@ -100,6 +100,12 @@ def compile_scene(settings: SceneSettings, tile_class: np.ndarray, class_thickne
     ny, nx = tile_class.shape
     return SceneModel(settings, nx, ny, float(tile_side), radius, np.ascontiguousarray(tile_class, np.uint8).ravel(),
                       np.asarray(class_thickness, float), tuple(np.asarray(t, np.int64) for t in class_templates))
+
+
+def open_water(model: SceneModel) -> SceneModel:
+    """The same scene without its field: no tiles, so the ship is in open water everywhere
+    (a console commissioned with no ice, ``icebridge links monitor``)."""
+    return replace(model, nx=0, ny=0, tile_class=np.zeros(0, dtype=np.uint8))
 
 
 def new_scene_data(model: SceneModel) -> SceneData:

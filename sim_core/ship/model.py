@@ -76,6 +76,9 @@ class ShipData:
     rotation: int = 0  # direction the engine last turned: +1 ahead, -1 astern, 0 never
     reverse_wait: float = 0.0  # s spent at rest waiting to reverse
     external: np.ndarray = field(default_factory=lambda: np.zeros(3))  # X, Y N; N N m at midship
+    current: np.ndarray = field(default_factory=lambda: np.zeros(2))  # the water's velocity, north, east m/s
+    steering_pumps: int = 2  # pumps of the steering gear working: 2 the design rate, 1 half, 0 the rudder stuck
+    power_share: float = 1.0  # share of the engine's power available: 0 blackout, 1 all
     ice_h: float = 0.0  # local level-ice thickness, m
     ice_condition: int = OPEN_WATER
     ice_resistance: float = 0.0  # N, last step (>= 0, opposing the motion)
@@ -212,7 +215,10 @@ def _ice_force(model: ShipModel, data: ShipData, u: float) -> float:
 
 
 def _steering_gear(model: ShipModel, data: ShipData, dt: float) -> None:
-    step = model.rudder_rate * dt
+    """The rudder towards its order at the gear's rate: two pumps running together give the
+    design rate, each half of it, so with one failed the rudder moves at half the rate and
+    with both failed it stays where it is."""
+    step = model.rudder_rate * dt * data.steering_pumps / 2.0
     data.rudder += min(max(data.rudder_order - data.rudder, -step), step)
 
 
@@ -226,6 +232,10 @@ def _engine(model: ShipModel, data: ShipData, dt: float) -> None:
     other way; ``data.rotation`` remembers the last direction turned."""
     e = model.particulars.engine
     order, n = data.rps_order, data.rps
+    # the propeller law: power grows as the cube of shaft speed, so a share of the power
+    # turns the shaft at most at the cube root of that share of full speed
+    cap = data.power_share ** (1.0 / 3.0)
+    order = min(max(order, model.rps_astern_max * cap), model.rps_ahead_max * cap)
     want = _sign(order)
     target = order
     if n != 0.0 and _sign(n) != want:
@@ -247,7 +257,10 @@ def _engine(model: ShipModel, data: ShipData, dt: float) -> None:
 
 def step(model: ShipModel, data: ShipData, dt: float) -> None:
     """Advance the ship by dt seconds (sub-stepped to <= MAX_SUBSTEP). Orders, the ice
-    condition and ``data.external`` are held constant over dt."""
+    condition, ``data.external`` and ``data.current`` are held constant over dt. ``nu`` is
+    the velocity through the water (the MMG model's); a uniform current carries the ship
+    with the water, so its position moves by the current on top (the relative-velocity
+    form of Fossen 2011, section 10.3, for an irrotational, constant current)."""
     if not (dt > 0.0 and math.isfinite(dt)):
         raise ValueError(f"step dt must be a positive number of seconds, got {dt!r}")
     n_sub = max(1, math.ceil(dt / MAX_SUBSTEP - 1e-9))
@@ -265,6 +278,8 @@ def step(model: ShipModel, data: ShipData, dt: float) -> None:
         k4 = state_derivatives(model, tuple(a + h * b for a, b in zip(s0, k3)), data.rudder, data.rps, ext, ice_x)
         s1 = [a + h / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4) for a, b1, b2, b3, b4 in zip(s0, k1, k2, k3, k4)]
         eta[0], eta[1], eta[5], nu[0], nu[1], nu[5] = s1
+        eta[0] += h * data.current[0]
+        eta[1] += h * data.current[1]
 
 
 def new_ship_data(model: ShipModel, speed: float = 0.0, rps: float | None = None, heading: float = 0.0) -> ShipData:

@@ -47,6 +47,7 @@ def ship_outputs(data: ShipData, time: float, lat0: float, lon0: float, utc: flo
     north, east, psi = float(data.eta[0]), float(data.eta[1]), float(data.eta[5])
     u, v, r = float(data.nu[0]), float(data.nu[1]), float(data.nu[5])
     ve, vn = ship_vector_to_world((u, v), psi)
+    vn, ve = vn + float(data.current[0]), ve + float(data.current[1])  # over ground: through the water + current
     lat, lon = local_to_geodetic(north, east, lat0, lon0)
     two_pi = 2.0 * math.pi
     return ShipOutputs(

@@ -122,6 +122,19 @@ class ShipLook(Params):
                                     description="eye on the bridge's centre line: x forward of midship, z, m")
 
 
+class Windage(Params):
+    """The ship above the waterline, for the wind load (``sim_core.ship.wind``): projected
+    areas and the coefficients of Fossen (2011), section 8.1.1, whose typical ranges for
+    large ships bound them."""
+
+    frontal_area: float = Field(gt=1.0, lt=20000.0, description="A_Fw, frontal projected area, m2")
+    lateral_area: float = Field(gt=1.0, lt=50000.0, description="A_Lw, lateral projected area, m2")
+    length_overall: float = Field(gt=10.0, lt=500.0, description="L_oa, m")
+    c_x: float = Field(0.7, ge=0.5, le=0.9, description="c_x of C_X = -c_x cos(gamma)")
+    c_y: float = Field(0.8, ge=0.7, le=0.95, description="c_y of C_Y = c_y sin(gamma)")
+    c_n: float = Field(0.1, ge=0.05, le=0.2, description="c_n of C_N = c_n sin(2 gamma)")
+
+
 class ShipParticulars(Params):
     """Everything static about one ship."""
 
@@ -143,3 +156,4 @@ class ShipParticulars(Params):
     engine: Engine
     ice: IceHull
     look: ShipLook = Field(default_factory=ShipLook)
+    windage: Windage | None = Field(None, description="unset: the wind exerts no load on this ship")

@@ -1,0 +1,93 @@
+"""``icebridge ctl``: command a running exercise from the command line (the instructor
+station's commands, scriptable): exit 0 with the node's reply, or 2 with the error it gave.
+
+    icebridge ctl freeze
+    icebridge ctl reposition --lat 74.01 --lon 20.05 --heading 10 --speed 6
+    icebridge ctl visibility 500
+    icebridge ctl steering-failure 2
+    icebridge ctl status --json
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+from bridge_node.control.client import request
+from bridge_node.node.config import load_config
+from bridge_node.node.errors import UserError
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--connect", default=None, metavar="ENDPOINT",
+                   help="the node's control endpoint (default: the config's control.endpoint)")
+    p.add_argument("--token", default=None, help="access token (default: the config's, or ICEBRIDGE_TOKEN)")
+    p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for the node's reply (default 5)")
+    p.add_argument("--json", action="store_true", help="print the node's reply as JSON")
+    actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
+    actions.add_parser("freeze", help="hold the physics; the clock stops, the outputs go on")
+    actions.add_parser("resume", help="run the physics again")
+    actions.add_parser("status", help="the exercise's time, ship and environment")
+    move = actions.add_parser("reposition", help="move the own ship")
+    move.add_argument("--lat", type=float, help="latitude, deg")
+    move.add_argument("--lon", type=float, help="longitude, deg")
+    move.add_argument("--north", type=float, help="m from the field's south-west corner")
+    move.add_argument("--east", type=float, help="m from the field's south-west corner")
+    move.add_argument("--heading", type=float, required=True, help="true heading, deg")
+    move.add_argument("--speed", type=float, default=0.0, help="speed through the water, kn (default 0)")
+    actions.add_parser("visibility", help="meteorological visibility").add_argument("metres", type=float)
+    actions.add_parser("clock", help="the exercise's time: HH:MM[:SS] (UTC, today) or an ISO 8601 date and "
+                                     "time").add_argument("time")
+    for name, (help_text, direction) in {"wind": ("true wind", "from_deg"),
+                                         "current": ("surface current", "to_deg")}.items():
+        one = actions.add_parser(name, help=help_text)
+        one.add_argument("speed_kn", type=float)
+        one.add_argument(direction, type=float, help="deg true (the wind: where from; the current: where to)")
+    actions.add_parser("steering-failure", help="steering gear pumps failed: 0 (repaired), 1 (half rate), "
+                                                "2 (rudder stuck)").add_argument("pumps_failed", type=int)
+    actions.add_parser("engine-failure", help="engine power left, percent: 100 (repaired) .. 0 "
+                                              "(blackout)").add_argument("power_percent", type=float)
+    actions.add_parser("send", help="send one command given as a JSON object").add_argument("command_json")
+
+
+def command_of(args: argparse.Namespace) -> dict:
+    """The command object the arguments give (checked again, whole, by the node)."""
+    a = args.action
+    if a in ("freeze", "resume"):
+        return {"command": a}
+    if a == "reposition":
+        place = {"latitude_deg": args.lat, "longitude_deg": args.lon, "north_m": args.north, "east_m": args.east}
+        return {"command": "reposition", **{k: v for k, v in place.items() if v is not None},
+                "heading_deg": args.heading, "speed_kn": args.speed}
+    if a == "visibility":
+        return {"command": "visibility", "visibility_m": args.metres}
+    if a == "clock":
+        return {"command": "clock", ("time_of_day" if len(args.time) <= 8 else "utc"): args.time}
+    if a == "wind":
+        return {"command": "wind", "speed_kn": args.speed_kn, "from_deg": args.from_deg}
+    if a == "current":
+        return {"command": "current", "speed_kn": args.speed_kn, "to_deg": args.to_deg}
+    if a == "steering-failure":
+        return {"command": "steering_failure", "pumps_failed": args.pumps_failed}
+    if a == "engine-failure":
+        return {"command": "engine_failure", "power_percent": args.power_percent}
+    try:
+        return json.loads(args.command_json)
+    except ValueError:
+        raise UserError(f"send {args.command_json!r}: not a JSON object") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    cfg = load_config(args.config)
+    if not (math.isfinite(args.timeout) and 0.1 <= args.timeout <= 600.0):
+        raise UserError(f"--timeout {args.timeout}: outside the allowed range [0.1, 600] s")
+    message = {"request": "status"} if args.action == "status" else {"command": command_of(args)}
+    reply = request(args.connect or cfg.control.endpoint, message, args.token or cfg.control.access_token(),
+                    args.timeout)
+    if not reply.get("ok"):
+        raise UserError(str(reply.get("error", "refused")))
+    if args.json or args.action == "status":
+        print(json.dumps(reply.get("status", reply)))
+    else:
+        print(f"{args.action}: queued")
+    return 0

@@ -1,0 +1,204 @@
+"""Instructor commands as they travel (JSON objects), checked field by field, and made into
+the world's typed commands (``sim_core.instructor``) at the tick that applies them.
+
+Each command is one JSON object with a ``command`` name and that command's fields, in the
+units of the bridge (degrees, knots, metres, UTC):
+
+========================  =========================================================
+``freeze``, ``resume``    physics held (the clock stops) / running again
+``reposition``            ``latitude_deg`` and ``longitude_deg``, or ``north_m`` and
+                          ``east_m`` (from the field's south-west corner);
+                          ``heading_deg``; ``speed_kn`` (default 0)
+``visibility``            ``visibility_m``
+``clock``                 ``utc`` (ISO 8601), or ``time_of_day`` (HH:MM[:SS], UTC, the
+                          exercise's date kept)
+``wind``                  ``speed_kn``, ``from_deg``
+``current``               ``speed_kn``, ``to_deg``
+``steering_failure``      ``pumps_failed``: 0 (repaired), 1 (half the rate), 2 (stuck)
+``engine_failure``        ``power_percent``: 100 (repaired) .. 0 (blackout)
+========================  =========================================================
+
+A bad command is refused whole with a ``CommandError`` that names the field, the value and
+what is allowed; nothing of it is applied.
+"""
+from __future__ import annotations
+
+import dataclasses
+import datetime as dt
+import json
+import math
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
+
+from sim_core.frames.geodesy import geodetic_to_local
+from sim_core.frames.units import KNOT
+from sim_core.instructor import (
+    Command,
+    EngineFailure,
+    Freeze,
+    Reposition,
+    SetClock,
+    SetEnvironment,
+    SteeringFailure,
+)
+from sim_core.world import WorldData, WorldModel
+
+MAX_COMMAND_BYTES = 4096  # a command's JSON is a few hundred bytes; anything longer is refused unread
+
+
+class CommandError(ValueError):
+    """A command refused: the message names the field, the value and what is allowed."""
+
+
+class _Command(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, frozen=True, allow_inf_nan=False)
+
+
+class FreezeCommand(_Command):
+    command: Literal["freeze", "resume"]
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        return Freeze(self.command == "freeze")
+
+
+class RepositionCommand(_Command):
+    command: Literal["reposition"]
+    latitude_deg: float | None = Field(None, ge=-89.0, le=89.0)
+    longitude_deg: float | None = Field(None, ge=-180.0, le=180.0)
+    north_m: float | None = Field(None, ge=-1.0e5, le=1.0e6)
+    east_m: float | None = Field(None, ge=-1.0e5, le=1.0e6)
+    heading_deg: float = Field(ge=0.0, lt=360.0)
+    speed_kn: float = Field(0.0, ge=0.0, le=25.0)
+
+    @model_validator(mode="after")
+    def _one_position(self) -> RepositionCommand:
+        geographic = (self.latitude_deg is not None, self.longitude_deg is not None)
+        local = (self.north_m is not None, self.east_m is not None)
+        if not (all(geographic) and not any(local) or all(local) and not any(geographic)):
+            raise ValueError("give latitude_deg and longitude_deg, or north_m and east_m")
+        return self
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        north, east = self.north_m, self.east_m
+        if north is None:
+            north, east = geodetic_to_local(math.radians(self.latitude_deg), math.radians(self.longitude_deg),
+                                            *model.origin)
+        return Reposition(north, east, math.radians(self.heading_deg), self.speed_kn * KNOT)
+
+
+class VisibilityCommand(_Command):
+    command: Literal["visibility"]
+    visibility_m: float = Field(ge=50.0, le=100_000.0)
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        return SetEnvironment((("visibility", float(self.visibility_m)),))
+
+
+class ClockCommand(_Command):
+    command: Literal["clock"]
+    utc: dt.datetime | None = Field(None, strict=False)  # from its ISO 8601 text
+    time_of_day: dt.time | None = Field(None, strict=False)  # from HH:MM[:SS]
+
+    @model_validator(mode="after")
+    def _one_time(self) -> ClockCommand:
+        if (self.utc is None) == (self.time_of_day is None):
+            raise ValueError("give utc (an ISO 8601 date and time) or time_of_day (HH:MM[:SS]), not both")
+        if self.utc is not None and not dt.datetime(1970, 1, 2, tzinfo=dt.timezone.utc) <= \
+                (self.utc if self.utc.tzinfo else self.utc.replace(tzinfo=dt.timezone.utc)) < \
+                dt.datetime(2200, 1, 1, tzinfo=dt.timezone.utc):
+            raise ValueError(f"utc {self.utc.isoformat()} is outside 1970-01-02 to 2200-01-01")
+        return self
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        if self.utc is not None:
+            utc = self.utc if self.utc.tzinfo else self.utc.replace(tzinfo=dt.timezone.utc)
+            return SetClock(utc.timestamp())
+        day = dt.datetime.fromtimestamp(data.epoch + data.time, dt.timezone.utc).date()
+        t = self.time_of_day.replace(tzinfo=None)
+        return SetClock(dt.datetime.combine(day, t, dt.timezone.utc).timestamp())
+
+
+class WindCommand(_Command):
+    command: Literal["wind"]
+    speed_kn: float = Field(ge=0.0, le=100.0)
+    from_deg: float = Field(ge=0.0, lt=360.0)
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        return SetEnvironment((("wind_speed", self.speed_kn * KNOT), ("wind_from", math.radians(self.from_deg))))
+
+
+class CurrentCommand(_Command):
+    command: Literal["current"]
+    speed_kn: float = Field(ge=0.0, le=10.0)
+    to_deg: float = Field(ge=0.0, lt=360.0)
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        return SetEnvironment((("current_speed", self.speed_kn * KNOT), ("current_to", math.radians(self.to_deg))))
+
+
+class SteeringFailureCommand(_Command):
+    command: Literal["steering_failure"]
+    pumps_failed: int = Field(ge=0, le=2)
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        return SteeringFailure(2 - self.pumps_failed)
+
+
+class EngineFailureCommand(_Command):
+    command: Literal["engine_failure"]
+    power_percent: float = Field(ge=0.0, le=100.0)
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        return EngineFailure(self.power_percent / 100.0)
+
+
+WireCommand = Annotated[FreezeCommand | RepositionCommand | VisibilityCommand | ClockCommand | WindCommand |
+                        CurrentCommand | SteeringFailureCommand | EngineFailureCommand,
+                        Field(discriminator="command")]
+_WIRE = TypeAdapter(WireCommand)
+COMMAND_NAMES = ("freeze", "resume", "reposition", "visibility", "clock", "wind", "current", "steering_failure",
+                 "engine_failure")
+
+
+def parse_command(message: dict) -> WireCommand:
+    """A command checked whole; CommandError naming the field, value and what is allowed."""
+    if not isinstance(message, dict) or message.get("command") not in COMMAND_NAMES:
+        name = message.get("command") if isinstance(message, dict) else message
+        raise CommandError(f"command {name!r}: unknown; allowed: {', '.join(COMMAND_NAMES)}")
+    try:
+        return _WIRE.validate_python(message)
+    except ValidationError as exc:
+        raise CommandError("; ".join(_explain(e) for e in exc.errors())) from None
+
+
+def _explain(error: dict) -> str:
+    """One pydantic error as 'field = value: what is allowed'."""
+    where = ".".join(str(p) for p in error["loc"][1:]) or "command"
+    value = error.get("input")
+    shown = json.dumps(value) if isinstance(value, (int, float, str, bool)) or value is None else type(value).__name__
+    text = error["msg"].removeprefix("Value error, ")
+    return f"{where} = {shown}: {text}" if where != "command" else text
+
+
+# -- the applied commands as records (session record, state stream) -----------------------
+_TYPES = {cls.__name__: cls for cls in (Freeze, Reposition, SetEnvironment, SetClock, SteeringFailure,
+                                        EngineFailure)}
+
+
+def command_record(command: Command) -> dict:
+    """An applied world command as a JSON-able dict (SI values, exactly as applied)."""
+    return {"type": type(command).__name__, **dataclasses.asdict(command)}
+
+
+def command_from_record(record: dict) -> Command:
+    """The world command a record holds; CommandError for one that is not."""
+    try:
+        cls = _TYPES[record["type"]]
+        fields = {k: v for k, v in record.items() if k != "type"}
+        if cls is SetEnvironment:
+            fields["changes"] = tuple((str(k), float(v)) for k, v in fields["changes"])
+        command = cls(**fields)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise CommandError(f"not a command record: {record!r:.200} ({exc})") from None
+    return command

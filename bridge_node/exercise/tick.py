@@ -1,0 +1,118 @@
+"""One tick for every mode, fanned out as python-can's ``Notifier`` fans out to ``Listener``.
+
+A tick takes the orders of its step from one ``OrderSource`` (the live links and their
+arbiter, a session record's links fed from the record, a track log) and the instructor's
+commands from one ``CommandSource`` (the control endpoint's queue, a session record),
+steps the world by dt with them (the commands applied first, at the step's start), notes
+the orders the ship refused, and hands one ``TickOutcome`` (the step's ``WorldEvents``, the
+orders, every alarm change of the step, the tick's clock) to its listeners: link outputs, the state stream, the session record, the status line, the
+traffic picture. ``run``, ``links monitor``, ``replay`` of a track and of a session all
+step through ``ExerciseTick``; they differ only in the source, the listeners and the
+pacing (``bridge_node.exercise.pacer``).
+"""
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Protocol
+
+from bridge_node.control.queue import CommandSource
+from bridge_node.links.arbiter import Decision
+from bridge_node.links.base import Alarm
+from bridge_node.node.order_refusals import OrderRefusals
+from sim_core.world import Controls, WorldData, WorldEvents, WorldModel, step
+
+
+class OrderSource(Protocol):
+    """Where a tick's orders come from (``LinkHub``, a replay's source)."""
+
+    def poll(self, now: float) -> Decision:
+        """The orders for the step about to be taken at ``now`` (the source's clock, s), and
+        the alarm changes they bring (not yet raised)."""
+
+
+@dataclass(frozen=True)
+class TickOutcome:
+    """What one tick published: the step's events, the orders it obeyed, every alarm change
+    of the step (the source's and the refused orders'), the tick's clock (s: monotonic in a
+    live run, the source's in a replay), when the newest order in it was read (monotonic s,
+    or None), and whether its outputs go out (False while a replay runs ahead to a seek)."""
+
+    events: WorldEvents
+    controls: Controls
+    alarms: tuple[Alarm, ...]
+    now: float
+    input_time: float | None
+    send: bool = True
+
+
+class StepListener:
+    """Gets every tick's outcome, like python-can's ``Listener`` gets every message;
+    ``stop`` when the exercise ends (called once by ``ExerciseTick.stop``)."""
+
+    def on_polled(self, seq: int, now: float) -> None:
+        """The tick of step ``seq`` has taken its orders at ``now`` (s)."""
+
+    def on_step(self, outcome: TickOutcome) -> None:
+        """One step done; ``outcome`` is what it published."""
+
+    def stop(self) -> None:
+        """The exercise ended: release what the listener holds."""
+
+
+class _Callback(StepListener):
+    """A plain function as a listener (python-can's ``Notifier`` takes callables too)."""
+
+    def __init__(self, function: Callable[[TickOutcome], None]) -> None:
+        self.on_step = function
+
+
+def as_listener(listener: StepListener | Callable[[TickOutcome], None]) -> StepListener:
+    """``listener`` itself, or a function given every outcome wrapped as a listener."""
+    return listener if isinstance(listener, StepListener) else _Callback(listener)
+
+
+class ExerciseTick:
+    """The one tick: orders from ``orders``, the world stepped, the outcome to ``listeners``
+    (``StepListener`` objects or functions of the outcome) in the order given. A context
+    manager: leaving it stops the listeners (once)."""
+
+    def __init__(self, model: WorldModel, data: WorldData, orders: OrderSource,
+                 listeners: Iterable[StepListener | Callable[[TickOutcome], None]] = (),
+                 commands: CommandSource | None = None) -> None:
+        self.model, self.data, self.orders, self.commands = model, data, orders, commands
+        self.listeners = [as_listener(listener) for listener in listeners]
+        self.refusals = OrderRefusals()
+        self._stopped = False
+
+    def add_listener(self, listener: StepListener | Callable[[TickOutcome], None]) -> None:
+        """Give ``listener`` every later tick's outcome."""
+        self.listeners.append(as_listener(listener))
+
+    def __call__(self, dt: float, now: float, send: bool = True) -> TickOutcome:
+        """One tick of dt s at ``now`` (the source's clock, s); ``send`` False: a step run
+        ahead, whose outputs do not go out (its alarm changes still do)."""
+        decision = self.orders.poll(now)
+        commands = self.commands.take(self.model, self.data) if self.commands is not None else ()
+        for listener in self.listeners:
+            listener.on_polled(self.data.seq, now)
+        events = step(self.model, self.data, dt, decision.controls, commands)
+        alarms = (*decision.alarms, *self.refusals.note(events.rejected, now))
+        outcome = TickOutcome(events, decision.controls, alarms, now, decision.input_time, send)
+        for listener in self.listeners:
+            listener.on_step(outcome)
+        return outcome
+
+    def stop(self) -> None:
+        """Stop every listener; safe to call twice."""
+        if self._stopped:
+            return
+        self._stopped = True
+        for listener in self.listeners:
+            listener.stop()
+
+    def __enter__(self) -> ExerciseTick:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()

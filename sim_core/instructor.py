@@ -1,0 +1,108 @@
+"""What an instructor does to a running exercise, as typed values the world applies at a
+step's start (``step(..., commands=...)``), in the order given: freeze and resume, move the
+own ship, set the visibility, the exercise clock, the wind and the current, and fail the
+steering gear or the engine. SI: m, m/s, rad, unix s. Values are checked where they are
+made (``bridge_node.exercise.commands``); here they are only applied.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from sim_core.ship.model import equilibrium_rps
+
+if TYPE_CHECKING:
+    from sim_core.world import WorldData, WorldModel
+
+
+@dataclass(frozen=True)
+class Freeze:
+    """Freeze (physics held, clock stopped) or resume the exercise."""
+
+    frozen: bool
+
+
+@dataclass(frozen=True)
+class Reposition:
+    """The own ship to (north, east) m from the field's corner, heading rad clockwise from
+    north, speed m/s ahead through the water, engine turning to hold it, rudder midships.
+    Not ``at_once``: the ship moves at the first step by which the tiles around the new
+    place have been prepared ahead (within the steps' budget, so that no step stalls);
+    the step that moves it publishes the move ``at_once``, as a replay gives it."""
+
+    north: float
+    east: float
+    heading: float
+    speed: float
+    at_once: bool = False
+
+
+@dataclass(frozen=True)
+class SetEnvironment:
+    """New values for some of the environment's fields (``sim_core.environment``); the
+    others keep theirs."""
+
+    changes: tuple[tuple[str, float], ...]
+
+
+@dataclass(frozen=True)
+class SetClock:
+    """The exercise clock to this UTC now, unix s (the time of day, the sun)."""
+
+    utc: float
+
+
+@dataclass(frozen=True)
+class SteeringFailure:
+    """The steering gear's pumps that work: 2 all, 1 (half the rate), 0 (the rudder stuck)."""
+
+    pumps: int
+
+
+@dataclass(frozen=True)
+class EngineFailure:
+    """The share of the engine's power available: 1 all, 0 a blackout."""
+
+    power_share: float
+
+
+Command = Freeze | Reposition | SetEnvironment | SetClock | SteeringFailure | EngineFailure
+
+
+def apply_command(model: WorldModel, data: WorldData, command: Command) -> Command | None:
+    """Carry one command out on the world, before its step; returns it as applied (None
+    for a move that waits for its tiles: ``WorldData.moving_to``)."""
+    ship = data.ship
+    if isinstance(command, Freeze):
+        data.environment = dataclasses.replace(data.environment, frozen=command.frozen)
+    elif isinstance(command, SetEnvironment):
+        data.environment = dataclasses.replace(data.environment, **dict(command.changes))
+    elif isinstance(command, SetClock):
+        data.epoch = command.utc - data.time
+    elif isinstance(command, SteeringFailure):
+        ship.steering_pumps = command.pumps
+    elif isinstance(command, EngineFailure):
+        ship.power_share = command.power_share
+    elif isinstance(command, Reposition) and not command.at_once:
+        data.moving_to = command
+        return None
+    elif isinstance(command, Reposition):
+        data.moving_to = None
+        move_ship(model, data, command)
+    return command
+
+
+def move_ship(model: WorldModel, data: WorldData, to: Reposition) -> None:
+    """Move the ship; its wake of broken ice stays where it was, and the scene switches the
+    tiles around the new place in at the step."""
+    ship = data.ship
+    ship.eta[:] = 0.0
+    ship.nu[:] = 0.0
+    ship.eta[0], ship.eta[1], ship.eta[5] = to.north, to.east, to.heading % (2.0 * math.pi)
+    ship.nu[0] = to.speed
+    ship.rps = ship.rps_order = equilibrium_rps(model.ship, to.speed)
+    ship.rudder = ship.rudder_order = 0.0
+    ship.external[:] = 0.0
+    data.last_hull_break = -math.inf
