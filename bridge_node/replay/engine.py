@@ -28,6 +28,7 @@ from bridge_node.links.arbiter import Decision
 from bridge_node.links.base import Alarm
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.order_refusals import OrderRefusals
+from bridge_node.node.output_files import OutputFile
 from bridge_node.stream.publisher import StatePublisher
 from sim_core.frames.geodesy import local_to_geodetic
 from sim_core.frames.units import KNOT
@@ -110,7 +111,7 @@ class ReplayStats:
         longitude (deg), north and east (m) from the field's corner at ``origin`` (lat, lon
         rad), heading (deg), speed over ground (kn), ice under the bow."""
         path.parent.mkdir(parents=True, exist_ok=True)
-        with open(path, "w", newline="", encoding="ascii") as f:
+        with OutputFile(path, "the replayed track (--out)") as tmp, open(tmp, "w", newline="", encoding="ascii") as f:
             out = csv.writer(f)
             out.writerow(["time", "latitude_deg", "longitude_deg", "north_m", "east_m", "heading_deg", "sog_kn", "ice"])
             for t, north, east, heading, sog, condition in self.rows:

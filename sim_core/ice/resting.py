@@ -175,6 +175,14 @@ def _take_pushes(rows, push, turn, mass, inertia, gcell, extent, vel, yaw_rate, 
     return out[:n]
 
 
+def wake_share(model: IceModel, data: IceData) -> None:
+    """Wake up to ``rest_per_step`` resting floes (the first rows): a current has set in,
+    and a floe at rest would not drift with the water."""
+    rows = np.flatnonzero(data.state.resting)[:model.settings.rest_per_step]
+    if len(rows):
+        data.contacts.wake(data.state, rows)
+
+
 def wake_struck(model: IceModel, data: IceData, con: Contacts) -> None:
     """Give the resting floes the pushes of the last step's contacts, and wake those they
     bring to ``rest_speed``. In the step a resting floe met its striker as a wall (a static

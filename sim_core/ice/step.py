@@ -221,8 +221,13 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
     """Advance the breakable ice by dt seconds with the hull moving as given, in water
     moving at ``water`` (world x east, y north, m/s; None: still)."""
     st, space = data.state, data.contacts
-    space.set_water_velocity(np.zeros(2) if water is None else water, dt)
-    rest = model.settings.rest_far_floes
+    still = water is None or not np.any(water)
+    space.set_water_velocity(np.zeros(2) if still else water, dt)
+    # floes rest only in still water: in a current every free floe drifts, so none is calm,
+    # and those at rest when it set in are woken, a step's share at a time
+    rest = model.settings.rest_far_floes and still
+    if not still:
+        resting.wake_share(model, data)
     space.set_hull(hull.xy, hull.angle, hull.velocity, hull.angular_velocity)
     if rest:
         resting.wake_near_hull(model, data, hull.xy)

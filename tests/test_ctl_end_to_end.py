@@ -1,0 +1,123 @@
+"""``icebridge run`` commanded by ``icebridge ctl`` and by a control client, as an instructor
+does it: separate processes, the console on a serial line, the instruments on UDP. Freeze
+stops the exercise clock and resume restarts it; a reposition moves the ship in the NMEA
+position; a steering failure holds the rudder angle the RSA sentences report."""
+import json
+import math
+import socket
+import subprocess
+import sys
+import time
+
+import pynmea2
+import pytest
+import serial
+from conftest import REPO, exercise_toml, run_cli
+from links_helpers import pty_pair
+
+from bridge_node.control.client import request
+from bridge_node.node.errors import UserError
+from bridge_node.node.network import free_port
+
+
+class _Instruments:
+    """The NMEA sentences the node sends to UDP, parsed as they come."""
+
+    def __init__(self) -> None:
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.settimeout(0.1)
+        self.port = self.sock.getsockname()[1]
+        self.last: dict[str, pynmea2.NMEASentence] = {}
+
+    def read(self, seconds: float) -> None:
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            try:
+                for line in self.sock.recv(4096).decode().split():
+                    if line.startswith("$"):
+                        msg = pynmea2.parse(line)
+                        self.last[msg.sentence_type] = msg
+            except (socket.timeout, pynmea2.ParseError):
+                pass
+
+
+def _wait_for(what, timeout: float = 60.0, poll: float = 0.2):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        try:
+            got = what()
+        except UserError:
+            got = None
+        if got:
+            return got
+        time.sleep(poll)
+    raise AssertionError("timed out")
+
+
+def test_freeze_reposition_and_steering_failure_from_the_command_line(tmp_path):
+    instruments = _Instruments()
+    endpoint = f"tcp://127.0.0.1:{free_port()}"
+    with pty_pair(tmp_path) as (node_end, console_end):
+        config = exercise_toml(tmp_path, "", control=f'endpoint = "{endpoint}"')
+        config.write_text(config.read_text() +
+                          f'[[links]]\nname = "console"\ntype = "nmea0183"\nport = "{node_end}"\nbaudrate = 38400\n'
+                          f'udp_output = true\nudp_port = {instruments.port}\n[arbitration]\nrudder = ["console"]\nengine = []\n')
+        node = subprocess.Popen([sys.executable, "-m", "bridge_node", "run", "--config", str(config), "--duration",
+                                 "120", "--render", "none", "--json", "--out", str(tmp_path / "out")], cwd=REPO,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        helm = serial.Serial(console_end, 38400, timeout=0)
+        try:
+            status = lambda: request(endpoint, {"request": "status"}, None, 1.0)["status"]  # noqa: E731
+            _wait_for(status)
+
+            def order(deg: float, seconds: float) -> None:
+                body = f"RCROR,{deg:.1f},A,,V,B"
+                checksum = 0
+                for c in body:
+                    checksum ^= ord(c)
+                end = time.monotonic() + seconds
+                while time.monotonic() < end:
+                    helm.write(f"${body}*{checksum:02X}\r\n".encode())
+                    instruments.read(0.1)
+
+            # freeze: the clock stops and the outputs go on; resume: it runs again
+            r = run_cli("ctl", "--config", str(config), "freeze")
+            assert r.returncode == 0 and "freeze: queued" in r.stdout
+            t0 = _wait_for(lambda: status()["frozen"] and status()["time_s"])
+            instruments.read(1.0)
+            assert status()["time_s"] == t0 and "RMC" in instruments.last  # held, still reporting
+            assert run_cli("ctl", "--config", str(config), "resume").returncode == 0
+            _wait_for(lambda: status()["time_s"] > t0 + 0.5)
+
+            # a steering failure holds the rudder where it is, as the RSA sentences show
+            order(6.0, 5.0)  # the gear turns about 2.3 deg/s
+            assert float(instruments.last["RSA"].rsa_starboard) == pytest.approx(6.0, abs=0.2)
+            assert request(endpoint, {"command": {"command": "steering_failure", "pumps_failed": 2}}, None)["ok"]
+            order(-6.0, 3.0)
+            assert float(instruments.last["RSA"].rsa_starboard) == pytest.approx(6.0, abs=0.2)  # stuck
+            assert request(endpoint, {"command": {"command": "steering_failure", "pumps_failed": 0}}, None)["ok"]
+            order(-6.0, 8.0)
+            assert float(instruments.last["RSA"].rsa_starboard) == pytest.approx(-6.0, abs=0.2)  # repaired
+
+            # a reposition moves the ship in the NMEA position
+            r = run_cli("ctl", "--config", str(config), "reposition", "--lat", "74.002", "--lon", "20.004",
+                        "--heading", "90", "--speed", "0")
+            assert r.returncode == 0, r.stderr
+            _wait_for(lambda: abs(status()["latitude_deg"] - 74.002) < 1e-4, timeout=30.0)
+            instruments.read(2.0)
+            rmc = instruments.last["RMC"]
+            assert rmc.latitude == pytest.approx(74.002, abs=2e-4) and rmc.longitude == pytest.approx(20.004, abs=5e-4)
+
+            # a bad command: exit 2 and the node's reason; nothing applied
+            r = run_cli("ctl", "--config", str(config), "visibility", "nan")
+            assert r.returncode == 2 and "visibility_m = NaN" in r.stderr and "Traceback" not in r.stderr
+            assert status()["visibility_m"] == 8000.0
+        finally:
+            helm.close()
+            node.terminate()
+            out, err = node.communicate(timeout=60)
+    assert node.returncode == 0, err
+    summary = json.loads(out)
+    assert summary["control"]["requests"]["accepted"] == 5 and summary["control"]["requests"]["invalid"] == 1
+    assert math.isfinite(summary["tick_ms_p99"])
