@@ -7,8 +7,8 @@ cd "$(dirname "$0")/.."
 
 # socat: pty pairs for the serial and Modbus RTU link tests; EGL + Mesa: headless rendering;
 # xvfb: a virtual X display for the channel-window tests; gpsd: the NMEA consumer the link
-# tests feed
-SYSTEM_PACKAGES=(socat libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri xvfb gpsd)
+# tests feed; chromium + chromium-driver: the headless browser the instructor station's tests drive
+SYSTEM_PACKAGES=(socat libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri xvfb gpsd chromium chromium-driver)
 
 missing=()
 for pkg in "${SYSTEM_PACKAGES[@]}"; do

@@ -17,6 +17,7 @@ from bridge_node.commands import (
     experiment_breaking,
     experiment_transit,
     hil,
+    instructor,
     links_monitor,
     prefracture,
     render_node,
@@ -44,6 +45,7 @@ COMMANDS: dict[str, tuple] = {
         "monitor": (links_monitor, "show orders and link health live, publish an open-water ship"),
     }),
     "console": (console, "a software bridge console: play scenario scripts or steer from the keyboard"),
+    "instructor": (instructor, "the instructor station: a web page to watch and command a running exercise"),
     "ctl": (ctl, "command a running exercise: freeze, reposition, weather, failures (the instructor's commands)"),
     "hil": ("hardware-in-the-loop tests", {
         "run": (hil, "start the node, play scenarios through the software console, judge the outputs"),

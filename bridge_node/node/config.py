@@ -23,6 +23,7 @@ from bridge_node.node.toml_errors import shown, toml_error
 from bridge_node.render.settings import RenderSettings
 from bridge_node.render.warp import WarpError, read_pfm
 from bridge_node.replay.settings import ReplaySettings
+from bridge_node.station.settings import InstructorSettings
 from bridge_node.stream.settings import StreamSettings
 from bridge_node.traffic.settings import TrafficSettings
 from sim_core.fracture.tile_template import FractureSettings
@@ -110,6 +111,7 @@ class NodeConfig(Params):
     render: RenderSettings = RenderSettings()
     stream: StreamSettings = StreamSettings()
     control: ControlSettings = ControlSettings()
+    instructor: InstructorSettings = InstructorSettings()
     links: list[LinkSettings] = Field(default_factory=list)
     arbitration: ArbitrationSettings = ArbitrationSettings()
     traffic: TrafficSettings = TrafficSettings()

@@ -1,0 +1,38 @@
+"""What the page needs once to draw the exercise: the field's extent and tile grid, every
+template cell's plan outline and home centroid, the own ship's waterline outline, and the
+local-plane scale of the latitude/longitude grid. Sent to each browser when it connects."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from bridge_node.node.config import NodeConfig
+from bridge_node.station.wire import pack
+from sim_core.frames.geodesy import radii
+from sim_core.world import WorldModel
+
+
+def geometry_message(model: WorldModel, cfg: NodeConfig) -> bytes:
+    """The ``geometry`` message: JSON for the field, ship and templates; arrays of every
+    global cell's outline points (x, y about its centroid, m), outline starts (G + 1) and
+    centroid in its template's tile frame (x, y, m)."""
+    ice, scene, ship = model.ice, model.scene, model.ship.particulars
+    lat0, lon0 = model.origin
+    m, n = radii(lat0)
+    templates = [{"start": int(ice.template_start[k]), "cells": int(t.n_cells), "side": float(t.side)}
+                 for k, t in enumerate(ice.templates)]
+    header = {
+        "type": "geometry",
+        "field": {"nx": int(scene.nx), "ny": int(scene.ny), "side": float(scene.side)},
+        "origin": {"latitude_deg": math.degrees(lat0), "longitude_deg": math.degrees(lon0),
+                   "m_per_deg_lat": m * math.pi / 180.0, "m_per_deg_lon": n * math.cos(lat0) * math.pi / 180.0},
+        "ship": {"name": cfg.ship.name, "length": float(ship.length), "beam": float(ship.beam),
+                 "hull": np.round(model.contour, 3).tolist()},
+        "searchlights": len(model.searchlights),
+        "templates": templates,
+        "rate_hz": cfg.instructor.rate_hz,
+    }
+    arrays = {"outline": ice.outline[:, :2], "outline_start": ice.outline_start.astype(np.int64),
+              "centroid": ice.centroid[:, :2]}
+    return pack(header, arrays)
