@@ -55,8 +55,10 @@ def exercise_config(cache_dir: Path, width: float, height: float, tile_side: flo
 
 def exercise_toml(folder: Path, channels: str = "", **sections: str) -> Path:
     """A config file for CLI runs: a 400 m x 400 m field of 0.3 m ice, the ship's bow in the
-    ice, its own template cache and session folder, a state stream on free loopback ports,
-    and the given ``[[render.channels]]`` text and extra sections (name -> TOML body)."""
+    ice, its own template cache and session folder, a state stream and a control endpoint on
+    free loopback ports, and the given ``[[render.channels]]`` text and extra sections
+    (name -> TOML body; a ``control`` one replaces the default's)."""
+    sections = {"control": f'endpoint = "tcp://127.0.0.1:{free_port()}"'} | sections
     text = ('[ship]\nname = "polar_cargo"\n[ice_field]\nwidth = 400.0\nheight = 400.0\nthickness = 0.3\n'
             '[exercise]\nstart_north = -60.0\n'
             f'[paths]\ncache_dir = "{folder / "tiles"}"\nsession_dir = "{folder / "sessions"}"\n'

@@ -19,7 +19,8 @@ def node_toml(folder, console: str) -> str:
     path.write_text('[ship]\nname = "polar_cargo"\n[ice_field]\nwidth = 400.0\nheight = 400.0\nthickness = 0.3\n'
                     f'[paths]\ncache_dir = "{folder / "tiles"}"\nsession_dir = "{folder / "sessions"}"\n'
                     f'[stream]\npublish = "tcp://127.0.0.1:{free_port()}"\n'
-                    f'snapshot = "tcp://127.0.0.1:{free_port()}"\n[console]\n{console}\n')
+                    f'snapshot = "tcp://127.0.0.1:{free_port()}"\n'
+                    f'[control]\nendpoint = "tcp://127.0.0.1:{free_port()}"\n[console]\n{console}\n')
     return str(path)
 
 
