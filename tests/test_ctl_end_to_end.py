@@ -55,6 +55,31 @@ def _wait_for(what, timeout: float = 60.0, poll: float = 0.2):
     raise AssertionError("timed out")
 
 
+def _order(helm: serial.Serial, instruments: _Instruments, deg: float, seconds: float) -> None:
+    """The helm's rudder order, sent 10 times a second for ``seconds``, the outputs read meanwhile."""
+    body = f"RCROR,{deg:.1f},A,,V,B"
+    checksum = 0
+    for c in body:
+        checksum ^= ord(c)
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        helm.write(f"${body}*{checksum:02X}\r\n".encode())
+        instruments.read(0.1)
+
+
+def _steering_failure(endpoint: str, helm: serial.Serial, instruments: _Instruments) -> None:
+    """A steering failure holds the rudder where it is, as the RSA sentences show; repaired,
+    it follows the order again (the gear turns about 2.3 deg/s)."""
+    _order(helm, instruments, 6.0, 5.0)
+    assert float(instruments.last["RSA"].rsa_starboard) == pytest.approx(6.0, abs=0.2)
+    assert request(endpoint, {"command": {"command": "steering_failure", "pumps_failed": 2}}, None)["ok"]
+    _order(helm, instruments, -6.0, 3.0)
+    assert float(instruments.last["RSA"].rsa_starboard) == pytest.approx(6.0, abs=0.2)  # stuck
+    assert request(endpoint, {"command": {"command": "steering_failure", "pumps_failed": 0}}, None)["ok"]
+    _order(helm, instruments, -6.0, 8.0)
+    assert float(instruments.last["RSA"].rsa_starboard) == pytest.approx(-6.0, abs=0.2)  # repaired
+
+
 def test_freeze_reposition_and_steering_failure_from_the_command_line(tmp_path):
     instruments = _Instruments()
     endpoint = f"tcp://127.0.0.1:{free_port()}"
@@ -71,16 +96,6 @@ def test_freeze_reposition_and_steering_failure_from_the_command_line(tmp_path):
             status = lambda: request(endpoint, {"request": "status"}, None, 1.0)["status"]  # noqa: E731
             _wait_for(status)
 
-            def order(deg: float, seconds: float) -> None:
-                body = f"RCROR,{deg:.1f},A,,V,B"
-                checksum = 0
-                for c in body:
-                    checksum ^= ord(c)
-                end = time.monotonic() + seconds
-                while time.monotonic() < end:
-                    helm.write(f"${body}*{checksum:02X}\r\n".encode())
-                    instruments.read(0.1)
-
             # freeze: the clock stops and the outputs go on; resume: it runs again
             r = run_cli("ctl", "--config", str(config), "freeze")
             assert r.returncode == 0 and "freeze: queued" in r.stdout
@@ -90,15 +105,7 @@ def test_freeze_reposition_and_steering_failure_from_the_command_line(tmp_path):
             assert run_cli("ctl", "--config", str(config), "resume").returncode == 0
             _wait_for(lambda: status()["time_s"] > t0 + 0.5)
 
-            # a steering failure holds the rudder where it is, as the RSA sentences show
-            order(6.0, 5.0)  # the gear turns about 2.3 deg/s
-            assert float(instruments.last["RSA"].rsa_starboard) == pytest.approx(6.0, abs=0.2)
-            assert request(endpoint, {"command": {"command": "steering_failure", "pumps_failed": 2}}, None)["ok"]
-            order(-6.0, 3.0)
-            assert float(instruments.last["RSA"].rsa_starboard) == pytest.approx(6.0, abs=0.2)  # stuck
-            assert request(endpoint, {"command": {"command": "steering_failure", "pumps_failed": 0}}, None)["ok"]
-            order(-6.0, 8.0)
-            assert float(instruments.last["RSA"].rsa_starboard) == pytest.approx(-6.0, abs=0.2)  # repaired
+            _steering_failure(endpoint, helm, instruments)
 
             # a reposition moves the ship in the NMEA position
             r = run_cli("ctl", "--config", str(config), "reposition", "--lat", "74.002", "--lon", "20.004",

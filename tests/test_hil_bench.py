@@ -4,9 +4,13 @@ import json
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import pytest
 from conftest import REPO
+
+from bridge_node.hil.bench import Bench
+from bridge_node.node.config import load_config, resolve_path
 
 pytest_plugins = ["bridge_node.testing"]  # the fixtures users get: hil_bench, hil_scenario
 SCENARIOS = REPO / "config" / "scenarios"
@@ -130,3 +134,19 @@ def test_modbus_bad_replies_over_tcp(node_toml, tmp_path):
     record = next((run / "sessions").iterdir()) / "modbus.csv"
     reads = [row for row in record.read_text().splitlines()[1:] if row.split(",")[2] == "read"]
     assert len(reads) == primary["inputs"] + primary["errors"]["out_of_range"]
+
+
+def test_the_session_record_folder_is_not_doubled_for_a_relative_run_folder(tmp_path, monkeypatch):
+    """``hil run`` names its run folder relative to the working directory; the node reads a
+    relative ``paths.session_dir`` from its config's folder, which is that run folder, so the
+    record went to out/hil/<stamp>/out/hil/<stamp>/sessions."""
+    monkeypatch.chdir(tmp_path)
+    bench = Bench(Path("out/hil/stamp"), ["nmea0183"])
+    bench.folder.mkdir(parents=True)
+    try:
+        bench._write_configs()
+    finally:
+        bench._stack.close()
+    node_toml = bench.folder / "node.toml"
+    cfg = load_config(node_toml)
+    assert resolve_path(node_toml, cfg.paths.session_dir) == tmp_path / "out" / "hil" / "stamp" / "sessions"

@@ -127,13 +127,18 @@ def other_simulator_pdu(lat_deg: float, lon_deg: float, heading: float, speed: f
     return buf.getvalue()
 
 
-def test_a_vessel_from_another_simulator_goes_out_as_ais(tmp_path):
-    nmea_rx, listen = receiver(), free_port()
-    cfg = node_config([
+def dis_and_plotter(listen: int, nmea_rx: socket.socket):
+    """A DIS link listening on ``listen`` and a plotter's NMEA link sending only AIS to ``nmea_rx``."""
+    return node_config([
         {"type": "dis", "name": "dis", "listen_port": listen, "send_to": [f"127.0.0.1:{free_port()}"]},
         {"type": "nmea0183", "name": "plotter", "udp_port": nmea_rx.getsockname()[1],
          "rates": {k: 0 for k in ("RMC", "GGA", "VTG", "ZDA", "HDT", "ROT", "RSA", "RPM", "VBW", "XDR")},
          "ais": {"mmsi": 257123450, "to_bow": 20, "to_stern": 130, "to_port": 10, "to_starboard": 12}}])
+
+
+def test_a_vessel_from_another_simulator_goes_out_as_ais(tmp_path):
+    nmea_rx, listen = receiver(), free_port()
+    cfg = dis_and_plotter(listen, nmea_rx)
     sim = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     with LinkHub(cfg.links, cfg.arbitration) as hub:
         sim.sendto(other_simulator_pdu(74.02, 20.03, math.radians(250.0), 6.0), ("127.0.0.1", listen))
@@ -162,11 +167,7 @@ def test_a_marking_outside_ais_text_is_sanitised_counted_and_the_traffic_goes_on
     """One PDU whose marking holds characters AIS 6-bit text lacks used to raise KeyError in
     pyais inside the hub's publish, which stopped ``icebridge run``."""
     nmea_rx, listen = receiver(), free_port()
-    cfg = node_config([
-        {"type": "dis", "name": "dis", "listen_port": listen, "send_to": [f"127.0.0.1:{free_port()}"]},
-        {"type": "nmea0183", "name": "plotter", "udp_port": nmea_rx.getsockname()[1],
-         "rates": {k: 0 for k in ("RMC", "GGA", "VTG", "ZDA", "HDT", "ROT", "RSA", "RPM", "VBW", "XDR")},
-         "ais": {"mmsi": 257123450, "to_bow": 20, "to_stern": 130, "to_port": 10, "to_starboard": 12}}])
+    cfg = dis_and_plotter(listen, nmea_rx)
     sim = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     with LinkHub(cfg.links, cfg.arbitration) as hub:
         sim.sendto(other_simulator_pdu(74.02, 20.03, 0.0, 3.0, marking="od{|}~`en"), ("127.0.0.1", listen))

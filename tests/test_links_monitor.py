@@ -39,21 +39,31 @@ def wait_ready(record, proc, timeout: float = 30.0) -> None:
         time.sleep(0.05)
 
 
-def test_monitor_json_summary(tmp_path):
+def monitor_summary(tmp_path, duration: str, lines: list[bytes], times: int, extra: str = "") -> dict:
+    """Run the monitor on a console pty (``extra`` added to its config), send ``lines``
+    ``times`` times, 0.1 s apart, and return its JSON summary."""
     with pty_pair(tmp_path) as (node_end, console_end):
+        cfg = tmp_path / "monitor.toml"
+        cfg.write_text(open(write_config(tmp_path, node_end)).read() + extra)
         record = tmp_path / "rec"
-        proc = start_monitor(write_config(tmp_path, node_end), record, "--duration", "6", "--json")
+        proc = start_monitor(str(cfg), record, "--duration", duration, "--json")
         wait_ready(record, proc)
         port = serial.Serial(console_end, 38400, timeout=0)
-        for _ in range(30):  # 3 s of orders, then silence: stale after 1 s, fail-safe 1 s later
-            port.write((str(ROR("RC", "ROR", ("20.0", "A", "", "V", "B"))) + "\r\n").encode())
-            port.write((str(PRC("RC", "PRC", ("50.0", "A", "", "V", "", "V", "B", "0"))) + "\r\n").encode())
-            port.write(b"$RCROR,20.0,A,,V,B*00\r\n")
+        for _ in range(times):
+            for line in lines:
+                port.write(line)
             time.sleep(0.1)
         out, err = proc.communicate(timeout=30)
         port.close()
     assert proc.returncode == 0, err
-    s = json.loads(out)
+    return json.loads(out)
+
+
+def test_monitor_json_summary(tmp_path):
+    # 3 s of orders, then silence: stale after 1 s, fail-safe 1 s later
+    s = monitor_summary(tmp_path, "6", [(str(ROR("RC", "ROR", ("20.0", "A", "", "V", "B"))) + "\r\n").encode(),
+                                        (str(PRC("RC", "PRC", ("50.0", "A", "", "V", "", "V", "B", "0"))) + "\r\n")
+                                        .encode(), b"$RCROR,20.0,A,,V,B*00\r\n"], 30)
     assert s["orders"]["console/rudder/0"]["count"] == 30
     assert abs(s["orders"]["console/rudder/0"]["last"] - 0.349066) < 1e-5
     assert s["orders"]["console/lever/0"]["last"] == 50.0
@@ -68,23 +78,10 @@ def test_monitor_json_summary(tmp_path):
 def test_searchlight_orders_act_under_the_monitor(tmp_path):
     """The monitor steps the exercise's one tick, so a searchlight order from the console
     reaches the ship's light (it used to be shown and dropped)."""
-    with pty_pair(tmp_path) as (node_end, console_end):
-        cfg = tmp_path / "light.toml"
-        cfg.write_text(open(write_config(tmp_path, node_end)).read() +
-                       '[[render.searchlights]]\nposition = [20.0, 0.0, 30.0]\ndepression_deg = 10.0\n'
-                       'train_range_deg = [-90.0, 90.0]\non = false\n')
-        record = tmp_path / "rec"
-        proc = start_monitor(str(cfg), record, "--duration", "4", "--json")
-        wait_ready(record, proc)
-        port = serial.Serial(console_end, 38400, timeout=0)
-        body = "PICBSL,0,A,45.0,-5.0"
-        for _ in range(10):
-            port.write(f"${body}*{checksum(body):02X}\r\n".encode())
-            time.sleep(0.1)
-        out, err = proc.communicate(timeout=30)
-        port.close()
-    assert proc.returncode == 0, err
-    s = json.loads(out)
+    body = "PICBSL,0,A,45.0,-5.0"
+    s = monitor_summary(tmp_path, "4", [f"${body}*{checksum(body):02X}\r\n".encode()], 10,
+                        '[[render.searchlights]]\nposition = [20.0, 0.0, 30.0]\ndepression_deg = 10.0\n'
+                        'train_range_deg = [-90.0, 90.0]\non = false\n')
     assert s["orders"]["console/searchlight/0"]["count"] == 10
     assert s["searchlights"] == [{"on": True, "bearing_deg": 45.0, "elevation_deg": -5.0}]
     assert s["orders_rejected"] == {}

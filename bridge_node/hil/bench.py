@@ -165,7 +165,8 @@ class Bench:
         base.pop("console", None)  # the bench's console gives the orders, not the config's own
         base |= {"links": node_links,
                  "arbitration": base.get("arbitration", {}) | {"rudder": sources, "engine": sources},
-                 "paths": paths | {"cache_dir": str(cache), "session_dir": str(self.folder / "sessions")},
+                 # absolute: the node reads a relative path from its config's folder, which is this one
+                 "paths": paths | {"cache_dir": str(cache), "session_dir": str((self.folder / "sessions").resolve())},
                  "stream": base.get("stream", {}) | {"publish": f"tcp://127.0.0.1:{free_port()}",
                                                      "snapshot": f"tcp://127.0.0.1:{free_port()}"},
                  "control": base.get("control", {}) | {"endpoint": f"tcp://127.0.0.1:{free_port()}"}}
