@@ -1,7 +1,9 @@
 """What an instructor does to a running exercise, as typed values the world applies at a
 step's start (``step(..., commands=...)``), in the order given: freeze and resume, move the
 own ship, set the visibility, the exercise clock, the wind and the current, and fail the
-steering gear or the engine. SI: m, m/s, rad, unix s. Values are checked where they are
+steering gear or the engine, and steer other vessels (``OtherVessel``, kept in the world and
+moved with each step, so that a replay has them where the run had them). SI: m, m/s, rad,
+unix s. Values are checked where they are
 made (``bridge_node.exercise.commands``); here they are only applied.
 """
 from __future__ import annotations
@@ -68,7 +70,57 @@ class EngineFailure:
     power_share: float
 
 
-Command = Freeze | Reposition | SetEnvironment | SetClock | SteeringFailure | EngineFailure
+@dataclass
+class OtherVessel:
+    """A vessel the instructor steers: north, east m from the field's corner, course rad
+    clockwise from north, speed m/s over ground (straight on), name (AIS 6-bit text),
+    length and beam m."""
+
+    name: str
+    north: float
+    east: float
+    course: float
+    speed: float
+    length: float
+    beam: float
+
+
+@dataclass(frozen=True)
+class AddVessel:
+    """A new vessel (or one replaced) under this MMSI."""
+
+    mmsi: int
+    vessel: OtherVessel
+
+
+@dataclass(frozen=True)
+class MoveVessel:
+    """A vessel to (north, east) m."""
+
+    mmsi: int
+    north: float
+    east: float
+
+
+@dataclass(frozen=True)
+class SteerVessel:
+    """A vessel on a new course (rad) and speed (m/s)."""
+
+    mmsi: int
+    course: float
+    speed: float
+
+
+@dataclass(frozen=True)
+class RemoveVessel:
+    """A vessel gone from the exercise."""
+
+    mmsi: int
+
+
+Command = (Freeze | Reposition | SetEnvironment | SetClock | SteeringFailure | EngineFailure | AddVessel | MoveVessel
+           | SteerVessel | RemoveVessel)
+VESSEL_COMMANDS = (AddVessel, MoveVessel, SteerVessel, RemoveVessel)
 
 
 def apply_command(model: WorldModel, data: WorldData, command: Command) -> Command | None:
@@ -85,6 +137,8 @@ def apply_command(model: WorldModel, data: WorldData, command: Command) -> Comma
         ship.steering_pumps = command.pumps
     elif isinstance(command, EngineFailure):
         ship.power_share = command.power_share
+    elif isinstance(command, VESSEL_COMMANDS):
+        return command if _command_vessel(data.vessels, command) else None
     elif isinstance(command, Reposition) and not command.at_once:
         data.moving_to = command
         return None
@@ -92,6 +146,30 @@ def apply_command(model: WorldModel, data: WorldData, command: Command) -> Comma
         data.moving_to = None
         move_ship(model, data, command)
     return command
+
+
+def _command_vessel(vessels: dict[int, OtherVessel], command: Command) -> bool:
+    """Carry out a command to another vessel; False where it names none the world has."""
+    if isinstance(command, AddVessel):
+        vessels[command.mmsi] = dataclasses.replace(command.vessel)  # its own copy, moved by the steps
+        return True
+    vessel = vessels.get(command.mmsi)
+    if vessel is None:
+        return False
+    if isinstance(command, MoveVessel):
+        vessel.north, vessel.east = command.north, command.east
+    elif isinstance(command, SteerVessel):
+        vessel.course, vessel.speed = command.course, command.speed
+    else:
+        del vessels[command.mmsi]
+    return True
+
+
+def move_vessels(vessels: dict[int, OtherVessel], dt: float) -> None:
+    """Every other vessel straight on for dt s."""
+    for v in vessels.values():
+        v.north += v.speed * math.cos(v.course) * dt
+        v.east += v.speed * math.sin(v.course) * dt
 
 
 def move_ship(model: WorldModel, data: WorldData, to: Reposition) -> None:

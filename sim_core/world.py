@@ -31,7 +31,7 @@ from sim_core.frames.ship_frame import ship_to_world, ship_vector_to_world, worl
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.model import IceModel
 from sim_core.ice.step import HullMotion, ice_step
-from sim_core.instructor import Command, Reposition, apply_command
+from sim_core.instructor import Command, OtherVessel, Reposition, apply_command, move_vessels
 from sim_core.ice.step import warm_up as warm_up_ice
 from sim_core.ice.tiles import IceData, PreparedTile, advance, new_ice_data
 from sim_core.scene.quadtree import tile_under, tiles_near
@@ -84,6 +84,7 @@ class WorldData:
     searchlights: list[SearchlightState] = field(default_factory=list)  # as commanded, one per mount
     environment: Environment = field(default_factory=Environment)  # as the instructor set it
     moving_to: Reposition | None = None  # a move of the ship waiting for its tiles
+    vessels: dict[int, OtherVessel] = field(default_factory=dict)  # other vessels the instructor steers, by MMSI
 
 
 @dataclass(frozen=True)
@@ -148,6 +149,7 @@ class WorldEvents:
     snapshot: bool = False
     environment: Environment = field(default_factory=Environment)  # as of the step's end
     commands: tuple[Command, ...] = ()  # the instructor's commands applied at the step's start
+    vessels: tuple[tuple[int, OtherVessel], ...] = ()  # the instructor's other vessels (MMSI, copy) at its end
 
 
 def compile_world(ship: ShipModel, ice: IceModel, scene: SceneModel, origin: tuple[float, float] = (0.0, 0.0),
@@ -228,7 +230,8 @@ def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> 
     return WorldEvents(seq=data.seq, time=data.time, ship=ship,
                        floe_rows=rows, floe_pose=pose, floe_status=st.status[rows].copy(),
                        floes_free=st.count(FloeStatus.FREE), floes_frozen=data.ice.frozen.count,
-                       environment=data.environment, **fields)
+                       environment=data.environment,
+                       vessels=tuple((m, dataclasses.replace(v)) for m, v in data.vessels.items()), **fields)
 
 
 def _apply_commands(model: WorldModel, data: WorldData, commands: tuple[Command, ...]) -> tuple[Command, ...]:
@@ -292,6 +295,7 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
         prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3)
     load = np.array([*world_vector_to_ship(report.hull_force, ship.eta[5]), -report.hull_moment])
     ship.external[:] = load + wind
+    move_vessels(data.vessels, dt)
     data.time += dt
     data.seq += 1
     if len(report.broken_by_hull):

@@ -10,6 +10,7 @@ import sys
 import time
 
 import pynmea2
+from pyais import decode
 import pytest
 import serial
 from conftest import REPO, exercise_toml, run_cli
@@ -29,12 +30,15 @@ class _Instruments:
         self.sock.settimeout(0.1)
         self.port = self.sock.getsockname()[1]
         self.last: dict[str, pynmea2.NMEASentence] = {}
+        self.ais: list[str] = []  # !AIVDM sentences, as they came
 
     def read(self, seconds: float) -> None:
         end = time.monotonic() + seconds
         while time.monotonic() < end:
             try:
                 for line in self.sock.recv(4096).decode().split():
+                    if line.startswith("!AIVDM"):
+                        self.ais.append(line)
                     if line.startswith("$"):
                         msg = pynmea2.parse(line)
                         self.last[msg.sentence_type] = msg
@@ -87,7 +91,9 @@ def test_freeze_reposition_and_steering_failure_from_the_command_line(tmp_path):
         config = exercise_toml(tmp_path, "", control=f'endpoint = "{endpoint}"')
         config.write_text(config.read_text() +
                           f'[[links]]\nname = "console"\ntype = "nmea0183"\nport = "{node_end}"\nbaudrate = 38400\n'
-                          f'udp_output = true\nudp_port = {instruments.port}\n[arbitration]\nrudder = ["console"]\nengine = []\n')
+                          f'udp_output = true\nudp_port = {instruments.port}\n'
+                          '[links.ais]\nmmsi = 257000001\nto_bow = 20\nto_stern = 130\nto_port = 12\nto_starboard = 12\n'
+                          '[arbitration]\nrudder = ["console"]\nengine = []\n')
         node = subprocess.Popen([sys.executable, "-m", "bridge_node", "run", "--config", str(config), "--duration",
                                  "120", "--render", "none", "--json", "--out", str(tmp_path / "out")], cwd=REPO,
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -116,6 +122,15 @@ def test_freeze_reposition_and_steering_failure_from_the_command_line(tmp_path):
             rmc = instruments.last["RMC"]
             assert rmc.latitude == pytest.approx(74.002, abs=2e-4) and rmc.longitude == pytest.approx(20.004, abs=5e-4)
 
+            # a vessel the instructor adds goes out as AIS
+            vessel = {"command": "add_vessel", "mmsi": 230000001, "name": "ODEN", "length_m": 108.0, "beam_m": 31.0,
+                      "latitude_deg": 74.003, "longitude_deg": 20.004, "course_deg": 0.0, "speed_kn": 0.0}
+            assert request(endpoint, {"command": vessel}, None)["ok"]
+            _wait_for(lambda: instruments.read(0.5) or any(decode(m).asdict()["mmsi"] == 230000001
+                                                           for m in instruments.ais if m.startswith("!AIVDM,1,1")))
+            report = next(decode(m).asdict() for m in instruments.ais if m.startswith("!AIVDM,1,1"))
+            assert report["lat"] == pytest.approx(74.003, abs=1e-4) and report["lon"] == pytest.approx(20.004, abs=1e-4)
+
             # a bad command: exit 2 and the node's reason; nothing applied
             r = run_cli("ctl", "--config", str(config), "visibility", "nan")
             assert r.returncode == 2 and "visibility_m = NaN" in r.stderr and "Traceback" not in r.stderr
@@ -126,5 +141,5 @@ def test_freeze_reposition_and_steering_failure_from_the_command_line(tmp_path):
             out, err = node.communicate(timeout=60)
     assert node.returncode == 0, err
     summary = json.loads(out)
-    assert summary["control"]["requests"]["accepted"] == 5 and summary["control"]["requests"]["invalid"] == 1
+    assert summary["control"]["requests"]["accepted"] == 6 and summary["control"]["requests"]["invalid"] == 1
     assert math.isfinite(summary["tick_ms_p99"])

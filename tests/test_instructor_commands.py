@@ -174,3 +174,30 @@ def test_the_clock_command_moves_the_exercise_clock():
     step(model, data, DT)
     events = step(model, data, DT, commands=(SetClock(1_800_000_000.0),))
     assert events.ship.utc == pytest.approx(1_800_000_000.0 + DT)
+
+
+def test_other_vessels_are_added_steered_moved_and_removed_in_the_world():
+    model, data = open_water_world(load_config(), None)
+    queue = CommandQueue()
+    for message in ({"command": "add_vessel", "mmsi": 230000001, "name": "ODEN", "length_m": 108.0, "beam_m": 31.0,
+                     "north_m": 500.0, "east_m": 0.0, "course_deg": 90.0, "speed_kn": 10.0},
+                    {"command": "steer_vessel", "mmsi": 230000009, "course_deg": 0.0, "speed_kn": 1.0}):
+        queue.put(parse_command(message))
+    added = step(model, data, 1.0, commands=queue.take(model, data))
+    assert [type(c).__name__ for c in added.commands] == ["AddVessel"]  # the unknown MMSI: nothing applied
+    (mmsi, oden), = added.vessels
+    assert mmsi == 230000001 and oden.name == "ODEN" and oden.east == pytest.approx(10.0 * KNOT)  # one second on
+    for message in ({"command": "steer_vessel", "mmsi": 230000001, "course_deg": 180.0, "speed_kn": 2.0},):
+        queue.put(parse_command(message))
+    step(model, data, 10.0, commands=queue.take(model, data))
+    assert data.vessels[230000001].north == pytest.approx(500.0 - 20.0 * KNOT)
+    queue.put(parse_command({"command": "move_vessel", "mmsi": 230000001, "latitude_deg": 74.0,
+                             "longitude_deg": 20.0}))
+    moved = step(model, data, DT, commands=queue.take(model, data))
+    assert moved.vessels[0][1].north == pytest.approx(-2.0 * KNOT * DT, abs=1e-9)  # at the origin, then on
+    assert command_from_record(command_record(added.commands[0])) == added.commands[0]
+    queue.put(parse_command({"command": "remove_vessel", "mmsi": 230000001}))
+    assert step(model, data, DT, commands=queue.take(model, data)).vessels == ()
+    with pytest.raises(CommandError, match="name"):
+        parse_command({"command": "add_vessel", "mmsi": 230000001, "name": "od{en}", "length_m": 10.0,
+                       "beam_m": 3.0, "north_m": 0.0, "east_m": 0.0, "course_deg": 0.0})

@@ -27,6 +27,9 @@ SCRIPT = [  # (simulated time s at which the instructor sends it, command)
     (1.5, {"command": "resume"}),  # (three in one tick: freeze, current, resume)
     (2.0, {"command": "reposition", "north_m": 300.0, "east_m": 250.0, "heading_deg": 30.0, "speed_kn": 5.0}),
     (3.0, {"command": "visibility", "visibility_m": 400.0}),
+    (3.0, {"command": "add_vessel", "mmsi": 230000001, "name": "ODEN", "length_m": 108.0, "beam_m": 31.0,
+           "north_m": 400.0, "east_m": 300.0, "course_deg": 200.0, "speed_kn": 9.0}),
+    (4.0, {"command": "steer_vessel", "mmsi": 230000001, "course_deg": 90.0, "speed_kn": 3.0}),
 ]
 
 
@@ -52,7 +55,8 @@ def test_a_replay_of_a_commanded_run_ends_in_its_final_state(tmp_path):
     with LinkHub(cfg.links, cfg.arbitration, record) as hub:
         run_realtime(model, live, hub, RATE, None,
                      [_Instructor(queue), lambda o: frozen_ticks.append(o.events.environment.frozen)],
-                     should_stop=lambda: live.time >= 6.0 - 1e-9, commands=queue)
+                     should_stop=lambda: live.time >= 6.0 - 1e-9 and live.moving_to is None or live.time > 60.0,
+                     commands=queue)  # (a move waits for its tiles, prepared a millisecond a step)
     logged, bad = read_commands(record / COMMANDS_FILE)
     applied = [c for step in sorted(logged) for c in logged[step]]
     assert not bad["malformed"] and len(applied) == len(SCRIPT)
@@ -70,6 +74,7 @@ def test_a_replay_of_a_commanded_run_ends_in_its_final_state(tmp_path):
     np.testing.assert_allclose(again.ship.eta, live.ship.eta, rtol=0.0, atol=1e-6)
     np.testing.assert_allclose(again.ship.nu, live.ship.nu, rtol=0.0, atol=1e-6)
     assert again.environment == live.environment and again.epoch == live.epoch
+    assert again.vessels == live.vessels and live.vessels[230000001].course == pytest.approx(math.pi / 2)
     a, b = live.ice.state, again.ice.state
     np.testing.assert_array_equal(a.status, b.status)
     assert math.hypot(*(again.ship.eta[:2] - live.ship.eta[:2])) < 1e-6

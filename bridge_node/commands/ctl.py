@@ -5,6 +5,7 @@ station's commands, scriptable): exit 0 with the node's reply, or 2 with the err
     icebridge ctl reposition --lat 74.01 --lon 20.05 --heading 10 --speed 6
     icebridge ctl visibility 500
     icebridge ctl steering-failure 2
+    icebridge ctl add-vessel 230000001 --name ODEN --length 108 --beam 31 --north 800 --east 400 --course 180 --speed 8
     icebridge ctl status --json
 """
 from __future__ import annotations
@@ -28,13 +29,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     actions.add_parser("freeze", help="hold the physics; the clock stops, the outputs go on")
     actions.add_parser("resume", help="run the physics again")
     actions.add_parser("status", help="the exercise's time, ship and environment")
-    move = actions.add_parser("reposition", help="move the own ship")
-    move.add_argument("--lat", type=float, help="latitude, deg")
-    move.add_argument("--lon", type=float, help="longitude, deg")
-    move.add_argument("--north", type=float, help="m from the field's south-west corner")
-    move.add_argument("--east", type=float, help="m from the field's south-west corner")
+    move = _placed(actions.add_parser("reposition", help="move the own ship"))
     move.add_argument("--heading", type=float, required=True, help="true heading, deg")
     move.add_argument("--speed", type=float, default=0.0, help="speed through the water, kn (default 0)")
+    _vessel_actions(actions)
     actions.add_parser("visibility", help="meteorological visibility").add_argument("metres", type=float)
     actions.add_parser("clock", help="the exercise's time: HH:MM[:SS] (UTC, today) or an ISO 8601 date and "
                                      "time").add_argument("time")
@@ -50,15 +48,57 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     actions.add_parser("send", help="send one command given as a JSON object").add_argument("command_json")
 
 
+def _placed(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """A position's options: --lat and --lon, or --north and --east."""
+    p.add_argument("--lat", type=float, help="latitude, deg")
+    p.add_argument("--lon", type=float, help="longitude, deg")
+    p.add_argument("--north", type=float, help="m from the field's south-west corner")
+    p.add_argument("--east", type=float, help="m from the field's south-west corner")
+    return p
+
+
+def _vessel_actions(actions) -> None:
+    """The commands to other vessels: add, move, steer, remove (by MMSI)."""
+    add = _placed(actions.add_parser("add-vessel", help="add another vessel (AIS, DIS, the channels show it)"))
+    add.add_argument("mmsi", type=int)
+    add.add_argument("--name", default="", help="AIS name (upper case, at most 20 characters)")
+    add.add_argument("--length", type=float, required=True, help="m")
+    add.add_argument("--beam", type=float, required=True, help="m")
+    add.add_argument("--course", type=float, required=True, help="true course, deg")
+    add.add_argument("--speed", type=float, default=0.0, help="kn over ground (default 0)")
+    _placed(actions.add_parser("move-vessel", help="move another vessel")).add_argument("mmsi", type=int)
+    steer = actions.add_parser("steer-vessel", help="another vessel's new course and speed")
+    for name, kind in (("mmsi", int), ("course", float), ("speed", float)):
+        steer.add_argument(name, type=kind)
+    actions.add_parser("remove-vessel", help="another vessel leaves the exercise").add_argument("mmsi", type=int)
+
+
+def _position(args: argparse.Namespace) -> dict:
+    place = {"latitude_deg": args.lat, "longitude_deg": args.lon, "north_m": args.north, "east_m": args.east}
+    return {k: v for k, v in place.items() if v is not None}
+
+
+def _vessel_command(args: argparse.Namespace) -> dict:
+    a = args.action
+    if a == "add-vessel":
+        return {"command": "add_vessel", "mmsi": args.mmsi, "name": args.name, "length_m": args.length,
+                "beam_m": args.beam, **_position(args), "course_deg": args.course, "speed_kn": args.speed}
+    if a == "move-vessel":
+        return {"command": "move_vessel", "mmsi": args.mmsi, **_position(args)}
+    if a == "steer-vessel":
+        return {"command": "steer_vessel", "mmsi": args.mmsi, "course_deg": args.course, "speed_kn": args.speed}
+    return {"command": "remove_vessel", "mmsi": args.mmsi}
+
+
 def command_of(args: argparse.Namespace) -> dict:
     """The command object the arguments give (checked again, whole, by the node)."""
     a = args.action
     if a in ("freeze", "resume"):
         return {"command": a}
     if a == "reposition":
-        place = {"latitude_deg": args.lat, "longitude_deg": args.lon, "north_m": args.north, "east_m": args.east}
-        return {"command": "reposition", **{k: v for k, v in place.items() if v is not None},
-                "heading_deg": args.heading, "speed_kn": args.speed}
+        return {"command": "reposition", **_position(args), "heading_deg": args.heading, "speed_kn": args.speed}
+    if a.endswith("-vessel"):
+        return _vessel_command(args)
     if a == "visibility":
         return {"command": "visibility", "visibility_m": args.metres}
     if a == "clock":

@@ -4,8 +4,9 @@ Opens the configured links, shows each decoded order and each link's health live
 exercise's one tick (``bridge_node.exercise.tick``) at 20 Hz with the ship in open water
 (the configured exercise without its ice field) on the orders it receives, searchlights
 included, and publishes that ship's state on the configured outputs. The session record
-holds a tick log, as a run's does, so a commissioning session can be re-simulated. ``--json`` ends with one JSON object: orders per source (last value,
-count), errors by kind, alarms raised, outputs sent.
+holds a tick log, as a run's does, so a commissioning session can be re-simulated.
+``--json`` ends with one JSON object: orders per source (last value, count), errors by kind,
+alarms raised, outputs sent.
 """
 from __future__ import annotations
 

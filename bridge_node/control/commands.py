@@ -16,7 +16,15 @@ units of the bridge (degrees, knots, metres, UTC):
 ``current``               ``speed_kn``, ``to_deg``
 ``steering_failure``      ``pumps_failed``: 0 (repaired), 1 (half the rate), 2 (stuck)
 ``engine_failure``        ``power_percent``: 100 (repaired) .. 0 (blackout)
+``add_vessel``            ``mmsi``, ``name``, ``length_m``, ``beam_m``, a position (as
+                          ``reposition``), ``course_deg``, ``speed_kn``
+``move_vessel``           ``mmsi`` and a position
+``steer_vessel``          ``mmsi``, ``course_deg``, ``speed_kn``
+``remove_vessel``         ``mmsi``
 ========================  =========================================================
+
+A command to a vessel the world does not have is applied as nothing (the step does not
+publish it).
 
 A bad command is refused whole with a ``CommandError`` that names the field, the value and
 what is allowed; nothing of it is applied.
@@ -31,15 +39,21 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
 
+from bridge_node.links.ais import SIX_BIT_TEXT
 from sim_core.frames.geodesy import geodetic_to_local
 from sim_core.frames.units import KNOT
 from sim_core.instructor import (
+    AddVessel,
     Command,
     EngineFailure,
     Freeze,
+    MoveVessel,
+    OtherVessel,
+    RemoveVessel,
     Reposition,
     SetClock,
     SetEnvironment,
+    SteerVessel,
     SteeringFailure,
 )
 from sim_core.world import WorldData, WorldModel
@@ -62,29 +76,81 @@ class FreezeCommand(_Command):
         return Freeze(self.command == "freeze")
 
 
-class RepositionCommand(_Command):
-    command: Literal["reposition"]
+class _Placed(_Command):
+    """A command with a position: latitude and longitude (deg), or north and east (m from
+    the field's south-west corner)."""
+
     latitude_deg: float | None = Field(None, ge=-89.0, le=89.0)
     longitude_deg: float | None = Field(None, ge=-180.0, le=180.0)
     north_m: float | None = Field(None, ge=-1.0e5, le=1.0e6)
     east_m: float | None = Field(None, ge=-1.0e5, le=1.0e6)
-    heading_deg: float = Field(ge=0.0, lt=360.0)
-    speed_kn: float = Field(0.0, ge=0.0, le=25.0)
 
     @model_validator(mode="after")
-    def _one_position(self) -> RepositionCommand:
+    def _one_position(self) -> _Placed:
         geographic = (self.latitude_deg is not None, self.longitude_deg is not None)
         local = (self.north_m is not None, self.east_m is not None)
         if not (all(geographic) and not any(local) or all(local) and not any(geographic)):
             raise ValueError("give latitude_deg and longitude_deg, or north_m and east_m")
         return self
 
+    def north_east(self, model: WorldModel) -> tuple[float, float]:
+        """The position in the field's frame, m."""
+        if self.north_m is not None:
+            return self.north_m, self.east_m
+        return geodetic_to_local(math.radians(self.latitude_deg), math.radians(self.longitude_deg), *model.origin)
+
+
+class RepositionCommand(_Placed):
+    command: Literal["reposition"]
+    heading_deg: float = Field(ge=0.0, lt=360.0)
+    speed_kn: float = Field(0.0, ge=0.0, le=25.0)
+
     def to_world(self, model: WorldModel, data: WorldData) -> Command:
-        north, east = self.north_m, self.east_m
-        if north is None:
-            north, east = geodetic_to_local(math.radians(self.latitude_deg), math.radians(self.longitude_deg),
-                                            *model.origin)
-        return Reposition(north, east, math.radians(self.heading_deg), self.speed_kn * KNOT)
+        return Reposition(*self.north_east(model), math.radians(self.heading_deg), self.speed_kn * KNOT)
+
+
+Mmsi = Annotated[int, Field(ge=100_000_000, le=999_999_999)]
+
+
+class AddVesselCommand(_Placed):
+    command: Literal["add_vessel"]
+    mmsi: Mmsi
+    name: str = Field("", max_length=20, pattern=SIX_BIT_TEXT)
+    length_m: float = Field(ge=1.0, le=1022.0)
+    beam_m: float = Field(ge=1.0, le=126.0)
+    course_deg: float = Field(ge=0.0, lt=360.0)
+    speed_kn: float = Field(0.0, ge=0.0, le=40.0)
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        north, east = self.north_east(model)
+        return AddVessel(self.mmsi, OtherVessel(self.name, north, east, math.radians(self.course_deg),
+                                                self.speed_kn * KNOT, self.length_m, self.beam_m))
+
+
+class MoveVesselCommand(_Placed):
+    command: Literal["move_vessel"]
+    mmsi: Mmsi
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        return MoveVessel(self.mmsi, *self.north_east(model))
+
+
+class SteerVesselCommand(_Command):
+    command: Literal["steer_vessel"]
+    mmsi: Mmsi
+    course_deg: float = Field(ge=0.0, lt=360.0)
+    speed_kn: float = Field(ge=0.0, le=40.0)
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        return SteerVessel(self.mmsi, math.radians(self.course_deg), self.speed_kn * KNOT)
+
+
+class RemoveVesselCommand(_Command):
+    command: Literal["remove_vessel"]
+    mmsi: Mmsi
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        return RemoveVessel(self.mmsi)
 
 
 class VisibilityCommand(_Command):
@@ -154,11 +220,12 @@ class EngineFailureCommand(_Command):
 
 
 WireCommand = Annotated[FreezeCommand | RepositionCommand | VisibilityCommand | ClockCommand | WindCommand |
-                        CurrentCommand | SteeringFailureCommand | EngineFailureCommand,
+                        CurrentCommand | SteeringFailureCommand | EngineFailureCommand | AddVesselCommand |
+                        MoveVesselCommand | SteerVesselCommand | RemoveVesselCommand,
                         Field(discriminator="command")]
 _WIRE = TypeAdapter(WireCommand)
 COMMAND_NAMES = ("freeze", "resume", "reposition", "visibility", "clock", "wind", "current", "steering_failure",
-                 "engine_failure")
+                 "engine_failure", "add_vessel", "move_vessel", "steer_vessel", "remove_vessel")
 
 
 def parse_command(message: dict) -> WireCommand:
@@ -183,7 +250,7 @@ def _explain(error: dict) -> str:
 
 # -- the applied commands as records (session record, state stream) -----------------------
 _TYPES = {cls.__name__: cls for cls in (Freeze, Reposition, SetEnvironment, SetClock, SteeringFailure,
-                                        EngineFailure)}
+                                        EngineFailure, AddVessel, MoveVessel, SteerVessel, RemoveVessel)}
 
 
 def command_record(command: Command) -> dict:
@@ -198,6 +265,8 @@ def command_from_record(record: dict) -> Command:
         fields = {k: v for k, v in record.items() if k != "type"}
         if cls is SetEnvironment:
             fields["changes"] = tuple((str(k), float(v)) for k, v in fields["changes"])
+        if cls is AddVessel:
+            fields["vessel"] = OtherVessel(**fields["vessel"])
         command = cls(**fields)
     except (KeyError, TypeError, ValueError) as exc:
         raise CommandError(f"not a command record: {record!r:.200} ({exc})") from None

@@ -7,9 +7,11 @@ from __future__ import annotations
 import time
 
 from bridge_node.exercise.tick import StepListener, TickOutcome
+from bridge_node.links.base import Vessel
 from bridge_node.links.hub import LinkHub
 from bridge_node.stream.publisher import StatePublisher
 from bridge_node.traffic.picture import TrafficPicture
+from sim_core.frames.geodesy import local_to_geodetic
 
 
 class LinkOutputs(StepListener):
@@ -49,6 +51,22 @@ class ReplayLinkOutputs(LinkOutputs):
             for link in self.hub.links:
                 self.console_orders_ignored += len(link.poll(now))
         super().on_step(outcome)
+
+
+class WorldTraffic(StepListener):
+    """The world's other vessels (the instructor's) into the traffic picture, placed on the
+    field whose corner is at ``origin`` (latitude, longitude rad), before the links send it."""
+
+    def __init__(self, picture: TrafficPicture, origin: tuple[float, float]) -> None:
+        self.picture, self.origin = picture, origin
+
+    def on_step(self, outcome: TickOutcome) -> None:
+        out = []
+        for mmsi, v in outcome.events.vessels:
+            lat, lon = local_to_geodetic(v.north, v.east, *self.origin)
+            out.append(Vessel(f"instructor:{mmsi}", mmsi, v.name, outcome.now, lat, lon, v.course, v.course,
+                              v.speed, 0.0, v.length, v.beam))
+        self.picture.world = out
 
 
 class StreamOutput(StepListener):

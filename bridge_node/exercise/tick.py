@@ -5,8 +5,8 @@ arbiter, a session record's links fed from the record, a track log) and the inst
 commands from one ``CommandSource`` (the control endpoint's queue, a session record),
 steps the world by dt with them (the commands applied first, at the step's start), notes
 the orders the ship refused, and hands one ``TickOutcome`` (the step's ``WorldEvents``, the
-orders, every alarm change of the step, the tick's clock) to its listeners: link outputs, the state stream, the session record, the status line, the
-traffic picture. ``run``, ``links monitor``, ``replay`` of a track and of a session all
+orders, every alarm change of the step, the tick's clock) to its listeners: link outputs,
+the state stream, the session record, the status line, the traffic picture. ``run``, ``links monitor``, ``replay`` of a track and of a session all
 step through ``ExerciseTick``; they differ only in the source, the listeners and the
 pacing (``bridge_node.exercise.pacer``).
 """

@@ -31,7 +31,7 @@ import numpy as np
 
 from bridge_node.control.command_log import CommandLog
 from bridge_node.control.queue import CommandSource
-from bridge_node.exercise.listeners import LinkOutputs
+from bridge_node.exercise.listeners import LinkOutputs, WorldTraffic
 from bridge_node.exercise.pacer import Pacer
 from bridge_node.exercise.tick import ExerciseTick, StepListener, TickOutcome
 from bridge_node.links.hub import LinkHub
@@ -149,7 +149,8 @@ def live_tick(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float,
         ticks = TickRecord(hub.record.folder, 1.0 / rate_hz)
         hub.add_listener(ticks)  # it counts the links' reads; stopped with the hub's other listeners
         records = [ticks, CommandLog(hub.record.folder)]
-    return ExerciseTick(model, data, hub, [*records, LinkOutputs(hub), *listeners], commands)
+    return ExerciseTick(model, data, hub, [*records, WorldTraffic(hub.traffic, model.origin), LinkOutputs(hub),
+                                          *listeners], commands)
 
 
 def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float, duration: float | None,

@@ -480,7 +480,8 @@ class SceneRenderer:
         half = math.radians(channel.hfov_deg) / 2
         sky = self.sky
         common = {"eye": tuple(cam.eye), "visibility": view.environment.visibility, "sun": sky.sun,
-                  "direct": sky.direct, "ambient": sky.ambient, "zenith_colour": sky.zenith, "horizon_colour": sky.horizon,
+                  "direct": sky.direct, "ambient": sky.ambient, "zenith_colour": sky.zenith,
+                  "horizon_colour": sky.horizon,
                   "noise": NOISE_UNIT, "water_colour": WATER,
                   "relief_reach": s.relief_reach_m, "time": view.time, **self._searchlights(view.ship)}
         ctx.clear(*sky.horizon, depth=1.0)

@@ -21,7 +21,7 @@ from typing import Protocol
 
 import numpy as np
 
-from bridge_node.exercise.listeners import ReplayLinkOutputs, StreamOutput
+from bridge_node.exercise.listeners import ReplayLinkOutputs, StreamOutput, WorldTraffic
 from bridge_node.exercise.pacer import Pacer
 from bridge_node.exercise.tick import ExerciseTick, TickOutcome
 from bridge_node.links.arbiter import Decision
@@ -183,9 +183,10 @@ def run_replay(model: WorldModel, data: WorldData, source: Source, playback: Pla
     stats = ReplayStats()
     orders = _StepOrders(source)
     links = ReplayLinkOutputs(hub) if hub is not None else None
+    world_traffic = WorldTraffic(hub.traffic, model.origin) if hub is not None else None
     stream = StreamOutput(publisher, hub.traffic if hub else None, model.origin) if publisher is not None else None
     tick = ExerciseTick(model, data, orders, [_stats_listener(stats, model, data, orders),
-                                               *(x for x in (links, stream) if x is not None)], orders)
+                                               *(x for x in (world_traffic, links, stream) if x is not None)], orders)
     stats.refusals = tick.refusals
     pacer = Pacer(source.dt / (playback.speed or 1.0), BEHIND_S)
     start, shown, seeking, speed = time.monotonic(), 0.0, playback.seek_to > 0, playback.speed
