@@ -138,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     summary = stats.summary() | _end_state(last) | {
         "rate_hz": rate, "late_tile_switches": data.late_switches, "alarms": alarms, "links": links,
         "stream": {"sent": publisher.sent, "dropped": publisher.dropped, "snapshots": publisher.snapshots,
-                   "error": publisher.error},
+                   "malformed": publisher.malformed, "error": publisher.error},
         "render_processes": rendered, "frames_rendered": sum(r.get("png_frames", 0) for r in rendered),
         "video": [r["video"] for r in rendered if "video" in r],
         "panorama": [r["panorama"] for r in rendered if "panorama" in r],

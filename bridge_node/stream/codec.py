@@ -6,6 +6,12 @@ dtype and shape in frame order. Floe poses travel as float32 (what the renderer 
 at 1 km) and row numbers as int32; frozen floes as ``FROZEN_FLOE_EVENT`` records. ``input_time`` is the monotonic time (s) of the newest
 console order that went into the step, or None. The last frame is the whole traffic picture
 at the step (``TRAFFIC_DTYPE`` rows; a few vessels, so every message carries all of them).
+
+A decoded message is checked against the bounds of a view before anyone applies it (render
+PCs may read the stream off the bridge network): row, placement and tile numbers within
+``MAX_ROWS``, arrays of one step of one length, poses and the ship's numbers finite, the
+JSON header shallow and its numbers in range. Anything else is a ``CodecError``, which the
+subscribers and the publisher count and drop.
 """
 from __future__ import annotations
 
@@ -23,6 +29,7 @@ from sim_core.ship.outputs import ShipOutputs
 from sim_core.scene.switches import FROZEN_FLOE_EVENT, PlacedTiles
 from sim_core.world import WorldEvents
 
+MAX_ROWS = 1 << 24  # row, placement and tile numbers are below this: a view allocates per row
 TOPIC = b"w"
 HEARTBEAT = b"h"  # [HEARTBEAT, b"<seq>"]: the last sequence number published
 _PLACED = [f.name for f in dataclasses.fields(PlacedTiles)]
@@ -92,6 +99,36 @@ def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
         raise
     except CommandError as exc:
         raise CodecError(f"malformed state message: {exc}") from None
-    except (ValueError, KeyError, TypeError, IndexError) as exc:
+    except (ValueError, KeyError, TypeError, IndexError, OverflowError) as exc:
         raise CodecError(f"malformed state message: {exc}") from None
+    except RecursionError:
+        raise CodecError("malformed state message: JSON nested too deep") from None
+    _check_bounds(events, input_time)
     return events, input_time, traffic
+
+
+def _check_bounds(events: WorldEvents, input_time: object) -> None:
+    """CodecError unless the message fits a view: numbers in range, arrays consistent."""
+    p = events.placed
+    counts = {len(getattr(p, name)) for name in _PLACED}
+    rows = [events.floe_rows, events.broken_by_hull, events.broken_by_contact, p.row_start, p.row_start + p.row_count,
+            p.tile, p.placement, events.thawed, events.frozen, events.frozen_floes["placement"].astype(np.int64)]
+    m = len(events.floe_rows)
+    problems = [
+        len(counts) != 1 and "placed tiles of different lengths",
+        any(len(a) and (a.min() < 0 or a.max() > MAX_ROWS) for a in rows) and "a row, placement or tile number out "
+                                                                                  "of range",
+        (events.floe_pose.shape != (m, 6) or events.floe_status.shape != (m,)) and "floe arrays of different lengths",
+        p.corner.shape != (len(p.tile), 2) and "tile corners of the wrong shape",
+        not (np.isfinite(events.floe_pose).all() and np.isfinite(p.corner).all()
+             and np.isfinite(events.frozen_floes["pose"]).all()) and "a pose that is not finite",
+        not all(math.isfinite(v) for v in (events.time, *events.ice_load)) and "a time or load that is not finite",
+        not all(math.isfinite(v) for v in dataclasses.astuple(events.ship) if isinstance(v, float))
+        and "a ship value that is not finite",
+        input_time is not None and not (isinstance(input_time, float) and math.isfinite(input_time))
+        and "an input time that is not a finite number",
+        events.ice_load.shape != (3,) and "an ice load of the wrong shape",
+    ]
+    problem = next((found for found in problems if found), None)
+    if problem:
+        raise CodecError(f"malformed state message: {problem}")

@@ -1,8 +1,9 @@
 """The physics process's side of the state stream (the Clone pattern's server).
 
 ``StatePublisher.publish(events)`` is called by the physics loop after every step. It only
-encodes the events and hands the frames over a loopback socket to the publisher, which runs
-in its own process (never blocking: if the publisher falls behind by ``HANDOVER_HWM``
+encodes the events and hands the frames over an IPC socket in a private folder (mode 0700,
+so no other user's process can reach it; a loopback TCP port took any local connection) to
+the publisher, which runs in its own process (never blocking: if the publisher falls behind by ``HANDOVER_HWM``
 messages the step is counted as dropped, and subscribers resynchronise). A process, not a
 thread: a thread woken by every step took the GIL from the physics thread inside each hand
 over, and the physics thread waited for it to finish with the step (0.15 ms a step at the
@@ -12,19 +13,24 @@ subscriber's messages instead of waiting for it, and keeps a ``WorldView`` of ev
 published, from which it answers snapshot requests on the ROUTER socket: a late joiner gets
 every placed tile and every floe row, frozen channel included, and the other vessels, then
 follows the live stream. Every ``HEARTBEAT_S`` it also publishes the last sequence number,
-so a subscriber that lost the last steps before a pause notices it too.
+so a subscriber that lost the last steps before a pause notices it too. A handed-over
+message that does not decode, or does not fit a view, is counted (``malformed``) and
+dropped; the stream goes on.
 """
 from __future__ import annotations
 
 import logging
 import multiprocessing as mp
 import multiprocessing.connection
+import shutil
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import zmq
 
-from bridge_node.stream.codec import HEARTBEAT, decode, encode
+from bridge_node.stream.codec import HEARTBEAT, CodecError, decode, encode
 from bridge_node.stream.settings import StreamSettings
 from bridge_node.stream.world_view import WorldView
 from sim_core.world import WorldEvents
@@ -35,7 +41,7 @@ SNAPSHOT_REQUEST = b"snapshot"
 STOP = b"stop"
 HEARTBEAT_S = 0.5
 START_TIMEOUT_S = 60.0  # for the publisher process to import and bind (a loaded machine)
-_SENT, _SNAPSHOTS = 0, 1  # indices of the shared counters
+_SENT, _SNAPSHOTS, _MALFORMED = 0, 1, 2  # indices of the shared counters
 
 
 class StatePublisher:
@@ -52,14 +58,17 @@ class StatePublisher:
         self._pipe: mp.connection.Connection | None = None
         self._counters = None
         self._error: str | None = None
+        self._folder: Path | None = None  # the private folder of the handover socket
 
     def open(self) -> None:
         """Start the publisher process, which binds the stream's sockets and a loopback
         handover socket; raises zmq.ZMQError if it cannot bind (e.g. address in use)."""
         ctx = mp.get_context("spawn")  # a fresh interpreter: no inherited ZeroMQ context or threads
-        self._counters = ctx.RawArray("q", 2)
+        self._counters = ctx.RawArray("q", 3)
+        self._folder = Path(tempfile.mkdtemp(prefix="icebridge-stream-"))  # 0700: this user's alone
         ours, theirs = ctx.Pipe()
-        self._process = ctx.Process(target=serve, args=(self.settings, self._counters, theirs),
+        self._process = ctx.Process(target=serve, args=(self.settings, self._counters, theirs,
+                                                        f"ipc://{self._folder / 'handover'}"),
                                     name="state-publisher", daemon=True)
         self._process.start()
         theirs.close()
@@ -72,6 +81,7 @@ class StatePublisher:
                 self._process.terminate()
             self._process.join(5.0)
             ours.close()
+            shutil.rmtree(self._folder, ignore_errors=True)
             raise zmq.ZMQError(detail[0], f"the publisher process: {detail[1]} (exit code {self._process.exitcode})"
                                if detail[0] is None else detail[1])
         self._pipe = ours
@@ -89,6 +99,11 @@ class StatePublisher:
     def snapshots(self) -> int:
         """Snapshot requests the publisher has answered."""
         return 0 if self._counters is None else int(self._counters[_SNAPSHOTS])
+
+    @property
+    def malformed(self) -> int:
+        """Handed-over messages the publisher dropped: not decoded, or out of a view's bounds."""
+        return 0 if self._counters is None else int(self._counters[_MALFORMED])
 
     def publish(self, events: WorldEvents, input_time: float | None = None, traffic: np.ndarray | None = None) -> None:
         """Hand one step's events and the traffic picture (``TRAFFIC_DTYPE`` rows; None:
@@ -136,6 +151,7 @@ class StatePublisher:
         self._push = None
         self._pipe.close()
         self._pipe = None
+        shutil.rmtree(self._folder, ignore_errors=True)
 
     def __enter__(self) -> "StatePublisher":
         if self._push is None:
@@ -146,29 +162,29 @@ class StatePublisher:
         self.close()
 
 
-def _bind(context: zmq.Context, settings: StreamSettings) -> tuple[list[zmq.Socket], str]:
-    """The handover (PULL on an ephemeral loopback port), PUB and ROUTER sockets, bound."""
+def _bind(context: zmq.Context, settings: StreamSettings, handover: str) -> list[zmq.Socket]:
+    """The handover (PULL on ``handover``, an IPC socket), PUB and ROUTER sockets, bound."""
     pull, pub, router = (context.socket(kind) for kind in (zmq.PULL, zmq.PUB, zmq.ROUTER))
     pull.setsockopt(zmq.RCVHWM, HANDOVER_HWM)
     pub.setsockopt(zmq.SNDHWM, settings.send_hwm)
     pub.setsockopt(zmq.LINGER, 500)  # ms: the last steps still reach subscribers on close
     try:
-        port = pull.bind_to_random_port("tcp://127.0.0.1")
+        pull.bind(handover)
         pub.bind(settings.publish)
         router.bind(settings.snapshot)
     except zmq.ZMQError:
         for s in (pull, pub, router):
             s.close(linger=0)
         raise
-    return [pull, pub, router], f"tcp://127.0.0.1:{port}"
+    return [pull, pub, router]
 
 
-def serve(settings: StreamSettings, counters, pipe: mp.connection.Connection) -> None:
+def serve(settings: StreamSettings, counters, pipe: mp.connection.Connection, handover: str) -> None:
     """The publisher process: bind, say where the handover is (or why not), then relay and
     answer snapshots until told to stop or the physics process is gone."""
     context = zmq.Context()
     try:
-        sockets, handover = _bind(context, settings)
+        sockets = _bind(context, settings, handover)
     except zmq.ZMQError as exc:
         pipe.send(("error", exc.errno, str(exc)))
         return
@@ -199,7 +215,13 @@ def _relay(pull: zmq.Socket, pub: zmq.Socket, router: zmq.Socket, counters) -> N
             frames = pull.recv_multipart()
             if frames == [STOP]:
                 return
-            events, _, view.traffic = decode(frames)
+            try:
+                events, _, traffic = decode(frames)
+            except CodecError as exc:
+                counters[_MALFORMED] += 1
+                log.warning("state publisher: dropped a handed-over message: %s", exc)
+                continue
+            view.traffic = traffic
             view.apply(events)
             pub.send_multipart(frames)  # PUB drops at a subscriber's high-water mark
             counters[_SENT] += 1
