@@ -27,7 +27,7 @@ class ControlWatch:
 
     def __init__(self, endpoint: str, token: str | None) -> None:
         self.endpoint, self.token = endpoint, token
-        self.error: str | None = "not asked yet"
+        self.error: str | None = None  # until the first request says otherwise
         self.status: dict | None = None
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="station-control", daemon=True)

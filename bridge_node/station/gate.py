@@ -9,6 +9,7 @@ is closed before it opens (the browser sees HTTP 403)."""
 from __future__ import annotations
 
 import hmac
+import html
 from http.cookies import CookieError, SimpleCookie
 from urllib.parse import parse_qs, unquote, urlsplit
 
@@ -24,7 +25,7 @@ align-items:center;justify-content:center}form{background:#162634;padding:28px 3
 h1{font-size:18px;margin:0 0 14px}input{width:100%;box-sizing:border-box;padding:8px;margin:8px 0 14px;
 background:#0e1a24;color:#fff;border:1px solid #3b5569;border-radius:4px}button{padding:8px 18px;background:#2f7fc1;
 color:#fff;border:0;border-radius:4px;cursor:pointer}p{color:#f08a7e;min-height:1em;margin:0 0 8px}</style></head>
-<body><form id="f"><h1>IceBridge instructor station</h1><p>%s</p><label>Access token (the node's control token)
+<body><form id="f"><h1>IceBridge instructor station</h1><p>{message}</p><label>Access token (the node's control token)
 <input id="t" type="password" autocomplete="current-password" autofocus></label><button>Sign in</button></form>
 <script>document.getElementById('f').onsubmit=function(e){e.preventDefault();
 document.cookie='icebridge_token='+encodeURIComponent(document.getElementById('t').value)+';path=/;SameSite=Strict';
@@ -90,7 +91,7 @@ class TokenGate:
         else:
             status, text = refused
             page = scope["path"] in ("/", "/index.html") and status == 401
-            body = (LOGIN_PAGE % text).encode() if page else (text or "access token needed").encode()
+            body = (LOGIN_PAGE.replace("{message}", html.escape(text)) if page else text or "access token needed").encode()
             await send({"type": "http.response.start", "status": status, "headers": [
                 (b"content-type", b"text/html; charset=utf-8" if page else b"text/plain; charset=utf-8"),
                 (b"content-length", str(len(body)).encode()), (b"cache-control", b"no-store")]})

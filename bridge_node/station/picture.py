@@ -157,27 +157,31 @@ class Picture:
                     not np.array_equal(old.floes, floes):
                 self.tiles[k] = TileEntry((old.version + 1) if old else 0, meta, cells, floes)
 
-    def _free_floes(self, view: WorldView) -> tuple[np.ndarray, np.ndarray]:
-        """Global cells and poses (x, y, yaw) of the live tiles' free floes."""
-        cells, poses = [], []
+    def _free_floes(self, view: WorldView) -> tuple[np.ndarray, np.ndarray, list[list[int]]]:
+        """Global cells and poses (x, y, yaw) of the live tiles' free floes, tile by tile,
+        and each tile's [placement, floe count] (the page redraws only the tiles whose
+        floes moved)."""
+        cells, poses, tiles = [], [], []
         for k, p in view.placements.items():
             if k in view.frozen or not p.row_count:
                 continue
             rows = p.row_start + np.flatnonzero(view.status[p.row_start:p.row_start + p.row_count] == FloeStatus.FREE)
-            cells.append(self.template_start[p.template] + rows - p.row_start)
-            poses.append(view.pose[rows][:, [0, 1, 3]])
+            if len(rows):
+                cells.append(self.template_start[p.template] + rows - p.row_start)
+                poses.append(view.pose[rows][:, [0, 1, 3]])
+                tiles.append([k, len(rows)])
         if not cells:
-            return np.zeros(0, np.int32), np.zeros((0, 3), np.float32)
-        return np.concatenate(cells).astype(np.int32), np.concatenate(poses).astype(np.float32)
+            return np.zeros(0, np.int32), np.zeros((0, 3), np.float32), []
+        return np.concatenate(cells).astype(np.int32), np.concatenate(poses).astype(np.float32), tiles
 
     def frame(self, view: WorldView, extra: dict) -> Frame:
         """A frame of the view as it is now; ``extra`` joins the header (stream and
         control health, alarms)."""
         self._update_tiles(view)
         self.add_track_point(view)
-        floe_cell, floe_pose = self._free_floes(view)
+        floe_cell, floe_pose, floe_tiles = self._free_floes(view)
         self._number += 1
-        header = {"type": "frame", "seq": view.seq, "time": view.time, "ship": ship_panel(view),
+        header = {"type": "frame", "seq": view.seq, "time": view.time, "ship": ship_panel(view), "floe_tiles": floe_tiles,
                   "environment": environment_panel(view), "traffic": traffic_list(view),
                   "counts": {"free": len(floe_cell), "frozen_floes": int(sum(len(t.cells) for t in self.tiles.values()
                                                                              if t.meta["frozen"])),

@@ -53,17 +53,22 @@ class Broadcast:
         for event in self.wakers:
             event.set()
 
+    def _wake_from_thread(self) -> None:
+        try:
+            if self.loop is not None:
+                self.loop.call_soon_threadsafe(self._wake)
+        except RuntimeError:  # the server has stopped (its loop is closed): nobody to tell
+            pass
+
     def publish(self, frame: Frame) -> None:
         """A new frame (from any thread)."""
         self.frame, self.waiting = frame, None
-        if self.loop is not None:
-            self.loop.call_soon_threadsafe(self._wake)
+        self._wake_from_thread()
 
     def wait_for_node(self, text: str) -> None:
         """No state to show, and why (from any thread)."""
         self.waiting = text
-        if self.loop is not None:
-            self.loop.call_soon_threadsafe(self._wake)
+        self._wake_from_thread()
 
 
 def _check_command(text: str) -> tuple[object, dict | str]:

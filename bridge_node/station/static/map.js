@@ -5,7 +5,7 @@
 "use strict";
 
 const MAP_COLORS = {
-  water: "#17364f", ice: "#dfe8ef", tileLine: "rgba(70, 110, 140, 0.35)", frozenTile: "rgba(96, 130, 160, 0.10)",
+  water: "#17364f", ice: "#d2dde6", tileLine: "rgba(70, 110, 140, 0.35)", frozenTile: "rgba(96, 130, 160, 0.10)",
   floe: "#f7fbfe", floeEdge: "#6d8aa1", frozenFloe: "#c3d1dc", track: "#ffb13b", ship: "#e8331f",
   shipEdge: "#ffffff", traffic: "#2fd27a", light: "rgba(255, 236, 140, 0.28)", grid: "rgba(255, 255, 255, 0.28)",
   gridText: "rgba(255, 255, 255, 0.85)", ghost: "rgba(255, 176, 59, 0.9)",
@@ -17,7 +17,7 @@ class MapView {
     this.ctx = canvas.getContext("2d");
     this.geo = null;
     this.tiles = new Map();     // placement -> {meta, holes: Path2D, floes: Path2D|null, box}
-    this.floePath = null;
+    this.floes = new Map();     // placement -> {cells, poses, path} of a live tile's free floes
     this.floeCount = 0;
     this.track = [];            // [x, y] pairs, NaN breaks the line
     this.frame = null;          // the last frame's header
@@ -27,7 +27,7 @@ class MapView {
     this.pick = null;           // callback while picking a position
     this.ghost = null;          // {x, y, heading} of a picked position
     this.dirty = true;
-    this.stats = { frames: 0, draws: 0, fps: 0, drawMs: 0, floes: 0, _t0: performance.now(), _n: 0 };
+    this.stats = { frames: 0, draws: 0, fps: 0, drawMs: 0, applyMs: 0, floes: 0, _t0: performance.now(), _n: 0 };
     window.stationStats = this.stats;
     this._input();
     const loop = () => { if (this.dirty) this.draw(); requestAnimationFrame(loop); };
@@ -39,43 +39,56 @@ class MapView {
     this.geo = { ...header, outline: arrays.outline, start: arrays.outline_start, centroid: arrays.centroid };
     const f = header.field;
     this.width = f.nx * f.side; this.height = f.ny * f.side;
-    this.tiles.clear();
+    this.tiles.clear(); this.floes.clear();
     this.dirty = true;
   }
 
-  // a cell's outline, turned by yaw and moved to (x, y), added to a path
-  _addCell(path, g, x, y, yaw) {
+  // a cell's outline, turned by yaw and moved to (x, y), as SVG path text (decimetres):
+  // one Path2D made from the text of many cells is far quicker than a lineTo a corner
+  _cell(g, x, y, yaw) {
     const o = this.geo.outline, a = this.geo.start[g], b = this.geo.start[g + 1];
     const c = Math.cos(yaw), s = Math.sin(yaw);
+    let text = "M";
     for (let i = a; i < b; i++) {
       const px = o[2 * i], py = o[2 * i + 1];
-      const wx = x + c * px - s * py, wy = y + s * px + c * py;
-      if (i === a) path.moveTo(wx, wy); else path.lineTo(wx, wy);
+      text += Math.round((x + c * px - s * py) * 10) / 10 + " " + Math.round((y + s * px + c * py) * 10) / 10 + (i + 1 < b ? "L" : "Z");
     }
-    path.closePath();
+    return text;
   }
 
   _setTile(meta, cells, floes) {
     const t = this.geo.templates[meta.template], side = t.side, turns = meta.turns % 4;
     const c = Math.round(Math.cos(turns * Math.PI / 2)), s = Math.round(Math.sin(turns * Math.PI / 2));
-    const holes = new Path2D(), yaw = turns * Math.PI / 2, cen = this.geo.centroid;
+    const yaw = turns * Math.PI / 2, cen = this.geo.centroid;
+    let holes = "", frozen = "";
     for (let i = 0; i < cells.length; i++) {
       const g = t.start + cells[i];
       const rx = cen[2 * g] - side / 2, ry = cen[2 * g + 1] - side / 2;
-      this._addCell(holes, g, c * rx - s * ry + side / 2 + meta.corner[0], s * rx + c * ry + side / 2 + meta.corner[1], yaw);
+      holes += this._cell(g, c * rx - s * ry + side / 2 + meta.corner[0], s * rx + c * ry + side / 2 + meta.corner[1], yaw);
+      if (floes.length) frozen += this._cell(g, floes[3 * i], floes[3 * i + 1], floes[3 * i + 2]);
     }
-    let floePath = null;
-    if (floes.length) {
-      floePath = new Path2D();
-      for (let i = 0; i < cells.length; i++) {
-        this._addCell(floePath, t.start + cells[i], floes[3 * i], floes[3 * i + 1], floes[3 * i + 2]);
-      }
+    this.tiles.set(meta.k, { meta, holes: new Path2D(holes), floes: frozen ? new Path2D(frozen) : null, side });
+  }
+
+  // the live floes, tile by tile: a tile's path is made again only when one of its floes moved
+  _setFloes(list, cell, pose) {
+    const kept = new Map();
+    let at = 0;
+    for (const [k, n] of list) {
+      const cells = cell.subarray(at, at + n), poses = pose.subarray(3 * at, 3 * (at + n));
+      at += n;
+      const old = this.floes.get(k);
+      if (old && sameArrays(old.cells, cells) && sameArrays(old.poses, poses)) { kept.set(k, old); continue; }
+      let text = "";
+      for (let i = 0; i < n; i++) text += this._cell(cells[i], poses[3 * i], poses[3 * i + 1], poses[3 * i + 2]);
+      kept.set(k, { cells: cells.slice(), poses: poses.slice(), path: new Path2D(text) });
     }
-    this.tiles.set(meta.k, { meta, holes, floes: floePath, side });
+    this.floes = kept;
   }
 
   applyFrame(header, arrays) {
     if (!this.geo) return;
+    const t0 = performance.now();
     if (header.scene_reset) this.tiles.clear();
     let cellAt = 0, floeAt = 0;
     for (const meta of header.tiles) {
@@ -84,15 +97,14 @@ class MapView {
       cellAt += meta.cells; floeAt += 3 * meta.floes;
       this._setTile(meta, cells, floes);
     }
-    const path = new Path2D(), cell = arrays.floe_cell, pose = arrays.floe_pose;
-    for (let i = 0; i < cell.length; i++) this._addCell(path, cell[i], pose[3 * i], pose[3 * i + 1], pose[3 * i + 2]);
-    this.floePath = path; this.floeCount = cell.length;
+    this._setFloes(header.floe_tiles, arrays.floe_cell, arrays.floe_pose);
+    this.floeCount = arrays.floe_cell.length;
     if (header.track_reset) this.track = [];
     const tr = arrays.track;
     for (let i = 0; i + 1 < tr.length; i += 2) this.track.push([tr[i], tr[i + 1]]);
     this.frame = header;
     if (this.follow) { this.cx = header.ship.east; this.cy = header.ship.north; }
-    this.stats.frames++; this.stats.floes = cell.length;
+    this.stats.frames++; this.stats.floes = this.floeCount; this.stats.applyMs = performance.now() - t0;
     this.dirty = true;
   }
 
@@ -198,10 +210,8 @@ class MapView {
     ctx.strokeStyle = MAP_COLORS.floeEdge;
     ctx.fillStyle = MAP_COLORS.frozenFloe;
     for (const t of this.tiles.values()) if (t.floes) { ctx.fill(t.floes); if (s > 0.4) ctx.stroke(t.floes); }
-    if (this.floePath) {
-      ctx.fillStyle = MAP_COLORS.floe; ctx.fill(this.floePath);
-      if (s > 0.25) ctx.stroke(this.floePath);
-    }
+    ctx.fillStyle = MAP_COLORS.floe;
+    for (const f of this.floes.values()) { ctx.fill(f.path); if (s > 0.25) ctx.stroke(f.path); }
   }
 
   _drawTrack(ctx, s) {
@@ -308,6 +318,12 @@ class MapView {
     st.draws++; st._n++; st.drawMs = now - t0;
     if (now - st._t0 >= 1000) { st.fps = st._n * 1000 / (now - st._t0); st._n = 0; st._t0 = now; }
   }
+}
+
+function sameArrays(a, b) {
+  if (a.length !== b.length) return false;
+  for (let i = 0; i < a.length; i++) if (a[i] !== b[i]) return false;
+  return true;
 }
 
 // a grid step in degrees: 0.01' to 30' (decimal minutes, as on a chart), or whole degrees

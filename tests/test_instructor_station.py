@@ -1,0 +1,342 @@
+"""The instructor station (issue 25, item 5), as an instructor uses it: ``icebridge run`` and
+``icebridge instructor`` in their own processes on loopback, the page opened in headless
+Chromium (Debian's, driven by Selenium). The map is checked on the pixels of screenshots;
+the page's commands are checked in the node's status (``icebridge ctl status``). One node
+and one station serve the tests in order; the map's test comes first and waits for the ship
+to break a channel behind it."""
+from __future__ import annotations
+
+import io
+import json
+import math
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from bridge_node.control.client import request
+from bridge_node.node.network import free_port
+from bridge_node.station.wire import unpack
+
+REPO = Path(__file__).resolve().parent.parent
+CHROMIUM, DRIVER = shutil.which("chromium"), shutil.which("chromedriver")
+pytestmark = pytest.mark.skipif(not (CHROMIUM and DRIVER), reason="needs chromium and chromium-driver "
+                                "(scripts/setup.sh installs them)")
+TOKEN = "instructor-test-token-0123456789"
+SHIP_RGB = (232, 51, 31)  # MAP_COLORS.ship in map.js
+FLOE_RGB = (247, 251, 254)  # MAP_COLORS.floe
+LEVEL_ICE_RGB = (210, 221, 230)  # MAP_COLORS.ice
+
+
+def wait_until(predicate, timeout: float, what: str, every: float = 0.1):
+    """The predicate's first truthy value, polled until ``timeout`` s; fails naming ``what``."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
+        time.sleep(every)
+
+
+def write_config(folder: Path, stream: tuple[int, int], control: int, port: int, extra: str = "") -> Path:
+    """An 800 m field of 0.3 m ice, the ship's bow in it, loopback ports of its own."""
+    text = ('[ship]\nname = "polar_cargo"\n[ice_field]\nwidth = 800.0\nheight = 800.0\nthickness = 0.3\n'
+            '[exercise]\nstart_north = -20.0\nstart_east = 450.0\n'
+            f'[paths]\ncache_dir = "{folder / "tiles"}"\nsession_dir = "{folder / "sessions"}"\n'
+            f'[stream]\npublish = "tcp://127.0.0.1:{stream[0]}"\nsnapshot = "tcp://127.0.0.1:{stream[1]}"\n'
+            f'[control]\nendpoint = "tcp://127.0.0.1:{control}"\n' + extra +
+            f'[instructor]\nport = {port}\n' + ("allow_network = true\n" if "token" in extra else ""))
+    path = folder / f"exercise-{port}.toml"
+    path.write_text(text)
+    return path
+
+
+def start(folder: Path, name: str, *args: str) -> subprocess.Popen:
+    out = open(folder / f"{name}.log", "w")
+    return subprocess.Popen([sys.executable, "-m", "bridge_node", *args], cwd=REPO, stdout=out, stderr=subprocess.STDOUT,
+                            env={**os.environ, "ICEBRIDGE_TOKEN": ""})
+
+
+def stop(proc: subprocess.Popen) -> None:
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(15)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(5)
+
+
+def ctl_status(config: Path) -> dict:
+    """The node's status as ``icebridge ctl status`` prints it."""
+    done = subprocess.run([sys.executable, "-m", "bridge_node", "ctl", "--config", str(config), "status"],
+                          cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+@pytest.fixture(scope="module")
+def exercise(tmp_path_factory):
+    """A running node and a station on it: (config, station URL, folder)."""
+    folder = tmp_path_factory.mktemp("station")
+    stream, control, port = (free_port(), free_port()), free_port(), free_port()
+    config = write_config(folder, stream, control, port)
+    node = start(folder, "node", "run", "--config", str(config), "--render", "none", "--duration", "600",
+                 "--no-record", "--json", "--out", str(folder / "out"))
+    station = start(folder, "station", "instructor", "--config", str(config))
+    try:
+        wait_until(lambda: node.poll() is None and _answers(control), 180, "the node's control endpoint")
+        url = f"http://127.0.0.1:{port}/"
+        wait_until(lambda: station.poll() is None and _http(url)[0] == 200, 120, "the station's page")
+        yield config, url, folder
+    finally:
+        stop(station)
+        stop(node)
+        for name in ("node", "station"):
+            print(name, (folder / f"{name}.log").read_text()[-2000:])
+
+
+def _answers(port: int) -> bool:
+    try:
+        return bool(request(f"tcp://127.0.0.1:{port}", {"request": "status"}, None, 1.0).get("ok"))
+    except Exception:  # noqa: BLE001 -- not up yet
+        return False
+
+
+def _http(url: str, headers: dict | None = None) -> tuple[int, str]:
+    try:
+        with urllib.request.urlopen(urllib.request.Request(url, headers=headers or {}), timeout=5) as r:
+            return r.status, r.read().decode()
+    except urllib.error.HTTPError as exc:
+        return exc.code, exc.read().decode()
+    except OSError:
+        return 0, ""
+
+
+@pytest.fixture(scope="module")
+def browser():
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = CHROMIUM
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--window-size=1400,900",
+                "--force-device-scale-factor=1"):
+        options.add_argument(arg)
+    driver = webdriver.Chrome(service=Service(DRIVER), options=options)
+    driver.set_page_load_timeout(30)
+    try:
+        yield driver
+    finally:
+        driver.quit()
+
+
+def open_page(browser, url: str, floes: int = 1) -> None:
+    browser.get(url)
+    wait_until(lambda: browser.execute_script("return window.stationStats && window.stationStats.frames > 3 && "
+                                              f"window.stationStats.floes >= {floes}"), 60,
+               f"frames with at least {floes} live floes on the page")
+
+
+def screenshot(browser) -> np.ndarray:
+    return np.asarray(Image.open(io.BytesIO(browser.get_screenshot_as_png())).convert("RGB")).astype(int)
+
+
+def near(image: np.ndarray, rgb: tuple[int, int, int], tolerance: int = 12) -> np.ndarray:
+    return (np.abs(image - np.array(rgb)) <= tolerance).all(axis=2)
+
+
+def canvas_pixel(browser, east: float, north: float) -> tuple[float, float]:
+    """Where a world point is drawn, in page pixels (the map's own transform)."""
+    return browser.execute_script(
+        "const r = map.canvas.getBoundingClientRect(), w = r.width, h = r.height;"
+        "return [r.left + w / 2 + (arguments[0] - map.cx) * map.scale, r.top + h / 2 - (arguments[1] - map.cy) * map.scale];",
+        east, north)
+
+
+def view(browser, east: float, north: float, scale: float) -> None:
+    """Hold the map still on a world point at a scale (px/m), and wait for it to be drawn."""
+    browser.execute_script("map.setFollow(false); map.cx = arguments[0]; map.cy = arguments[1]; map.scale = arguments[2];"
+                           "map.dirty = true;", east, north, scale)
+    draws = browser.execute_script("return window.stationStats.draws")
+    wait_until(lambda: browser.execute_script("return window.stationStats.draws") > draws + 1, 10, "a redraw")
+
+
+def shown_time(browser) -> float:
+    return float(browser.find_element("id", "sim-time").text.split()[0])
+
+
+def _endpoint(config: Path) -> str:
+    return next(line.split('"')[1] for line in config.read_text().splitlines() if line.startswith("endpoint"))
+
+
+def test_map_shows_ship_and_floes(exercise, browser):
+    config, url, folder = exercise
+    open_page(browser, url, floes=100)
+    wait_until(lambda: browser.execute_script("return lastFrame.ship.north") > 120.0, 120,
+               "the ship's stern 45 m into the ice (a channel behind it)")
+    request(_endpoint(config), {"command": {"command": "freeze"}}, None)  # a still picture to compare with
+    try:
+        status = wait_until(lambda: (s := ctl_status(config))["frozen"] and s, 20, "the node frozen")
+        wait_until(lambda: browser.execute_script("return lastFrame.environment.frozen"), 10, "the page frozen")
+        east, north, heading = status["east_m"], status["north_m"], math.radians(status["heading_deg"])
+        view(browser, east, north, 2.0)
+        image = screenshot(browser)
+        Image.fromarray(image.astype(np.uint8)).save(folder / "map.png")
+
+        def box(forward: float, starboard: float, half: int) -> np.ndarray:
+            """The screenshot around a point of the ship's frame (m), +-half px."""
+            x, y = (round(v) for v in canvas_pixel(
+                browser, east + forward * math.sin(heading) + starboard * math.cos(heading),
+                north + forward * math.cos(heading) - starboard * math.sin(heading)))
+            return image[y - half:y + half + 1, x - half:x + half + 1]
+
+        ship = near(box(0.0, 0.0, 15), SHIP_RGB, 20).mean()
+        assert ship > 0.5, f"the own ship's colour covers {ship:.0%} around its place"
+        assert not near(box(0.0, 60.0, 15), SHIP_RGB, 20).any(), "ship colour 60 m abeam"
+        floes = near(box(0.0, 0.0, 200), FLOE_RGB, 6).sum()  # broken floes beside and ahead of the hull
+        assert floes > 2000, f"floe pixels {floes}"
+        channel = near(box(-100.0, 0.0, 20), LEVEL_ICE_RGB, 6).mean()  # 25 m astern of the stern: broken
+        level = near(box(-100.0, 60.0, 20), LEVEL_ICE_RGB, 6).mean()  # 60 m to starboard of it: intact
+        assert channel < 0.5 < level, f"level ice: {channel:.0%} of the channel astern, {level:.0%} beside it"
+    finally:
+        request(_endpoint(config), {"command": {"command": "resume"}}, None)
+
+
+def test_freeze_and_resume_from_the_page(exercise, browser):
+    config, url, _ = exercise
+    open_page(browser, url)
+    wait_until(lambda: not browser.execute_script("return lastFrame.environment.frozen"), 10, "a running exercise")
+    browser.find_element("id", "freeze").click()
+    wait_until(lambda: ctl_status(config)["frozen"], 20, "icebridge ctl status to say frozen")
+    wait_until(lambda: not browser.find_element("id", "frozen-badge").get_attribute("hidden"), 5, "the FROZEN badge")
+    before, node_before = shown_time(browser), ctl_status(config)["time_s"]
+    time.sleep(1.0)
+    assert shown_time(browser) == before, "the clock shown moved while frozen"
+    assert ctl_status(config)["time_s"] == node_before, "the node's clock moved while frozen"
+    assert "queued" in browser.find_element("css selector", "[data-for~=freeze]").text
+    browser.find_element("id", "resume").click()
+    wait_until(lambda: shown_time(browser) > before + 0.5, 20, "the clock shown to run again")
+    status = ctl_status(config)
+    assert not status["frozen"] and status["time_s"] > node_before
+
+
+def test_reposition_from_the_page(exercise, browser):
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    config, url, _ = exercise
+    open_page(browser, url)
+    view(browser, 400.0, 400.0, 0.6)
+    target = (250.0, 600.0)  # east, north: in the ice, away from the ship's lane
+    px, py = canvas_pixel(browser, *target)
+    canvas = browser.find_element("id", "map")
+    rect = browser.execute_script("const r = map.canvas.getBoundingClientRect(); return [r.left, r.top, r.width, r.height];")
+    browser.find_element("id", "pick").click()
+    ActionChains(browser).move_to_element_with_offset(canvas, px - rect[0] - rect[2] / 2,
+                                                      py - rect[1] - rect[3] / 2).click().perform()
+    picked = [float(browser.find_element("id", i).get_attribute("value")) for i in ("rp-east", "rp-north")]
+    assert math.dist(picked, target) < 3.0, f"picked {picked}, clicked on {target}"
+    for field, value in (("rp-heading", "90"), ("rp-speed", "6")):
+        browser.find_element("id", field).clear()
+        browser.find_element("id", field).send_keys(value)
+    browser.find_element("id", "reposition").click()
+    status = wait_until(lambda: (s := ctl_status(config)) and math.dist((s["east_m"], s["north_m"]), picked) < 20 and s,
+                        30, "the node's ship at the picked place")
+    assert abs(status["heading_deg"] - 90.0) < 5.0
+    wait_until(lambda: math.dist(browser.execute_script("return [lastFrame.ship.east, lastFrame.ship.north]"), picked)
+               < 20, 10, "the page's ship at the picked place")
+    request(_endpoint(config), {"command": {"command": "freeze"}}, None)
+    try:
+        wait_until(lambda: browser.execute_script("return lastFrame.environment.frozen"), 10, "the page frozen")
+        ship = browser.execute_script("return [lastFrame.ship.east, lastFrame.ship.north]")
+        view(browser, 400.0, 400.0, 0.6)
+        image = screenshot(browser)
+        x, y = (round(v) for v in canvas_pixel(browser, *ship))
+        assert near(image[y - 4:y + 5, x - 4:x + 5], SHIP_RGB, 20).mean() > 0.5, "no ship drawn at its new place"
+        assert "reposition" in browser.find_element("id", "log").text
+    finally:
+        request(_endpoint(config), {"command": {"command": "resume"}}, None)
+
+
+def test_a_refused_command_is_shown(exercise, browser):
+    _, url, _ = exercise
+    open_page(browser, url)
+    box = browser.find_element("id", "visibility")
+    box.clear()
+    box.send_keys("20")  # below the node's 50 m: the browser's own check is bypassed by submitting through JS
+    browser.execute_script("document.getElementById('visibility-form').dispatchEvent(new Event('submit', {cancelable: true}))")
+    reply = browser.find_element("css selector", "[data-for~=visibility]")
+    wait_until(lambda: "visibility_m" in reply.text, 10, "the node's refusal on the page")
+    assert "50" in reply.text and "err" in reply.get_attribute("class")
+
+
+def test_token_asked_with_the_network_opened(exercise, tmp_path, browser):
+    config, _, folder = exercise
+    stream = [int(line.rsplit(":", 1)[1].rstrip('"')) for line in config.read_text().splitlines()
+              if line.startswith(("publish", "snapshot"))]
+    port = free_port()
+    guarded = write_config(folder, tuple(stream), int(_endpoint(config).rsplit(":", 1)[1]), port,
+                           extra=f'token = "{TOKEN}"\n')
+    station = start(folder, "guarded", "instructor", "--config", str(guarded))
+    url = f"http://127.0.0.1:{port}/"
+    try:
+        wait_until(lambda: station.poll() is None and _http(url)[0] == 401, 120, "the guarded station")
+        assert "Access token" in _http(url)[1]
+        assert _http(url + "static/station.js")[0] == 401
+        assert _http(url, {"Authorization": f"Bearer {TOKEN}"})[0] == 200
+        assert _http(url + "?token=wrong-token-0123456789")[0] == 401
+        _websocket_refused(port)
+        assert _websocket_hello(port, TOKEN)["type"] == "hello"
+        browser.get(url)  # the login page, then the station with the token's cookie
+        browser.find_element("id", "t").send_keys(TOKEN + "\n")
+        wait_until(lambda: browser.execute_script("return !!window.stationStats && window.stationStats.frames > 2"),
+                   30, "frames after signing in")
+    finally:
+        stop(station)
+        browser.delete_all_cookies()
+
+
+def _websocket_refused(port: int) -> None:
+    from websockets.exceptions import ConnectionClosed, InvalidStatus
+    from websockets.sync.client import connect
+
+    try:
+        with connect(f"ws://127.0.0.1:{port}/ws", open_timeout=10) as ws:
+            ws.recv(timeout=5)
+    except InvalidStatus as exc:
+        assert exc.response.status_code in (401, 403)
+    except ConnectionClosed:
+        pass
+    else:
+        raise AssertionError("a WebSocket without the token got a message")
+
+
+def _websocket_hello(port: int, token: str) -> dict:
+    from websockets.sync.client import connect
+
+    with connect(f"ws://127.0.0.1:{port}/ws?token={token}", open_timeout=10, max_size=None) as ws:
+        hello = json.loads(ws.recv(timeout=10))
+        header, arrays = unpack(ws.recv(timeout=10))
+        assert header["type"] == "geometry" and len(arrays["outline_start"]) > 1
+        return hello
+
+
+def test_user_errors_are_clean(exercise):
+    config, url, _ = exercise
+    port = int(url.rsplit(":", 1)[1].strip("/"))
+    for args, text in ((["--record", "nowhere"], "debrief"), (["--port", "0"], "--port"),
+                       (["--port", str(port)], "cannot listen")):
+        done = subprocess.run([sys.executable, "-m", "bridge_node", "instructor", "--config", str(config), *args],
+                              cwd=REPO, capture_output=True, text=True, timeout=120)
+        assert done.returncode == 2 and text in done.stderr and "Traceback" not in done.stderr, done.stderr
