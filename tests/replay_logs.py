@@ -176,3 +176,18 @@ def shifted(fixes: list[Fix], after: float, north_m: float) -> list[Fix]:
         return f.lat + math.degrees(north_m / radii(math.radians(f.lat))[0])
 
     return [Fix(f.t, north(f), f.lon, f.heading, f.course, f.speed) if f.t > after else f for f in fixes]
+
+
+def truncated_ais(line: str, chars: int) -> str:
+    """An AIS sentence (with or without a tag block) with its payload cut to ``chars``
+    six-bit characters and a fresh checksum: a message missing its later fields."""
+    tag, _, rest = line.rpartition("!")
+    parts = rest[:rest.rindex("*")].split(",")
+    parts[5], parts[6] = parts[5][:chars], "0"
+    return tag + sentence(",".join(parts), "!")
+
+
+def tick_log(period: str, ticks: list[str]) -> str:
+    """A session record's ``ticks.log``: the header with ``period`` as written, then the
+    tick lines (``seq monotonic unix nmea can modbus``)."""
+    return f"# icebridge ticks 1 period_s={period}\n" + "".join(f"{t}\n" for t in ticks)

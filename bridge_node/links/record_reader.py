@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,7 +16,36 @@ from pathlib import Path
 import can
 from can.io.canutils import CanutilsLogReader
 
+from bridge_node.node.errors import UserError
 from bridge_node.node.input_files import LOG_LIMIT, read_input_text
+
+MAX_UNIX_TIME = 1e10  # s (year 2286): a record line's unix time must lie in [0, this]
+MAX_RECORD_TICKS = 10_000_000  # ticks a record without a tick log may span (about 2.3 days at 120 Hz)
+MODBUS_COLUMNS = ("unix_time", "link", "op", "table", "address", "raw", "value")
+MAX_REGISTER = 2**32  # a Modbus address or raw value at or above this is malformed
+
+
+def record_time(text: str) -> float:
+    """A record line's unix time (s); ValueError unless a finite number in [0, MAX_UNIX_TIME]."""
+    x = float(text)
+    if not 0.0 <= x <= MAX_UNIX_TIME:  # also NaN
+        raise ValueError(f"unix time {text!r} out of range")
+    return x
+
+
+def check_tick_count(folder: Path, times: list[float], period: float) -> int:
+    """The number of ticks a record without a tick log spans at ``period`` s a step (the
+    first to the last line's time); UserError naming the folder when that is more than
+    MAX_RECORD_TICKS (a line far from the others), so that none is made one by one."""
+    if not times:
+        return 0
+    span = max(times) - min(times)
+    n = span / period + 1.0
+    if not math.isfinite(n) or n > MAX_RECORD_TICKS:
+        raise UserError(f"{folder}: the record's lines span {span:.0f} s, {n:.3g} ticks of {period:g} s "
+                        f"without a tick log (at most {MAX_RECORD_TICKS}); a line's time is wrong, or "
+                        f"give the files of one run")
+    return round(n - 1.0) + 1
 
 
 @dataclass(frozen=True)
@@ -45,9 +75,13 @@ def read_can_log(path: Path) -> tuple[list[can.Message], Counter]:
         if not line.strip():
             continue
         try:
-            frames.extend(CanutilsLogReader(io.StringIO(line + "\n")))
-        except (ValueError, IndexError):  # what python-can's parser raises on a bad line
+            read = list(CanutilsLogReader(io.StringIO(line + "\n")))
+            for msg in read:
+                record_time(str(msg.timestamp))
+        except (ValueError, IndexError, OverflowError):  # what python-can's parser raises on a bad line
             counts["malformed"] += 1
+            continue
+        frames.extend(read)
     return frames, counts
 
 
@@ -58,28 +92,48 @@ def read_nmea_log(path: Path) -> tuple[list[NmeaRecord], Counter]:
     for line in lines:
         parts = line.split(" ", 3)
         try:
-            out.append(NmeaRecord(float(parts[0]), parts[1], parts[2], parts[3]))
+            if parts[2] not in ("rx", "tx"):
+                raise ValueError(line)
+            out.append(NmeaRecord(record_time(parts[0]), parts[1], parts[2], parts[3]))
         except (ValueError, IndexError):
             counts["malformed"] += 1
     return out, counts
 
 
+def _modbus_row(header: list[str], row: list[str]) -> dict:
+    """A ``modbus.csv`` row as a dict of its header's columns; ValueError unless it has
+    every column, a unix time in range and an integer address and raw value in
+    [0, MAX_REGISTER)."""
+    if len(row) != len(header):
+        raise ValueError("wrong number of columns")
+    out = dict(zip(header, row))
+    record_time(out["unix_time"])
+    if not all(x.strip().isdigit() and len(x.strip()) <= 10 and int(x) < MAX_REGISTER
+               for x in (out["address"], out["raw"])):
+        raise ValueError("address or raw value not a register's")
+    return out
+
+
 def read_modbus_csv(path: Path) -> tuple[list[dict], Counter]:
     """Rows of ``modbus.csv`` as dicts of its header's columns, and counts of torn and
-    malformed rows."""
+    malformed rows (a field csv cannot split included). UserError naming the file when its
+    header lacks a column of MODBUS_COLUMNS."""
     lines, counts = complete_lines(path)
-    rows = list(csv.reader(line.rstrip("\r") for line in lines))
-    if not rows:
+    lines = [line.rstrip("\r") for line in lines]
+    if not lines:
         return [], counts
-    header, out = rows[0], []
-    for row in rows[1:]:
-        if len(row) != len(header):
-            counts["malformed"] += 1
-            continue
+    try:
+        header = next(csv.reader(lines[:1]))
+    except (csv.Error, StopIteration):
+        header = []
+    missing = [c for c in MODBUS_COLUMNS if c not in header]
+    if missing:
+        raise UserError(f"{path}: not a Modbus record: its header lacks {', '.join(missing)} "
+                        f"(a record's header is {','.join(MODBUS_COLUMNS)})")
+    out = []
+    for line in lines[1:]:
         try:
-            float(row[0])
-        except ValueError:
+            out.append(_modbus_row(header, next(csv.reader([line]))))
+        except (csv.Error, StopIteration, ValueError):
             counts["malformed"] += 1
-            continue
-        out.append(dict(zip(header, row)))
     return out, counts

@@ -18,13 +18,17 @@ from pathlib import Path
 
 from bridge_node.exercise.tick import StepListener
 from bridge_node.links.base import Listener, Traffic
-from bridge_node.links.record_reader import complete_lines
+from bridge_node.links.record_reader import complete_lines, record_time
 from bridge_node.links.session_record import FLUSH_PERIOD, cut_torn_tail
 
 TICKS_FILE = "ticks.log"
 HEADER = "# icebridge ticks 1 period_s="
 READS = {"nmea0183": "rx", "can": "rx", "modbus": "read"}  # protocol -> the direction of its inputs
 PROTOCOLS = tuple(READS)
+PERIOD_RANGE = (1e-3, 10.0)  # s: a tick log's period_s must lie in it (the node steps at 5 to 120 Hz)
+MAX_SEQ = 2**53  # a step number at or above this is malformed (beyond any run, and exact in a float)
+MAX_READS = 10**7  # inputs one tick read: more is malformed (a record file holds fewer lines)
+_MAX_DIGITS = 16  # a count's or step number's digits: more is malformed, never parsed
 
 
 @dataclass(frozen=True)
@@ -71,24 +75,54 @@ class TickRecord(Listener, StepListener):
             self._file.close()
 
 
+def _period(line: str) -> float:
+    """The step period (s) of a tick log's header; ValueError unless a finite number
+    within PERIOD_RANGE."""
+    text = line[len(HEADER):].strip()
+    try:
+        period = float(text)
+    except ValueError:
+        raise ValueError(f"its period_s {text!r} is not a number") from None
+    if not PERIOD_RANGE[0] <= period <= PERIOD_RANGE[1]:  # NaN fails too
+        raise ValueError(f"its period_s {text!r} is outside [{PERIOD_RANGE[0]:g}, {PERIOD_RANGE[1]:g}] s")
+    return period
+
+
+def _count(text: str, limit: int) -> int:
+    """A non-negative integer field below ``limit``; ValueError otherwise (a long one is
+    refused before it is parsed)."""
+    if len(text) > _MAX_DIGITS or not text.isdigit() or not text.isascii() or int(text) >= limit:
+        raise ValueError(f"count {text[:20]!r} out of range")
+    return int(text)
+
+
+def _tick(line: str) -> Tick:
+    """One tick line; ValueError or IndexError when malformed: a step number, a finite
+    monotonic time, a unix time in range and one read count per protocol, each in range."""
+    parts = line.split()
+    if len(parts) != 3 + len(PROTOCOLS):
+        raise ValueError("wrong number of fields")
+    monotonic = float(parts[1])
+    if not abs(monotonic) <= 1e12:  # s: NaN and infinity too
+        raise ValueError("monotonic time out of range")
+    return Tick(_count(parts[0], MAX_SEQ), monotonic, record_time(parts[2]),
+                tuple(_count(p, MAX_READS) for p in parts[3:]))
+
+
 def read_ticks(path: Path) -> tuple[float, list[Tick], Counter]:
     """The step period (s) and ticks of a ``ticks.log``, and counts of torn and malformed
-    lines. ValueError if it does not start with the header or holds more than one run."""
+    lines. ValueError if it does not start with the header, its period is not a finite
+    number within PERIOD_RANGE, or it holds more than one run."""
     lines, counts = complete_lines(path)
     if not lines or not lines[0].startswith(HEADER):
         raise ValueError(f"not a tick log (its first line is not {HEADER!r}...)")
     if any(line.startswith(HEADER) for line in lines[1:]):
         raise ValueError("it holds more than one run (two runs started in the same second?)")
-    period = float(lines[0][len(HEADER):])
+    period = _period(lines[0])
     ticks = []
     for line in lines[1:]:
-        parts = line.split()
         try:
-            ticks.append(Tick(int(parts[0]), float(parts[1]), float(parts[2]), tuple(int(p) for p in parts[3:])))
+            ticks.append(_tick(line))
         except (ValueError, IndexError):
-            counts["malformed"] += 1
-            continue
-        if len(ticks[-1].reads) != len(PROTOCOLS):
-            ticks.pop()
             counts["malformed"] += 1
     return period, ticks, counts

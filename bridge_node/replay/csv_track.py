@@ -35,11 +35,14 @@ COLUMNS = {
               "sog_ms", "speed_ms", "speed_mps", "speed_kmh"),
     "mmsi": ("mmsi",),
 }
+MAX_TIME = 1e13  # |a time cell| above this (unix ms in year 2286) is not a time
 ELAPSED = ("t", "t_s", "time_s", "elapsed", "elapsed_s", "elapsed_time", "seconds", "sec", "secs")  # s from the start
 TIME_PROBE_ROWS = 50  # rows read to suggest a column of times
 SPEED_UNITS = {"kn": KNOT, "m/s": 1.0, "km/h": 1.0 / 3.6}
 MAPPING_KEYS = (*COLUMNS, "speed_unit")
 NOT_AVAILABLE_ANGLE = 360.0  # AIS writes 511 for an unknown heading: >= 360 deg is none
+MAX_HEADER = 10_000  # characters: a longer first line is no CSV header
+MAX_SPEED_KN = 1000.0  # a speed cell above this (or below 0) makes the row bad
 
 
 def _normal(name: str) -> str:
@@ -122,11 +125,13 @@ def _no_time(path: str, header: list[str], cols: dict[str, int], rows: list[list
 def looks_like_csv_track(first_lines: list[str], mapping: dict[str, str]) -> bool:
     """Whether the first non-comment line is a header naming latitude and longitude columns."""
     header = next((line for line in first_lines if line.strip() and not line.startswith("#")), "")
+    if len(header) > MAX_HEADER:
+        return False
     try:
         dialect = csv.Sniffer().sniff(header, delimiters=",;\t|")
-    except csv.Error:
+        cols = find_columns(next(csv.reader([header], dialect)), mapping)
+    except (csv.Error, StopIteration):
         return False
-    cols = find_columns(next(csv.reader([header], dialect)), mapping)
     return "lat" in cols and "lon" in cols
 
 
@@ -139,7 +144,7 @@ def _time(text: str) -> tuple[float, bool]:
     except ValueError:
         pass
     else:
-        if not math.isfinite(x):
+        if not math.isfinite(x) or abs(x) > MAX_TIME:
             raise ValueError(text)
         return (x * 1e-3, True) if x > 1e11 else (x, x > 1e8)
     try:
@@ -147,8 +152,16 @@ def _time(text: str) -> tuple[float, bool]:
     except ValueError:
         tod = dt.time.fromisoformat(text)
         return tod.hour * 3600.0 + tod.minute * 60.0 + tod.second + tod.microsecond * 1e-6, False
-    moment = moment if moment.tzinfo else moment.replace(tzinfo=dt.timezone.utc)
-    return moment.timestamp(), True
+    return unix_time(moment), True
+
+
+def unix_time(moment: dt.datetime) -> float:
+    """Unix time (s) of a datetime, UTC unless it says otherwise; ValueError for one that
+    has no unix time (a zone offset of 24 h or more, a year that overflows in UTC)."""
+    try:
+        return (moment if moment.tzinfo else moment.replace(tzinfo=dt.timezone.utc)).timestamp()
+    except OverflowError as exc:
+        raise ValueError(f"{moment!r}: {exc}") from None
 
 
 def _angle(cell: str) -> float | None:
@@ -159,52 +172,98 @@ def _angle(cell: str) -> float | None:
     return math.radians(deg) if math.isfinite(deg) and 0.0 <= deg < NOT_AVAILABLE_ANGLE else None
 
 
+def _rows(reader, bad: list[int]):
+    """The rows of a csv reader; a row csv cannot split (a field over its 131 072
+    character limit, a stray quote in strict dialects) is counted in ``bad[0]`` and
+    skipped."""
+    while True:
+        try:
+            yield next(reader)
+        except StopIteration:
+            return
+        except csv.Error:
+            bad[0] += 1
+
+
+def _row_fix(cell: dict[str, str], unit: float) -> tuple:
+    """(t, absolute, lat rad, lon rad, mmsi, speed m/s, course, heading) of one row's
+    cells; ValueError, IndexError or KeyError for a row that is not a fix."""
+    when, absolute = _time(f"{cell['date']} {cell['time']}" if "date" in cell and "time" in cell
+                           else cell.get("time", ""))
+    lat, lon = float(cell["lat"]), float(cell["lon"])
+    if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+        raise ValueError("position out of range")
+    mmsi = int(cell["mmsi"]) if "mmsi" in cell else None
+    speed = float(cell["speed"]) if cell.get("speed", "").strip() else None
+    if speed is not None and not 0.0 <= speed * unit <= MAX_SPEED_KN * KNOT:
+        raise ValueError("speed out of range")
+    return (when, absolute, math.radians(lat), math.radians(lon), mmsi, None if speed is None else speed * unit,
+            _angle(cell.get("course", "")), _angle(cell.get("heading", "")))
+
+
 def read_csv_track(path: str, lines: list[str], mapping: dict[str, str]) -> dict[int | None, TrackLog]:
     """The fixes of a CSV track as track logs by MMSI (None: the file has no MMSI column);
-    rows that cannot be read are counted as ``bad_row`` on each."""
+    rows that cannot be read (bad cells, a position off the Earth, a speed out of range,
+    a field csv cannot split) are counted as ``bad_row`` on each. UserError naming the
+    file when it has no header csv can read, or no time column."""
     body = [line for line in lines if line.strip() and not line.startswith("#")]
-    dialect = csv.Sniffer().sniff(body[0], delimiters=",;\t|")
-    rows = csv.reader(body, dialect)
-    header = next(rows)
+    try:
+        if not body or len(body[0]) > MAX_HEADER:
+            raise csv.Error("no header line")
+        dialect = csv.Sniffer().sniff(body[0], delimiters=",;\t|")
+        rows = csv.reader(body, dialect)
+        header = next(rows)
+    except (csv.Error, StopIteration) as exc:
+        raise UserError(f"{path}: no CSV header naming the columns ({exc})") from None
+    bad = [0]
     cols = find_columns(header, mapping)
     if "time" not in cols:
-        raise _no_time(path, header, cols, list(rows), mapping)
+        raise _no_time(path, header, cols, list(_rows(rows, bad)), mapping)
     unit = SPEED_UNITS[mapping.get("speed_unit") or (_speed_unit(header[cols["speed"]]) if "speed" in cols else "kn")]
     logs: dict[int | None, TrackLog] = {}
-    bad = 0
-    for row in rows:
+    for row in _rows(rows, bad):
         try:
-            cell = {k: row[i] for k, i in cols.items()}
-            when, absolute = _time(f"{cell['date']} {cell['time']}" if "date" in cell and "time" in cell
-                                   else cell.get("time", ""))
-            lat, lon = float(cell["lat"]), float(cell["lon"])
-            if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
-                raise ValueError("position out of range")
-            mmsi = int(cell["mmsi"]) if "mmsi" in cell else None
-            speed = float(cell["speed"]) * unit if cell.get("speed", "").strip() else None
-            course, heading = _angle(cell.get("course", "")), _angle(cell.get("heading", ""))
+            when, absolute, lat, lon, mmsi, speed, course, heading = _row_fix({k: row[i] for k, i in cols.items()},
+                                                                              unit)
         except (ValueError, IndexError, KeyError):
-            bad += 1
+            bad[0] += 1
             continue
         log = logs.setdefault(mmsi, TrackLog([path], vessel=None if mmsi is None else str(mmsi)))
         log.absolute = log.absolute and absolute
-        log.fixes.append((when, math.radians(lat), math.radians(lon)))
+        log.fixes.append((when, lat, lon))
         log.add_motion(when, course, speed)
         if heading is not None:
             log.heading.append((when, heading))
         log.read["csv row"] += 1
     for log in logs.values():
-        if bad:
-            log.bad["bad_row"] += bad
+        if bad[0]:
+            log.bad["bad_row"] += bad[0]
     return logs
+
+
+def _gpx_point(p) -> tuple[float, float, float, float | None, float | None]:
+    """(t, lat rad, lon rad, course rad or None, speed m/s or None) of a GPX track point;
+    ValueError for one off the Earth or whose time has no unix time (a zone offset of 24 h
+    or more). A course or speed out of range is taken as none."""
+    lat, lon = p.latitude, p.longitude
+    if not (isinstance(lat, float) and isinstance(lon, float) and -90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+        raise ValueError(f"position {lat!r}, {lon!r} off the Earth")
+    t = unix_time(p.time)
+    if not abs(t) <= MAX_TIME:
+        raise ValueError(f"time {p.time!r} out of range")
+    course = p.course if isinstance(p.course, float) and 0.0 <= p.course < NOT_AVAILABLE_ANGLE else None
+    speed = p.speed if isinstance(p.speed, float) and 0.0 <= p.speed <= MAX_SPEED_KN * KNOT else None
+    return t, math.radians(lat), math.radians(lon), None if course is None else math.radians(course), speed
 
 
 def read_gpx(path: str, text: str) -> TrackLog:
     """The track points of a GPX file (every track and segment; speed and course where the
-    file has them); UserError if it is not GPX."""
+    file has them); UserError if it is not GPX. Points without a time are counted as
+    ``no_time``, points off the Earth or with a time that has no unix time (a zone offset
+    of 24 h or more) as ``bad_point``."""
     try:
         gpx = gpxpy.parse(text)
-    except gpxpy.gpx.GPXException as exc:
+    except (gpxpy.gpx.GPXException, ValueError) as exc:
         raise UserError(f"{path}: not a GPX file gpxpy can read: {exc}") from None
     log = TrackLog([path])
     for track in gpx.tracks:
@@ -213,9 +272,12 @@ def read_gpx(path: str, text: str) -> TrackLog:
                 if p.time is None:
                     log.bad["no_time"] += 1
                     continue
-                moment = p.time if p.time.tzinfo else p.time.replace(tzinfo=dt.timezone.utc)
-                t = moment.timestamp()
-                log.fixes.append((t, math.radians(p.latitude), math.radians(p.longitude)))
-                log.add_motion(t, None if p.course is None else math.radians(p.course), p.speed)
+                try:
+                    t, lat, lon, course, speed = _gpx_point(p)
+                except ValueError:
+                    log.bad["bad_point"] += 1
+                    continue
+                log.fixes.append((t, lat, lon))
+                log.add_motion(t, course, speed)
                 log.read["gpx point"] += 1
     return log

@@ -7,7 +7,7 @@ from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
-from bridge_node.links.record_reader import complete_lines
+from bridge_node.links.record_reader import complete_lines, record_time
 
 DIS_FILE = "dis.log"
 
@@ -23,7 +23,8 @@ class DisRecord:
 
 
 def read_dis_log(path: Path) -> tuple[list[DisRecord], Counter]:
-    """The PDUs of ``dis.log``, and counts of torn and malformed lines."""
+    """The PDUs of ``dis.log``, and counts of torn and malformed lines (a unix time that is
+    not a finite number in the record's range included)."""
     lines, counts = complete_lines(path)
     out = []
     for line in lines:
@@ -31,7 +32,7 @@ def read_dis_log(path: Path) -> tuple[list[DisRecord], Counter]:
         try:
             if len(parts) != 4 or parts[2] not in ("rx", "tx"):
                 raise ValueError(line)
-            out.append(DisRecord(float(parts[0]), parts[1], parts[2], bytes.fromhex(parts[3])))
+            out.append(DisRecord(record_time(parts[0]), parts[1], parts[2], bytes.fromhex(parts[3])))
         except ValueError:
             counts["malformed"] += 1
     return out, counts

@@ -13,6 +13,8 @@ several vessels give the list of vessels when none was picked.
 """
 from __future__ import annotations
 
+import datetime as dt
+import math
 import re
 from collections import Counter
 from dataclasses import dataclass
@@ -32,6 +34,7 @@ _NODE_NMEA = re.compile(r"^\d+\.\d+ \S+ (rx|tx) [$!]")
 _MODBUS_HEADER = "unix_time,link,op,table,address,raw,value"
 _SENTENCE = re.compile(r"[$!][A-Z][A-Z0-9]{4},")
 SNIFF_LINES = 200
+MAX_SPAN_S = 30 * 86400.0  # s: the longest stretch of a track log one replay steps through
 LOOKED_FOR = ("NMEA 0183 RMC/GGA/GLL fixes, AIS position reports (types 1, 2, 3, 18, 19), CSV rows with "
               "time, latitude and longitude, GPX track points with a time, or a session record")
 
@@ -151,6 +154,29 @@ def load_inputs(paths: list[str], mmsi: int | None, mapping: dict[str, str],
         bad.update(log.bad)
     found = f"; bad data: {', '.join(f'{n} {k}' for k, n in sorted(bad.items()))}" if bad else ""
     raise UserError(f"{names}: no usable track: no position in it (looked for {LOOKED_FOR}){found}")
+
+
+def check_span(files: list[str], start: float, end: float, step: float, absolute: bool = True) -> int:
+    """The number of steps of ``step`` s from logged time ``start`` to ``end`` (s); a
+    UserError naming the files, the span and how to narrow it (--from/--to) when it is
+    longer than MAX_SPAN_S (30 days: more than 5 million steps at 0.5 s) or not finite."""
+    span = end - start
+    if not (math.isfinite(span) and span <= MAX_SPAN_S):
+        days = span / 86400.0
+        where = (f"from {_utc(start)} to {_utc(end)} UTC" if absolute and math.isfinite(span)
+                 else f"{span:.6g} s")
+        raise UserError(f"{', '.join(files)}: the track spans {days:.6g} days ({where}), over the "
+                        f"{MAX_SPAN_S / 86400.0:g} days one replay steps through every {step:g} s; "
+                        f"narrow it with --from and --to (e.g. --from 0 --to {int(MAX_SPAN_S)})")
+    return max(1, math.ceil(span / step - 1e-9))
+
+
+def _utc(t: float) -> str:
+    """A unix time as ISO 8601 UTC text, or the number where no date holds it."""
+    try:
+        return dt.datetime.fromtimestamp(t, dt.timezone.utc).strftime("%Y-%m-%d %H:%M:%S")
+    except (OverflowError, ValueError, OSError):
+        return f"{t:.6g} s"
 
 
 def _merged(logs: list[TrackLog], others: list | None = None) -> TrackLog:

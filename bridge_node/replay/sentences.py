@@ -33,6 +33,8 @@ _TAG_BLOCK = re.compile(r"\\(?P<tags>[^\\]*)\\")
 USED = {"RMC", "GGA", "GLL", "VTG", "HDT", "THS", "HDG", "ZDA", "RSA", "ROT"}
 AIS_POSITION = {1, 2, 3, 18, 19}
 AIS_NO_SECOND = 60  # AIS UTC second 60..63: not available
+MAX_SPEED_KN = 1000.0  # a logged speed over ground above this is a bad field, not a fast ship
+MAX_CORRECTION_DEG = 180.0  # HDG deviation and variation: at most half a turn either way
 
 
 class THS(pynmea2.TalkerSentence):
@@ -42,12 +44,33 @@ class THS(pynmea2.TalkerSentence):
     fields = (("Heading", "heading"), ("Mode", "mode"))
 
 
+def _bearing(degrees: float | None, limit: float = 360.0) -> float | None:
+    """An angle field (deg, ``0 <= degrees <= limit``, 360 the same as 0) in rad within
+    [0, 2 pi); None when empty; ValueError when out of range or not finite."""
+    if degrees is None:
+        return None
+    if not (math.isfinite(degrees) and 0.0 <= degrees <= limit):
+        raise ValueError(f"angle {degrees!r} deg out of range")
+    return math.radians(degrees % 360.0) % (2.0 * math.pi)
+
+
+def _speed(knots: float | None) -> float | None:
+    """A speed field (kn, finite, 0 to MAX_SPEED_KN) in m/s; None when empty; ValueError."""
+    if knots is None:
+        return None
+    if not (math.isfinite(knots) and 0.0 <= knots <= MAX_SPEED_KN):
+        raise ValueError(f"speed {knots!r} kn out of range")
+    return knots * KNOT
+
+
 def _number(text: str | None) -> float | None:
     """An NMEA decimal field, None when empty; ValueError when not a number."""
     return None if text in (None, "") else nmea_decimal(text)
 
 
 def _unix(moment: dt.datetime) -> float:
+    """Unix time (s) of a datetime (UTC unless it says otherwise); ValueError or
+    OverflowError for one that has none (an offset of 24 h or more, a year out of range)."""
     return (moment if moment.tzinfo else moment.replace(tzinfo=dt.timezone.utc)).timestamp()
 
 
@@ -68,7 +91,7 @@ def prefix_time(prefix: str) -> float | None:
         for text in (token, " ".join(tokens[i:i + 2])):
             try:
                 return _unix(dt.datetime.fromisoformat(text.replace("/", "-")))
-            except ValueError:
+            except (ValueError, OverflowError):
                 continue
     return None
 
@@ -186,11 +209,13 @@ class SentenceLog:
 
     def _clock(self, msg, kind: str) -> float | None:
         """The sentence's own time (RMC, ZDA; GGA and GLL with the last date), kept as the
-        time of the untimed sentences that follow; None before any time is known."""
+        time of the untimed sentences that follow; None before any time is known.
+        ValueError or OverflowError (a bad line, counted by the caller) for a date or time
+        no datetime holds; the clock is left as it was then."""
         if (kind == "RMC" and msg.data[8]) or kind == "ZDA":
             moment = msg.datetime
-            self._date = moment.date()
-            self._time = _unix(moment)
+            date, unix = moment.date(), _unix(moment)
+            self._date, self._time = date, unix
         elif kind in ("GGA", "GLL") and msg.timestamp is not None:
             tod = msg.timestamp
             seconds = tod.hour * 3600 + tod.minute * 60 + tod.second + tod.microsecond * 1e-6
@@ -216,11 +241,18 @@ class SentenceLog:
                 self.own.bad["no_time"] += 1
                 return
             self._own(kind, msg, t)
-        except (pynmea2.ParseError, ValueError, TypeError, AttributeError, IndexError):
-            self.own.bad["bad_field"] += 1
+        except (pynmea2.ParseError, ValueError, OverflowError, TypeError, AttributeError, IndexError):
+            self.own.bad["bad_field"] += 1  # OverflowError: a date or time field too large for a date
 
     def _own(self, kind: str, msg, t: float) -> None:
+        """One own-ship sentence at time t into the log. ValueError (counted by the caller
+        as ``bad_field``) for a field out of range: a position, a speed below 0 or above
+        MAX_SPEED_KN, an angle outside [0, 360] deg; nothing of the sentence is kept then."""
         log = self.own
+        if kind in ("RMC", "VTG"):  # read before the fix is kept: a bad field drops the sentence
+            course, speed = (_number(msg.data[7]), _number(msg.data[6])) if kind == "RMC" else \
+                (_number(msg.data[0]), _number(msg.data[4]))
+            course, speed = _bearing(course), _speed(speed)
         if kind in ("RMC", "GGA", "GLL"):
             valid = msg.status == "A" if kind != "GGA" else (msg.gps_qual or "0") != "0"
             if not valid:
@@ -232,24 +264,32 @@ class SentenceLog:
                 return
             log.fixes.append((t, math.radians(lat), math.radians(lon)))
         if kind in ("RMC", "VTG"):
-            course, speed = (_number(msg.data[7]), _number(msg.data[6])) if kind == "RMC" else \
-                (_number(msg.data[0]), _number(msg.data[4]))
-            log.add_motion(t, None if course is None else math.radians(course), None if speed is None else speed * KNOT)
-        elif kind in ("HDT", "THS"):
-            heading = _number(msg.data[0])
-            if heading is None or (kind == "THS" and msg.data[1] == "V"):
-                log.bad["no_heading"] += 1
-                return
-            log.heading.append((t, math.radians(heading)))
-        elif kind == "HDG":
+            log.add_motion(t, course, speed)
+        elif kind in ("HDT", "THS", "HDG") and not self._heading(kind, msg, t):
+            return
+        log.read[kind] += 1
+
+    def _heading(self, kind: str, msg, t: float) -> bool:
+        """A true heading (HDT, THS, HDG with variation) into the log, in [0, 2 pi); False
+        (counted ``no_heading``) when the sentence gives none; ValueError when out of range."""
+        if kind == "HDG":
             heading, deviation, variation = (_number(msg.data[i]) for i in (0, 1, 3))
             if heading is None or variation is None:  # magnetic only: no true heading
-                log.bad["no_heading"] += 1
-                return
+                self.own.bad["no_heading"] += 1
+                return False
+            _bearing(heading)
             east = {"E": 1.0, "W": -1.0}
-            true = heading + (deviation or 0.0) * east.get(msg.data[2], 1.0) + variation * east.get(msg.data[4], 1.0)
-            log.heading.append((t, math.radians(true)))
-        log.read[kind] += 1
+            corrections = [_bearing(x, MAX_CORRECTION_DEG) or 0.0 for x in (deviation, variation)]
+            true = math.radians(heading) + corrections[0] * east.get(msg.data[2], 1.0) + \
+                corrections[1] * east.get(msg.data[4], 1.0)
+            self.own.heading.append((t, true % (2.0 * math.pi)))
+            return True
+        heading = _bearing(_number(msg.data[0]))
+        if heading is None or (kind == "THS" and msg.data[1] == "V"):
+            self.own.bad["no_heading"] += 1
+            return False
+        self.own.heading.append((t, heading))
+        return True
 
     # --- other vessels: AIS ---
 
@@ -279,25 +319,54 @@ class SentenceLog:
                 self._ais_message(parts, started if started is not None else when)
 
     def _ais_message(self, parts: list[str], when: float | None) -> None:
+        """One whole AIS message: the vessel heard, its name and dimensions, its position
+        report. A message too short for its fields (pyais gives None for those) or with a
+        position off the Earth is counted, never fatal."""
         try:
             msg = ais_decode(*parts)
         except (AISBaseException, ValueError, IndexError):
+            self.own.bad["ais_undecodable"] += 1
+            return
+        if not isinstance(getattr(msg, "mmsi", None), int):
             self.own.bad["ais_undecodable"] += 1
             return
         v = self.vessels.setdefault(msg.mmsi, Vessel(msg.mmsi))
         v.own = v.own or parts[0][3:6] == "VDO"
         v.heard(msg.msg_type, when)
         name = getattr(msg, "shipname", None)
-        if name:
+        if isinstance(name, str) and name.strip():
             v.name = name.strip()
-        if getattr(msg, "to_bow", None) is not None:
-            v.length = float(msg.to_bow + msg.to_stern) or v.length
-            v.beam = float(msg.to_port + msg.to_starboard) or v.beam
+        size = [getattr(msg, k, None) for k in ("to_bow", "to_stern", "to_port", "to_starboard")]
+        if all(isinstance(x, int) for x in size):
+            v.length = float(size[0] + size[1]) or v.length
+            v.beam = float(size[2] + size[3]) or v.beam
         if msg.msg_type in AIS_POSITION:
-            if abs(msg.lat) > 90.0 or abs(msg.lon) > 180.0:
+            report = _ais_report(msg, when)
+            if report is None:
                 self.own.bad["ais_no_position"] += 1
                 return
-            v.reports.append((when, msg.second, math.radians(msg.lat), math.radians(msg.lon),
-                              None if msg.speed >= 102.3 else msg.speed * KNOT,
-                              None if msg.course >= 360.0 else math.radians(msg.course),
-                              None if msg.heading >= 360 else math.radians(msg.heading)))
+            v.reports.append(report)
+
+
+def _ais_field(msg, name: str, unavailable: float) -> float | None:
+    """A numeric AIS field, None when missing, not a finite number or at or above the
+    value that means "not available"."""
+    x = getattr(msg, name, None)
+    if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) or x < 0 or x >= unavailable:
+        return None
+    return float(x)
+
+
+def _ais_report(msg, when: float | None) -> tuple | None:
+    """A position report as (t, UTC second, lat, lon, sog, cog, heading), SI; None when it
+    has no position on the Earth (a missing field, or 91/181 deg: not available)."""
+    lat, lon = getattr(msg, "lat", None), getattr(msg, "lon", None)
+    if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in (lat, lon)) \
+            or abs(lat) > 90.0 or abs(lon) > 180.0:
+        return None
+    second = getattr(msg, "second", None)
+    speed, course, heading = (_ais_field(msg, "speed", 102.3), _ais_field(msg, "course", 360.0),
+                              _ais_field(msg, "heading", 360.0))
+    return (when, second if isinstance(second, int) else None, math.radians(lat), math.radians(lon),
+            None if speed is None else speed * KNOT, None if course is None else math.radians(course),
+            None if heading is None else math.radians(heading))
