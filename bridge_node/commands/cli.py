@@ -26,6 +26,7 @@ from bridge_node.commands import (
     run,
     trial,
 )
+from bridge_node.node.children import end_with_parent
 from bridge_node.node.errors import UserError
 from bridge_node.node.paths import writable_dir, writable_file
 
@@ -95,6 +96,7 @@ def _interrupt(*_) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    end_with_parent()  # a child of a node (a console, a render process) ends with it
     args = build_parser().parse_args(argv)
     # SIGTERM ends a command as Ctrl-C does: the long-running ones close their links and
     # flush their session record on the way out

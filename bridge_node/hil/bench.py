@@ -16,7 +16,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 from contextlib import ExitStack
 from pathlib import Path
@@ -26,6 +25,7 @@ import tomli_w
 from bridge_node.hil.player import BusOff, Console, ScenarioResult, play
 from bridge_node.hil.scenario import Scenario
 from bridge_node.hil.settings import ConsoleConfig, load_console_config
+from bridge_node.node.children import child_env, ending_with_parent, private_folder
 from bridge_node.node.config import DEFAULT_CONFIG, load_config, read_toml, resolve_path
 from bridge_node.node.errors import UserError
 from bridge_node.node.network import free_port
@@ -55,8 +55,8 @@ class PtyPair:
     def restore(self) -> None:
         if shutil.which("socat") is None:
             raise UserError("socat is missing: install it (apt-get install socat, or run scripts/setup.sh)")
-        self._proc = subprocess.Popen(["socat", f"pty,raw,echo=0,link={self.node_end}",
-                                       f"pty,raw,echo=0,ignoreeof,link={self.console_end}"],
+        self._proc = subprocess.Popen(ending_with_parent(["socat", f"pty,raw,echo=0,link={self.node_end}",
+                                                          f"pty,raw,echo=0,ignoreeof,link={self.console_end}"]),
                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         deadline = time.monotonic() + 5.0
         while not (self.node_end.exists() and self.console_end.exists()):
@@ -116,9 +116,12 @@ def wire_end(role: str, kind: str, node_name: str, ptys: Path, stack: ExitStack)
 
 
 def pty_folder(stack: ExitStack) -> Path:
-    """A temporary folder for pty pairs, removed by ``stack``: socat's address syntax has no
-    quoting, so the ptys live in a folder of plain characters."""
-    return Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="icebridge-hil-")))
+    """A temporary folder for pty pairs, removed by ``stack`` (or, should this process be
+    killed first, by the next one made): socat's address syntax has no quoting, so the ptys
+    live in a folder of plain characters."""
+    folder = private_folder("hil")
+    stack.callback(shutil.rmtree, folder, ignore_errors=True)
+    return folder
 
 
 def parse_kinds(text: str) -> list[str]:
@@ -186,7 +189,8 @@ class Bench:
             with open(self.folder / "node.json", "w") as out, open(self.folder / "node.log", "w") as log:
                 self.node = subprocess.Popen(
                     [sys.executable, "-m", "bridge_node", "run", "--config", str(self.folder / "node.toml"),
-                     "--render", "none", "--json", "--out", str(self.folder / "node")], stdout=out, stderr=log)
+                     "--render", "none", "--json", "--out", str(self.folder / "node")], stdout=out, stderr=log,
+                    env=child_env())
             self.console.wait_ready(self.startup_timeout_s, self.node_gone)
         except BaseException:
             self.__exit__()

@@ -17,6 +17,7 @@ from pathlib import Path
 import tomli_w
 
 from bridge_node.hil.bench import STOP_TIMEOUT_S, pty_folder, wire_end
+from bridge_node.node.children import child_env
 from bridge_node.hil.scenario import load_scenario
 from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig, resolve_path
 from bridge_node.node.errors import UserError
@@ -81,7 +82,7 @@ class RunConsole:
             self._process = subprocess.Popen(
                 [sys.executable, "-m", "bridge_node", "console", "--config", str(config), "--script", s.script,
                  "--wait", str(WAIT_S), "--hold", "--results", str(self.results)],
-                stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
+                stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, env=child_env())
 
     def _keep_node_config(self) -> None:
         """``node.toml`` in the record: the run's node config, its paths absolute, without

@@ -23,13 +23,13 @@ import logging
 import multiprocessing as mp
 import multiprocessing.connection
 import shutil
-import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 import zmq
 
+from bridge_node.node.children import private_folder
 from bridge_node.stream.codec import HEARTBEAT, CodecError, decode, encode
 from bridge_node.stream.settings import StreamSettings
 from bridge_node.stream.world_view import WorldView
@@ -65,7 +65,7 @@ class StatePublisher:
         handover socket; raises zmq.ZMQError if it cannot bind (e.g. address in use)."""
         ctx = mp.get_context("spawn")  # a fresh interpreter: no inherited ZeroMQ context or threads
         self._counters = ctx.RawArray("q", 3)
-        self._folder = Path(tempfile.mkdtemp(prefix="icebridge-stream-"))  # 0700: this user's alone
+        self._folder = private_folder("stream")  # 0700: this user's alone
         ours, theirs = ctx.Pipe()
         self._process = ctx.Process(target=serve, args=(self.settings, self._counters, theirs,
                                                         f"ipc://{self._folder / 'handover'}"),
