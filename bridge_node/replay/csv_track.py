@@ -205,7 +205,7 @@ def read_csv_track(path: str, lines: list[str], mapping: dict[str, str]) -> dict
     """The fixes of a CSV track as track logs by MMSI (None: the file has no MMSI column);
     rows that cannot be read (bad cells, a position off the Earth, a speed out of range,
     a field csv cannot split) are counted as ``bad_row`` on each. UserError naming the
-    file when it has no header csv can read, or no time column."""
+    file when it has no header csv can read, no latitude and longitude or no time column."""
     body = [line for line in lines if line.strip() and not line.startswith("#")]
     try:
         if not body or len(body[0]) > MAX_HEADER:
@@ -217,6 +217,9 @@ def read_csv_track(path: str, lines: list[str], mapping: dict[str, str]) -> dict
         raise UserError(f"{path}: no CSV header naming the columns ({exc})") from None
     bad = [0]
     cols = find_columns(header, mapping)
+    if "lat" not in cols or "lon" not in cols:
+        raise UserError(f"{path}: no latitude and longitude columns in its header ({', '.join(header)[:200]}); "
+                        f"name them with --columns lat=COLUMN,lon=COLUMN")
     if "time" not in cols:
         raise _no_time(path, header, cols, list(_rows(rows, bad)), mapping)
     unit = SPEED_UNITS[mapping.get("speed_unit") or (_speed_unit(header[cols["speed"]]) if "speed" in cols else "kn")]
