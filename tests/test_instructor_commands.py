@@ -201,3 +201,16 @@ def test_other_vessels_are_added_steered_moved_and_removed_in_the_world():
     with pytest.raises(CommandError, match="name"):
         parse_command({"command": "add_vessel", "mmsi": 230000001, "name": "od{en}", "length_m": 10.0,
                        "beam_m": 3.0, "north_m": 0.0, "east_m": 0.0, "course_deg": 0.0})
+
+
+@pytest.mark.parametrize("record", [
+    {"type": "SetEnvironment", "changes": [["visibility", float("nan")]]},
+    {"type": "SetEnvironment", "changes": [["frozen", 1.0]]},
+    {"type": "Reposition", "north": 1.0, "east": 2.0, "heading": 0.1, "speed": float("inf"), "at_once": True},
+    {"type": "Sink"}, {"type": "Freeze"}, ["Freeze"],
+])
+def test_a_command_record_that_is_no_command_is_refused(record):
+    """commands.log is read back by a replay: a line changed by hand or torn cannot put a
+    NaN or an unknown field into the world."""
+    with pytest.raises(CommandError, match="not a command record"):
+        command_from_record(record)

@@ -30,7 +30,7 @@ from bridge_node.node.world_setup import build_world, start_exercise, start_posi
 from bridge_node.replay.console import KeyReader, ReplayProgress, logged_text
 from bridge_node.replay.csv_track import parse_mapping
 from bridge_node.replay.engine import MAX_SPEED, MIN_SPEED, Playback, ReplayStats, Source, run_replay
-from bridge_node.replay.inputs import LOOKED_FOR, VesselChoice, load_inputs
+from bridge_node.replay.inputs import LOOKED_FOR, VesselChoice, check_span, load_inputs
 from bridge_node.replay.session import RecordedSession, SessionSource, recorded_config
 from bridge_node.replay.track import Track, TrackLog, TrackPath, TrackSource, clean_for, origin_under
 from bridge_node.reports.replay import gap_summary, plot_replay
@@ -132,6 +132,7 @@ def _track_replay(cfg: NodeConfig, args: argparse.Namespace, log: TrackLog, orig
     t1 = parse_time(args.end, "--to", track.start, track.end, log.absolute) if args.end else track.end
     if t1 <= t0:
         raise UserError(f"--from {args.start!r} is not before --to {args.end!r}")
+    check_span(log.files, t0, t1, r.step_s, log.absolute)
     placed = "--field-origin" if origin else "first fix at the exercise's start"
     if origin is None:
         first = min(int(track.t.searchsorted(t0)), len(track.t) - 1)

@@ -249,6 +249,7 @@ def _explain(error: dict) -> str:
 
 
 # -- the applied commands as records (session record, state stream) -----------------------
+_ENVIRONMENT_FIELDS = {"visibility", "wind_speed", "wind_from", "current_speed", "current_to"}
 _TYPES = {cls.__name__: cls for cls in (Freeze, Reposition, SetEnvironment, SetClock, SteeringFailure,
                                         EngineFailure, AddVessel, MoveVessel, SteerVessel, RemoveVessel)}
 
@@ -268,6 +269,19 @@ def command_from_record(record: dict) -> Command:
         if cls is AddVessel:
             fields["vessel"] = OtherVessel(**fields["vessel"])
         command = cls(**fields)
-    except (KeyError, TypeError, ValueError) as exc:
+        numbers = [v for v in _leaves(dataclasses.asdict(command)) if isinstance(v, float)]
+        if not all(math.isfinite(v) for v in numbers) or \
+                cls is SetEnvironment and not {k for k, _ in command.changes} <= _ENVIRONMENT_FIELDS:
+            raise ValueError("a value that is not finite, or a field the environment lacks")
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise CommandError(f"not a command record: {record!r:.200} ({exc})") from None
     return command
+
+
+def _leaves(value: object) -> list:
+    """Every value in nested dicts, lists and tuples."""
+    if isinstance(value, dict):
+        return [leaf for v in value.values() for leaf in _leaves(v)]
+    if isinstance(value, (list, tuple)):
+        return [leaf for v in value for leaf in _leaves(v)]
+    return [value]

@@ -26,7 +26,7 @@ from bridge_node.links.can_link import CanLink
 from bridge_node.links.hub import LinkHub
 from bridge_node.links.modbus_link import register_order
 from bridge_node.links.nmea_link import NmeaLink
-from bridge_node.links.record_reader import read_can_log, read_modbus_csv, read_nmea_log
+from bridge_node.links.record_reader import check_tick_count, read_can_log, read_modbus_csv, read_nmea_log
 from bridge_node.node.config import NodeConfig
 from bridge_node.node.tick_record import PROTOCOLS, TICKS_FILE, Tick, read_ticks
 from sim_core.instructor import Command
@@ -119,7 +119,7 @@ def read_session(folder: Path, names: set[str], period: float) -> RecordedSessio
     if not times:
         return RecordedSession(folder, sorted(names), period, [], [], False, bad)
     t0 = min(times)  # about the first tick: its outputs are the record's first lines
-    n = round((max(times) - t0) / period) + 1
+    n = check_tick_count(folder, times, period)
     ticks = [Tick(k, t0 + k * period, t0 + k * period, ()) for k in range(n)]
     inputs = [{p: [] for p in PROTOCOLS} for _ in range(n)]
     for p in PROTOCOLS:
