@@ -50,13 +50,15 @@ def wait_until(predicate, timeout: float, what: str, every: float = 0.1):
 
 
 def write_config(folder: Path, stream: tuple[int, int], control: int, port: int, extra: str = "") -> Path:
-    """An 800 m field of 0.3 m ice, the ship's bow in it, loopback ports of its own."""
+    """An 800 m field of 0.3 m ice, the ship's bow in it, loopback ports of its own, and NMEA
+    0183 instrument sentences on UDP (the session record's tx sentences a debrief plays)."""
     text = ('[ship]\nname = "polar_cargo"\n[ice_field]\nwidth = 800.0\nheight = 800.0\nthickness = 0.3\n'
             '[exercise]\nstart_north = -20.0\nstart_east = 450.0\n'
             f'[paths]\ncache_dir = "{folder / "tiles"}"\nsession_dir = "{folder / "sessions"}"\n'
             f'[stream]\npublish = "tcp://127.0.0.1:{stream[0]}"\nsnapshot = "tcp://127.0.0.1:{stream[1]}"\n'
             f'[control]\nendpoint = "tcp://127.0.0.1:{control}"\n' + extra +
-            f'[instructor]\nport = {port}\n' + ("allow_network = true\n" if "token" in extra else ""))
+            f'[instructor]\nport = {port}\n' + ("allow_network = true\n" if "token" in extra else "") +
+            f'[[links]]\nname = "instruments"\ntype = "nmea0183"\nudp_port = {free_port()}\n')
     path = folder / f"exercise-{port}.toml"
     path.write_text(text)
     return path
@@ -93,7 +95,7 @@ def exercise(tmp_path_factory):
     stream, control, port = (free_port(), free_port()), free_port(), free_port()
     config = write_config(folder, stream, control, port)
     node = start(folder, "node", "run", "--config", str(config), "--render", "none", "--duration", "600",
-                 "--no-record", "--json", "--out", str(folder / "out"))
+                 "--json", "--out", str(folder / "out"))
     station = start(folder, "station", "instructor", "--config", str(config))
     try:
         wait_until(lambda: node.poll() is None and _answers(control), 180, "the node's control endpoint")
@@ -117,9 +119,9 @@ def _answers(port: int) -> bool:
 def _http(url: str, headers: dict | None = None) -> tuple[int, str]:
     try:
         with urllib.request.urlopen(urllib.request.Request(url, headers=headers or {}), timeout=5) as r:
-            return r.status, r.read().decode()
+            return r.status, r.read().decode("latin-1")
     except urllib.error.HTTPError as exc:
-        return exc.code, exc.read().decode()
+        return exc.code, exc.read().decode("latin-1")
     except OSError:
         return 0, ""
 
@@ -335,8 +337,48 @@ def _websocket_hello(port: int, token: str) -> dict:
 def test_user_errors_are_clean(exercise):
     config, url, _ = exercise
     port = int(url.rsplit(":", 1)[1].strip("/"))
-    for args, text in ((["--record", "nowhere"], "debrief"), (["--port", "0"], "--port"),
+    for args, text in ((["--record", "nowhere"], "no nmea.log"), (["--export", "p.png"], "--record DIR"),
+                       (["--port", "0"], "--port"),
                        (["--port", str(port)], "cannot listen")):
         done = subprocess.run([sys.executable, "-m", "bridge_node", "instructor", "--config", str(config), *args],
                               cwd=REPO, capture_output=True, text=True, timeout=120)
         assert done.returncode == 2 and text in done.stderr and "Traceback" not in done.stderr, done.stderr
+
+
+def test_debrief_of_the_session_record(exercise, browser, tmp_path):
+    config, _, folder = exercise
+    record = next((folder / "sessions").iterdir())  # the running node's record, with this module's commands
+    plots = tmp_path / "plots.png"
+    done = subprocess.run([sys.executable, "-m", "bridge_node", "instructor", "--config", str(config), "--record",
+                           str(record), "--export", str(plots)], cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["events"] >= 4  # freeze, resume, reposition... of the tests before
+    image = np.asarray(Image.open(plots).convert("L"))
+    assert image.shape == (900, 1000) and (image < 128).mean() > 0.01, "a blank plot"
+    port = free_port()
+    station = start(folder, "debrief", "instructor", "--config", str(config), "--record", str(record),
+                    "--port", str(port))
+    try:
+        url = f"http://127.0.0.1:{port}/"
+        wait_until(lambda: station.poll() is None and _http(url)[0] == 200, 120, "the debrief page")
+        assert _http(url + "plots.png")[1][1:4] == "PNG"
+        browser.get(url)
+        wait_until(lambda: browser.execute_script("return !!(playback.data && map.frame)"), 30, "the record played")
+        assert browser.find_element("id", "debrief-card").is_displayed()
+        assert not browser.find_element("id", "freeze").is_displayed()
+        duration = browser.execute_script("return playback.data.duration")
+        browser.execute_script("seekTo(arguments[0]); map.setFollow(true);", duration)
+        wait_until(lambda: "reposition" in browser.find_element("id", "log").text, 10, "the commands in the log")
+        end = browser.execute_script("return [map.frame.ship.east, map.frame.ship.north]")
+        assert math.dist(end, browser.execute_script("return [playback.data.a.pos_east.at(-1), "
+                                                     "playback.data.a.pos_north.at(-1)]")) < 1.0
+        browser.execute_script("seekTo(0)")
+        assert "reposition" not in browser.find_element("id", "log").text
+        browser.find_element("id", "speed").send_keys("1000")
+        browser.find_element("id", "play").click()
+        wait_until(lambda: browser.execute_script("return playback.t") >= duration, 10, "the playback at its end")
+        x, y = (round(v) for v in canvas_pixel(browser, *browser.execute_script(
+            "return [map.frame.ship.east, map.frame.ship.north]")))
+        assert near(screenshot(browser)[y - 4:y + 5, x - 4:x + 5], SHIP_RGB, 20).mean() > 0.5
+    finally:
+        stop(station)

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import anyio
 from starlette.applications import Starlette
-from starlette.responses import FileResponse
+from starlette.responses import FileResponse, Response
 from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
@@ -87,9 +87,11 @@ def _check_command(text: str) -> tuple[object, dict | str]:
     return ident, command
 
 
-async def _send_command(target: ControlTarget, text: str) -> dict:
+async def _send_command(target: ControlTarget | None, text: str) -> dict:
     """The reply to one command message of the page (the node's, or why it never got there)."""
     ident, command = _check_command(text)
+    if target is None and not isinstance(command, str):
+        command = "a debrief plays a record: there is no node to command"
     if isinstance(command, str):
         return {"type": "reply", "id": ident, "ok": False, "error": command}
     try:
@@ -102,13 +104,16 @@ async def _send_command(target: ControlTarget, text: str) -> dict:
 
 
 class Station:
-    """The ASGI app: page, static assets and WebSocket, behind the ``TokenGate``."""
+    """The ASGI app: page, static assets and WebSocket, behind the ``TokenGate``. A debrief
+    (``target`` None) sends its ``debrief`` message after the geometry, and serves its
+    time plots at ``/plots.png``."""
 
-    def __init__(self, geometry: bytes, broadcast: Broadcast, target: ControlTarget, token: str | None,
-                 loopback_only: bool, info: dict) -> None:
+    def __init__(self, geometry: bytes, broadcast: Broadcast, target: ControlTarget | None, token: str | None,
+                 loopback_only: bool, info: dict, debrief: tuple[bytes, bytes] | None = None) -> None:
         self.geometry, self.broadcast, self.target, self.info = geometry, broadcast, target, info
+        self.debrief = debrief
         app = Starlette(routes=[
-            Route("/", self.index), Route("/index.html", self.index),
+            Route("/", self.index), Route("/index.html", self.index), Route("/plots.png", self.plots),
             WebSocketRoute("/ws", self.socket),
             Mount("/static", app=StaticFiles(directory=STATIC), name="static"),
         ], lifespan=self._lifespan)
@@ -123,6 +128,11 @@ class Station:
     async def index(self, _request) -> FileResponse:
         return FileResponse(STATIC / "index.html", headers={"cache-control": "no-store"})
 
+    async def plots(self, _request) -> Response:
+        if self.debrief is None:
+            return Response("no record open: the time plots belong to a debrief", 404)
+        return Response(self.debrief[1], media_type="image/png", headers={"cache-control": "no-store"})
+
     async def socket(self, ws: WebSocket) -> None:
         await ws.accept()
         self.clients += 1
@@ -131,6 +141,8 @@ class Station:
         try:
             await ws.send_text(json.dumps({"type": "hello", **self.info}))
             await ws.send_bytes(self.geometry)
+            if self.debrief is not None:
+                await ws.send_bytes(self.debrief[0])
             sender = asyncio.create_task(self._sender(ws, wake))
             try:
                 await self._receiver(ws)

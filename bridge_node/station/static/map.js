@@ -26,6 +26,7 @@ class MapView {
     this.follow = true;
     this.pick = null;           // callback while picking a position
     this.ghost = null;          // {x, y, heading} of a picked position
+    this.plan = null;           // a debrief's whole track, drawn faint
     this.dirty = true;
     this.stats = { frames: 0, draws: 0, fps: 0, drawMs: 0, applyMs: 0, floes: 0, _t0: performance.now(), _n: 0 };
     window.stationStats = this.stats;
@@ -105,6 +106,15 @@ class MapView {
     this.frame = header;
     if (this.follow) { this.cx = header.ship.east; this.cy = header.ship.north; }
     this.stats.frames++; this.stats.floes = this.floeCount; this.stats.applyMs = performance.now() - t0;
+    this.dirty = true;
+  }
+
+  // a debrief's state: the ship as a frame header's ship, the track travelled so far
+  showDebrief(ship, travelled) {
+    this.frame = { ship, traffic: [] };
+    this.track = travelled;
+    if (this.follow) { this.cx = ship.east; this.cy = ship.north; }
+    this.stats.frames++;
     this.dirty = true;
   }
 
@@ -215,6 +225,11 @@ class MapView {
   }
 
   _drawTrack(ctx, s) {
+    if (this.plan) {
+      ctx.beginPath();
+      this.plan.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
+      ctx.strokeStyle = "rgba(255, 177, 59, 0.35)"; ctx.lineWidth = 1.5 / s; ctx.stroke();
+    }
     if (this.track.length < 2) return;
     ctx.beginPath();
     let pen = false;

@@ -37,11 +37,16 @@ function connect() {
     const [header, arrays] = unpack(e.data);
     if (header.type === "geometry") { map.setGeometry(header, arrays); if (!lastFrame) map.zoom(1); }
     else if (header.type === "frame") onFrame(header, arrays);
+    else if (header.type === "debrief") startDebrief(header, arrays);
   };
 }
 
 function onText(msg) {
-  if (msg.type === "hello") { $("ship-name").textContent = `${msg.ship}`; document.title = `IceBridge instructor: ${msg.ship}`; }
+  if (msg.type === "hello") {
+    $("ship-name").textContent = msg.mode === "debrief" ? `${msg.ship} · debrief` : msg.ship;
+    document.title = `IceBridge instructor: ${msg.ship}${msg.mode === "debrief" ? " (debrief)" : ""}`;
+    if (msg.mode === "debrief") ["link-stream", "link-control"].forEach((id) => { $(id).hidden = true; });
+  }
   else if (msg.type === "waiting") showWaiting(msg.text);
   else if (msg.type === "reply") onReply(msg);
 }
@@ -92,6 +97,7 @@ function shipPanel(h) {
     ["Ice resistance", `${fix(s.ice_resistance_kn, 0)} kN`],
     ["Ice load X / Y / N", `${fix(s.ice_load_kn[0], 0)} / ${fix(s.ice_load_kn[1], 0)} kN / ${fix(s.ice_load_kn[2], 0)} kNm`],
     ["Refused orders", `${refusedCount}`],
+    ["Floes live / frozen", h.counts ? `${h.counts.free} / ${h.counts.frozen_floes}` : "–"],
   ]);
 }
 
