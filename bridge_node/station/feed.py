@@ -118,7 +118,9 @@ class Feed:
     def _make_frame(self, sub: StateSubscriber, age_s: float) -> None:
         started = time.perf_counter()
         alarms = self.picture.log.alarms(age_s, self.control.error, sub.view.time, sub.view.ship.utc)
+        log = self.picture.log
         extra = {"alarms": alarms, "stream": {"age_s": round(age_s, 2), "resyncs": sub.resyncs, "lost": sub.lost},
+                 "failures": {"pumps_failed": 2 - log.steering, "power_percent": round(log.power * 100.0, 1)},
                  "control": {"error": self.control.error}}
         frame = self.picture.frame(sub.view, extra)
         self.build_ms = [*self.build_ms[-999:], (time.perf_counter() - started) * 1e3]

@@ -219,9 +219,9 @@ class MapView {
     ctx.strokeStyle = MAP_COLORS.tileLine; ctx.stroke(tileLines);
     ctx.strokeStyle = MAP_COLORS.floeEdge;
     ctx.fillStyle = MAP_COLORS.frozenFloe;
-    for (const t of this.tiles.values()) if (t.floes) { ctx.fill(t.floes); if (s > 0.4) ctx.stroke(t.floes); }
+    for (const t of this.tiles.values()) if (t.floes) { ctx.fill(t.floes); if (s > 1) ctx.stroke(t.floes); }
     ctx.fillStyle = MAP_COLORS.floe;
-    for (const f of this.floes.values()) { ctx.fill(f.path); if (s > 0.25) ctx.stroke(f.path); }
+    for (const f of this.floes.values()) { ctx.fill(f.path); if (s > 1) ctx.stroke(f.path); }
   }
 
   _drawTrack(ctx, s) {
@@ -255,6 +255,12 @@ class MapView {
 
   _drawShip(ctx, s, ship, color, own) {
     const g = this.geo.ship, grow = Math.max(1, 26 / (g.length * s));  // at least 26 px long
+    const env = this.frame.environment;
+    if (own && env && env.visibility_m < 5000) {  // how far the bridge sees: the fog's circle
+      ctx.beginPath(); ctx.arc(ship.east, ship.north, env.visibility_m, 0, 2 * Math.PI);
+      ctx.strokeStyle = "rgba(255, 255, 255, 0.55)"; ctx.lineWidth = 1.5 / s; ctx.setLineDash([10 / s, 6 / s]); ctx.stroke();
+      ctx.setLineDash([]);
+    }
     for (const [on, bearing] of own ? ship.searchlights : []) {
       if (!on) continue;
       const a = ship.heading + bearing, reach = Math.max(300, 60 / s), spread = 0.12;

@@ -69,6 +69,8 @@ function onFrame(h, arrays) {
   shipPanel(h);
   envPanel(e);
   alarms(h.alarms);
+  const f = h.failures;
+  $("failures-now").textContent = `seen on the stream: steering ${["both pumps working", "one pump failed", "both pumps failed"][f.pumps_failed]}, engine ${f.power_percent} % power`;
   for (const ev of h.events) logRow(ev);
   if (first) fillForms(h);
   $("map-stats").textContent = `${h.counts.free} live floes · ${h.counts.frozen_floes} frozen · ${h.counts.tiles_live}/${h.counts.tiles_frozen} tiles live/frozen · ${map.stats.fps.toFixed(0)} fps`;
