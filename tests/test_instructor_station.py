@@ -343,6 +343,11 @@ def test_user_errors_are_clean(exercise):
         done = subprocess.run([sys.executable, "-m", "bridge_node", "instructor", "--config", str(config), *args],
                               cwd=REPO, capture_output=True, text=True, timeout=120)
         assert done.returncode == 2 and text in done.stderr and "Traceback" not in done.stderr, done.stderr
+    opened = config.with_name("opened.toml")  # a network address without allow_network
+    opened.write_text(config.read_text().replace("[instructor]\n", '[instructor]\nhost = "10.1.2.3"\n'))
+    done = subprocess.run([sys.executable, "-m", "bridge_node", "instructor", "--config", str(opened)],
+                          cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and "not a loopback address" in done.stderr and "Traceback" not in done.stderr
 
 
 def test_debrief_of_the_session_record(exercise, browser, tmp_path):
