@@ -8,6 +8,7 @@ import socket
 import subprocess
 import sys
 import time
+import urllib.request
 
 import pynmea2
 from pyais import decode
@@ -143,3 +144,26 @@ def test_freeze_reposition_and_steering_failure_from_the_command_line(tmp_path):
     summary = json.loads(out)
     assert summary["control"]["requests"]["accepted"] == 6 and summary["control"]["requests"]["invalid"] == 1
     assert math.isfinite(summary["tick_ms_p99"])
+
+
+def test_run_starts_the_instructor_station_and_names_its_address(tmp_path):
+    port = free_port()
+    config = exercise_toml(tmp_path, "", instructor=f"start = true\nport = {port}")
+    node = subprocess.Popen([sys.executable, "-m", "bridge_node", "run", "--config", str(config), "--duration", "120",
+                             "--render", "none", "--json", "--out", str(tmp_path / "out")], cwd=REPO,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        def page() -> bool:
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=2) as r:
+                    return r.status == 200 and b"<canvas" in r.read()
+            except OSError:
+                return False
+        _wait_for(page, timeout=120.0, poll=0.5)
+    finally:
+        node.terminate()
+        out, err = node.communicate(timeout=60)
+    assert node.returncode == 0, err
+    summary = json.loads(out)
+    assert summary["instructor"]["address"] == f"http://127.0.0.1:{port}/"
+    assert summary["instructor"]["exit"] == 0, (tmp_path / "out" / "instructor.log").read_text()

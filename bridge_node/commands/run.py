@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import math
 import time
+from contextlib import nullcontext
 from pathlib import Path
 
 from rich.console import Console
@@ -31,6 +32,7 @@ from bridge_node.node.config import load_config, new_session_dir
 from bridge_node.node.errors import UserError
 from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.render_processes import RenderProcesses, open_stream, wait_for_renderers
+from bridge_node.node.station_process import StationProcess
 from bridge_node.node.world_setup import build_world, start_world, warm_up
 from bridge_node.reports.run import plot_run
 from bridge_node.reports.summary import print_summary
@@ -53,12 +55,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="start local render processes (default: config render.processes)")
 
 
-def status_line(events: WorldEvents, alarms: int) -> str:
-    """One line of the live display: time, position, heading, speed, rudder, floes, alarms."""
+def status_line(events: WorldEvents, alarms: int, station: str | None = None) -> str:
+    """One line of the live display: time, position, heading, speed, rudder, floes, alarms,
+    and the instructor station's address where it runs."""
     s = events.ship
-    return (f"t {events.time:7.1f} s | N {s.north:8.1f} m E {s.east:8.1f} m | hdg {math.degrees(s.heading):5.1f} deg"
-            f" | {s.speed_over_ground / KNOT:4.1f} kn | rudder {math.degrees(s.rudder_angle):+5.1f} | live floes "
-            f"{events.floes_free} | frozen {events.floes_frozen} | alarms {alarms}")
+    return (f"t {events.time:7.1f} s{' FROZEN' if events.environment.frozen else ''} | N {s.north:8.1f} m E "
+            f"{s.east:8.1f} m | hdg {math.degrees(s.heading):5.1f} deg | {s.speed_over_ground / KNOT:4.1f} kn | rudder "
+            f"{math.degrees(s.rudder_angle):+5.1f} | live floes {events.floes_free} | frozen {events.floes_frozen} | "
+            f"alarms {alarms}" + (f" | instructor {station}" if station else ""))
 
 
 def _end_state(events: WorldEvents) -> dict:
@@ -80,14 +84,14 @@ def _check(args: argparse.Namespace, rate: float) -> None:
 class _StatusLine(StepListener):
     """The live display's line, four times a second; keeps the last events for the summary."""
 
-    def __init__(self, live: Live, hub: LinkHub, first: WorldEvents) -> None:
-        self.live, self.hub, self.last, self._shown = live, hub, first, 0.0
+    def __init__(self, live: Live, hub: LinkHub, first: WorldEvents, station: str | None) -> None:
+        self.live, self.hub, self.last, self.station, self._shown = live, hub, first, station, 0.0
 
     def on_step(self, outcome: TickOutcome) -> None:
         self.last = outcome.events
         if time.monotonic() - self._shown > 0.25:
             self._shown = time.monotonic()
-            self.live.update(status_line(outcome.events, len(self.hub.active_alarms)))
+            self.live.update(status_line(outcome.events, len(self.hub.active_alarms), self.station))
 
 
 def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, renderers, record, console,
@@ -100,14 +104,17 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
         publisher.publish(first)
         live.update("starting the render processes")
         wait_for_renderers(renderers, publisher, 300.0)
-        status = _StatusLine(live, hub, first)
+        station = StationProcess(cfg, args.config, Path(args.out)) if cfg.instructor.start else nullcontext()
+        status = _StatusLine(live, hub, first, station.address if cfg.instructor.start else None)
         queue = CommandQueue(cfg.control.queue, cfg.control.per_tick)
-        with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last)) as control:
+        with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last, data, hub)) as control, \
+                station:
             stats = run_realtime(model, data, hub, rate, args.duration,
                                  [StreamOutput(publisher, traffic, model.origin), status], commands=queue)
         return (stats, status.last, [link.health().as_dict() for link in hub.links],
                 [a.text for a in hub.active_alarms.values()],
-                {"endpoint": cfg.control.endpoint, "requests": dict(control.counts)})
+                {"endpoint": cfg.control.endpoint, "requests": dict(control.counts)},
+                station.stop() if isinstance(station, StationProcess) else None)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -130,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
                 model = build_world(cfg, args.config)
                 warm_up(model, cfg)
                 data = start_world(model, cfg)
-            stats, last, links, alarms, control = _loop(cfg, args, rate, model, data, publisher, renderers, record,
+            stats, last, links, alarms, control, station = _loop(cfg, args, rate, model, data, publisher, renderers, record,
                                                         console, traffic)
         finally:
             if renderers:  # before the stream closes, so that they draw the last state
@@ -143,6 +150,7 @@ def run(args: argparse.Namespace) -> int:
         "video": [r["video"] for r in rendered if "video" in r],
         "panorama": [r["panorama"] for r in rendered if "panorama" in r],
         "record": str(record) if record else None, "console": run_console.summary(), "control": control,
+        "instructor": station,
     }
     try:  # a finished run's summary is never lost to a plotting error
         summary["plot"] = str(plot_run(stats, out / "run.png"))

@@ -1,18 +1,23 @@
 """The exercise's state as the control endpoint reports it (``status`` requests): what the
-last step published, in the bridge's units."""
+last step published, the orders and failures the ship has now, the links' health and the
+active alarms, in the bridge's units. Read from the control endpoint's thread while the
+loop runs: the values are numbers the loop replaces whole, and the lists are copied."""
 from __future__ import annotations
 
 import datetime as dt
 import math
 
+from bridge_node.links.hub import LinkHub
 from sim_core.frames.units import KNOT
-from sim_core.world import WorldEvents
+from sim_core.world import WorldData, WorldEvents
 
 
-def exercise_status(events: WorldEvents) -> dict:
-    """Time, exercise clock, freeze, the own ship and the environment of a step's events."""
+def exercise_status(events: WorldEvents, data: WorldData | None = None, hub: LinkHub | None = None) -> dict:
+    """Time, exercise clock, freeze, the own ship and the environment of a step's events;
+    with the world's data, the ship's orders and failures; with the hub, link health and
+    active alarms."""
     s, e = events.ship, events.environment
-    return {
+    status = {
         "seq": events.seq, "time_s": round(events.time, 3), "frozen": e.frozen,
         "utc": dt.datetime.fromtimestamp(s.utc, dt.timezone.utc).isoformat(timespec="seconds"),
         "latitude_deg": round(math.degrees(s.latitude), 7), "longitude_deg": round(math.degrees(s.longitude), 7),
@@ -21,5 +26,14 @@ def exercise_status(events: WorldEvents) -> dict:
         "rudder_deg": round(math.degrees(s.rudder_angle), 2), "shaft_rpm": round(s.shaft_rps * 60.0, 1),
         "visibility_m": e.visibility, "wind_kn": round(e.wind_speed / KNOT, 2),
         "wind_from_deg": round(math.degrees(e.wind_from), 1), "current_kn": round(e.current_speed / KNOT, 2),
-        "current_to_deg": round(math.degrees(e.current_to), 1),
+        "current_to_deg": round(math.degrees(e.current_to), 1), "vessels": len(events.vessels),
     }
+    if data is not None:
+        ship = data.ship
+        status |= {"rudder_order_deg": round(math.degrees(ship.rudder_order), 2),
+                   "shaft_rpm_order": round(ship.rps_order * 60.0, 1), "steering_pumps": ship.steering_pumps,
+                   "power_percent": round(ship.power_share * 100.0, 1)}
+    if hub is not None:
+        status |= {"alarms": [{"number": a.number, "text": a.text} for a in list(hub.active_alarms.values())],
+                   "links": [link.health().as_dict() for link in list(hub.links)]}
+    return status

@@ -19,6 +19,7 @@ class InstructorSettings(Params):
     port: int = Field(8470, ge=1, le=65535, description="TCP port of the web page and its WebSocket")
     allow_network: bool = False
     rate_hz: float = Field(10.0, ge=1.0, le=30.0, description="map updates a second sent to each browser")
+    start: bool = Field(False, description="icebridge run starts the station beside the node")
 
     @model_validator(mode="after")
     def _where(self) -> InstructorSettings:
