@@ -25,7 +25,7 @@ import tomli_w
 from bridge_node.hil.player import BusOff, Console, ScenarioResult, play
 from bridge_node.hil.scenario import Scenario
 from bridge_node.hil.settings import ConsoleConfig, load_console_config
-from bridge_node.node.children import child_env, ending_with_parent, private_folder
+from bridge_node.node.children import child_env, ending_with_parent, private_folder, spawn
 from bridge_node.node.config import DEFAULT_CONFIG, load_config, read_toml, resolve_path
 from bridge_node.node.errors import UserError
 from bridge_node.node.network import free_port
@@ -55,9 +55,9 @@ class PtyPair:
     def restore(self) -> None:
         if shutil.which("socat") is None:
             raise UserError("socat is missing: install it (apt-get install socat, or run scripts/setup.sh)")
-        self._proc = subprocess.Popen(ending_with_parent(["socat", f"pty,raw,echo=0,link={self.node_end}",
-                                                          f"pty,raw,echo=0,ignoreeof,link={self.console_end}"]),
-                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        self._proc = spawn(ending_with_parent(["socat", f"pty,raw,echo=0,link={self.node_end}",
+                                               f"pty,raw,echo=0,ignoreeof,link={self.console_end}"]),
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         deadline = time.monotonic() + 5.0
         while not (self.node_end.exists() and self.console_end.exists()):
             if time.monotonic() > deadline:
@@ -187,7 +187,7 @@ class Bench:
         try:
             self.console = self._stack.enter_context(Console(self._write_configs()))
             with open(self.folder / "node.json", "w") as out, open(self.folder / "node.log", "w") as log:
-                self.node = subprocess.Popen(
+                self.node = spawn(
                     [sys.executable, "-m", "bridge_node", "run", "--config", str(self.folder / "node.toml"),
                      "--render", "none", "--json", "--out", str(self.folder / "node")], stdout=out, stderr=log,
                     env=child_env())

@@ -17,7 +17,7 @@ from pathlib import Path
 import tomli_w
 
 from bridge_node.hil.bench import STOP_TIMEOUT_S, pty_folder, wire_end
-from bridge_node.node.children import child_env
+from bridge_node.node.children import child_env, spawn
 from bridge_node.hil.scenario import load_scenario
 from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig, resolve_path
 from bridge_node.node.errors import UserError
@@ -79,7 +79,7 @@ class RunConsole:
         config.write_text(tomli_w.dumps({"links": [console_link]}), encoding="utf-8")
         self.results.unlink(missing_ok=True)
         with open(self.log, "w") as log:
-            self._process = subprocess.Popen(
+            self._process = spawn(
                 [sys.executable, "-m", "bridge_node", "console", "--config", str(config), "--script", s.script,
                  "--wait", str(WAIT_S), "--hold", "--results", str(self.results)],
                 stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, env=child_env())

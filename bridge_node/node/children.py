@@ -1,7 +1,10 @@
 """Child processes end with the node that started them, and leave nothing behind in /tmp.
 
 Linux sends a process its parent-death signal (``prctl(PR_SET_PDEATHSIG)``) when the
-thread that started it ends, however it ends: SIGKILL or a crash included. A child that
+thread that started it ends, however it ends: SIGKILL or a crash included. So every such
+child is started by one thread that lives as long as the process (``spawn``): one started
+by a short-lived thread (a test's replug, a watchdog) would be signalled when that thread
+ended. A child that
 runs ``icebridge`` (the software console, a render process, a HIL bench's node) asks for it
 itself at its start (``end_with_parent``), told its parent by ``ICEBRIDGE_PARENT_PID``
 (``child_env``); a program of another kind (socat) is started through util-linux's
@@ -14,11 +17,19 @@ import ctypes
 import os
 import shutil
 import signal
+import subprocess
 import tempfile
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 PARENT_VARIABLE = "ICEBRIDGE_PARENT_PID"
 _PR_SET_PDEATHSIG = 1  # linux/prctl.h
+_SPAWNER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="icebridge-spawner")  # lives with the process
+
+
+def spawn(command: list[str], **popen: object) -> subprocess.Popen:
+    """``subprocess.Popen(command, **popen)``, started on the process's one spawning thread."""
+    return _SPAWNER.submit(subprocess.Popen, command, **popen).result()
 
 
 def child_env(env: dict[str, str] | None = None) -> dict[str, str]:

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import zmq
 
-from bridge_node.node.children import child_env
+from bridge_node.node.children import child_env, spawn
 from bridge_node.node.config import NodeConfig
 from bridge_node.node.errors import UserError
 from bridge_node.stream.publisher import StatePublisher
@@ -81,7 +81,7 @@ class RenderProcesses:
 
     def _launch(self, p: RenderProcess) -> None:
         with open(p.stderr, "a", encoding="utf-8") as err:
-            p.proc = subprocess.Popen(p.command, env=child_env(self.env), stdout=subprocess.DEVNULL, stderr=err)
+            p.proc = spawn(p.command, env=child_env(self.env), stdout=subprocess.DEVNULL, stderr=err)
 
     def start(self) -> None:
         """Start every process, and the watchdog thread."""

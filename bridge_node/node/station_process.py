@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from bridge_node.node.children import child_env
+from bridge_node.node.children import child_env, spawn
 from bridge_node.node.config import NodeConfig
 
 STOP_TIMEOUT_S = 10.0
@@ -29,8 +29,8 @@ class StationProcess:
     def __enter__(self) -> StationProcess:
         self.log.parent.mkdir(parents=True, exist_ok=True)
         with open(self.log, "w", encoding="utf-8") as log:
-            self._process = subprocess.Popen(self.command, stdin=subprocess.DEVNULL, stdout=log,
-                                             stderr=subprocess.STDOUT, env=child_env())
+            self._process = spawn(self.command, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
+                                  env=child_env())
         return self
 
     def __exit__(self, *exc) -> None:
