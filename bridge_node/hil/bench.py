@@ -172,7 +172,8 @@ class Bench:
                  "paths": paths | {"cache_dir": str(cache), "session_dir": str((self.folder / "sessions").resolve())},
                  "stream": base.get("stream", {}) | {"publish": f"tcp://127.0.0.1:{free_port()}",
                                                      "snapshot": f"tcp://127.0.0.1:{free_port()}"},
-                 "control": base.get("control", {}) | {"endpoint": f"tcp://127.0.0.1:{free_port()}"}}
+                 "control": base.get("control", {}) | {"endpoint": f"tcp://127.0.0.1:{free_port()}"},
+                 "instructor": base.get("instructor", {}) | {"start": False}}  # the bench has no instructor
         ships = self.base.resolve().parent / "ships"
         if ships.is_dir() and not (self.folder / "ships").exists():
             (self.folder / "ships").symlink_to(ships)  # ships beside the user's config stay found
