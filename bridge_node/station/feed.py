@@ -118,10 +118,13 @@ class Feed:
     def _make_frame(self, sub: StateSubscriber, age_s: float) -> None:
         started = time.perf_counter()
         alarms = self.picture.log.alarms(age_s, self.control.error, sub.view.time, sub.view.ship.utc)
-        log = self.picture.log
+        log, status = self.picture.log, self.control.status or {}
+        # the node's status knows the orders and the failures applied before this station joined
+        failures = {"pumps_failed": 2 - status.get("steering_pumps", log.steering),
+                    "power_percent": status.get("power_percent", round(log.power * 100.0, 1))}
         extra = {"alarms": alarms, "stream": {"age_s": round(age_s, 2), "resyncs": sub.resyncs, "lost": sub.lost},
-                 "failures": {"pumps_failed": 2 - log.steering, "power_percent": round(log.power * 100.0, 1)},
-                 "control": {"error": self.control.error}}
+                 "failures": failures,
+                 "control": {"error": self.control.error, "rudder_order_deg": status.get("rudder_order_deg")}}
         frame = self.picture.frame(sub.view, extra)
         self.build_ms = [*self.build_ms[-999:], (time.perf_counter() - started) * 1e3]
         self.frames += 1

@@ -94,7 +94,9 @@ function shipPanel(h) {
     ["Speed through water", `${fix(s.stw_kn, 1)} kn`],
     ["Rate of turn", `${fix(s.rot_deg_min, 1)} °/min`],
     ["Rudder angle", `${fix(Math.abs(s.rudder_deg), 1)}° ${side(s.rudder_deg)}`],
-    ["Rudder order", `<span class="muted" title="the state stream does not carry the order">n/a</span>`],
+    ["Rudder order", Number.isFinite(h.control?.rudder_order_deg)  // (a debrief has no control)
+      ? `${fix(Math.abs(h.control.rudder_order_deg), 1)}° ${side(h.control.rudder_order_deg)}`
+      : `<span class="muted" title="from the node's status, every few seconds">n/a</span>`],
     ["Shaft", `${fix(s.rpm, 0)} rpm`],
     ["Ice resistance", `${fix(s.ice_resistance_kn, 0)} kN`],
     ["Ice load X / Y / N", `${fix(s.ice_load_kn[0], 0)} / ${fix(s.ice_load_kn[1], 0)} kN / ${fix(s.ice_load_kn[2], 0)} kNm`],
