@@ -4,7 +4,7 @@ files and session record files (``ticks.log``, ``nmea.log``, ``can.log``, ``modb
 (huge, negative, not a number, empty, long, random text), or raw text.
 
 A reader passes when it returns or raises its documented error (``UserError``; for
-``read_ticks`` also ``ValueError``), within a second per input (the deadline), and every
+``read_ticks`` also ``ValueError``), and ends (pytest's timeout catches a hang), and every
 value it accepts is in range: times finite, latitude within [-pi/2, pi/2], longitude within
 [-pi, pi], headings and courses within [0, 2 pi), speeds finite and not negative, record
 times finite, tick periods positive and finite.
@@ -33,7 +33,7 @@ from bridge_node.replay.session import RecordedSession
 from bridge_node.replay.track import TrackLog
 
 EXAMPLES = int(os.environ.get("ICEBRIDGE_FUZZ_EXAMPLES", "200"))
-FUZZ = settings(max_examples=EXAMPLES, deadline=1000, suppress_health_check=[HealthCheck.too_slow])
+FUZZ = settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 HOSTILE = ["99999", "-9999", "nan", "inf", "-inf", "1e400", "1e308", "-1", "0", "", "360", "511", "91", "181",
            "9" * 30, "9" * 5000, "x" * 140_000, '"', "+24:00", "99999999999", "2023-11-14T22:13:20+99:00",
            "0001-01-01T00:00:00+01:00", "9999-12-31T23:59:59-23:59", "1e10", "-1e10", "\x00", "é"]
