@@ -217,20 +217,7 @@ class SceneRenderer:
         self.ctx, self.model, self.settings = ctx, model, settings
         self._configured_aims = [light.mount().default for light in settings.searchlights]  # before any order
         scene = model.scene
-        lights = len(settings.searchlights)
-        self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=shaders.with_lights(shaders.ENV_FS, lights))
-        self.floe = ctx.program(vertex_shader=shaders.FLOE_VS,
-                                fragment_shader=shaders.with_lights(shaders.FLOE_FS, lights))
-        self.ship = ctx.program(vertex_shader=shaders.SHIP_VS,
-                                fragment_shader=shaders.with_lights(shaders.SHIP_FS, lights))
-        self.band = ctx.program(vertex_shader=shaders.BAND_VS, fragment_shader=shaders.BAND_FS)
-        self.band_buf = ctx.buffer(reserve=2 * 6 * 2 * 4)
-        self.band_vao = ctx.vertex_array(self.band, [(self.band_buf, "2f", "in_ndc")])
-        self.sky_prog = ctx.program(vertex_shader=shaders.ENV_VS,
-                                    fragment_shader=shaders.with_lights(shaders.SKY_FS, lights))
-        self.env_buf = ctx.buffer(reserve=2 * 9 * 5 * 4)  # ground, then sky: 3 triangles each at most
-        self.env_vao = ctx.vertex_array(self.env, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
-        self.sky_vao = ctx.vertex_array(self.sky_prog, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
+        self._make_programs(len(settings.searchlights))
         if scene.nx * scene.ny > MAX_TILES:
             raise ValueError(f"the renderer draws fields of up to {MAX_TILES} tiles; "
                              f"this one has {scene.nx * scene.ny}")
@@ -280,6 +267,24 @@ class SceneRenderer:
         # the eye, below the wings), bilinear
         self.noise.filter = moderngl.NEAREST_MIPMAP_NEAREST, moderngl.LINEAR
         self.sky: Sky | None = None
+
+    def _make_programs(self, lights: int) -> None:
+        """The shader programs (with ``lights`` searchlights) and the screen-space buffers of
+        the environment, sky and blend band."""
+        ctx = self.ctx
+        self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=shaders.with_lights(shaders.ENV_FS, lights))
+        self.floe = ctx.program(vertex_shader=shaders.FLOE_VS,
+                                fragment_shader=shaders.with_lights(shaders.FLOE_FS, lights))
+        self.ship = ctx.program(vertex_shader=shaders.SHIP_VS,
+                                fragment_shader=shaders.with_lights(shaders.SHIP_FS, lights))
+        self.band = ctx.program(vertex_shader=shaders.BAND_VS, fragment_shader=shaders.BAND_FS)
+        self.band_buf = ctx.buffer(reserve=2 * 6 * 2 * 4)
+        self.band_vao = ctx.vertex_array(self.band, [(self.band_buf, "2f", "in_ndc")])
+        self.sky_prog = ctx.program(vertex_shader=shaders.ENV_VS,
+                                    fragment_shader=shaders.with_lights(shaders.SKY_FS, lights))
+        self.env_buf = ctx.buffer(reserve=2 * 9 * 5 * 4)  # ground, then sky: 3 triangles each at most
+        self.env_vao = ctx.vertex_array(self.env, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
+        self.sky_vao = ctx.vertex_array(self.sky_prog, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
 
     # -- per frame uploads ----------------------------------------------------------------
     def update(self, view: WorldView) -> None:

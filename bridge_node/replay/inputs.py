@@ -85,10 +85,21 @@ def load_inputs(paths: list[str], mmsi: int | None, mapping: dict[str, str],
                 session_period: float) -> TrackLog | RecordedSession | VesselChoice:
     """Recognise and read the given files: a track log (several files merged), a session
     record, or the vessels to choose from. UserError for anything unusable."""
+    names = ", ".join(paths)
+    sessions, sentences, track_logs, by_mmsi = _read_files(paths, mapping)
+    if sessions:
+        if sentences.own.files or track_logs or by_mmsi:
+            raise UserError(f"{names}: a session record cannot be replayed together with track logs")
+        return _session(sessions, names, session_period)
+    return _track(sentences, track_logs, by_mmsi, mmsi, names)
+
+
+def _read_files(paths: list[str], mapping: dict[str, str]) -> tuple[list, SentenceLog, list, dict]:
+    """Every file read by its kind: the session record files (folder, names), the NMEA and
+    AIS sentences, the CSV and GPX track logs, and the CSV logs by MMSI."""
     sessions: list[tuple[Path, set[str]]] = []
     node_nmea: list[tuple[str, Path, list[str]]] = []  # session files, or track logs when alone
     sentences, track_logs, by_mmsi = SentenceLog(), [], {}
-    names = ", ".join(paths)
     for name in paths:
         path = Path(name).expanduser()
         if path.is_dir():
@@ -115,17 +126,25 @@ def load_inputs(paths: list[str], mmsi: int | None, mapping: dict[str, str],
     else:
         for name, _, lines in node_nmea:
             sentences.read(name, lines)
-    if sessions:
-        if sentences.own.files or track_logs or by_mmsi:
-            raise UserError(f"{names}: a session record cannot be replayed together with track logs")
-        folders = {folder for folder, _ in sessions}
-        if len(folders) > 1:
-            raise UserError(f"{names}: files of {len(folders)} session records; replay one at a time")
-        try:
-            return read_session(folders.pop(), set().union(*(n for _, n in sessions)) or set(RECORD_FILES.values()),
-                                session_period)
-        except ValueError as exc:
-            raise UserError(f"{sessions[0][0] / TICKS_FILE}: {exc}") from None
+    return sessions, sentences, track_logs, by_mmsi
+
+
+def _session(sessions: list[tuple[Path, set[str]]], names: str, period: float) -> RecordedSession:
+    """The one session record the files belong to."""
+    folders = {folder for folder, _ in sessions}
+    if len(folders) > 1:
+        raise UserError(f"{names}: files of {len(folders)} session records; replay one at a time")
+    try:
+        return read_session(folders.pop(), set().union(*(n for _, n in sessions)) or set(RECORD_FILES.values()),
+                            period)
+    except ValueError as exc:
+        raise UserError(f"{sessions[0][0] / TICKS_FILE}: {exc}") from None
+
+
+def _track(sentences: SentenceLog, track_logs: list, by_mmsi: dict, mmsi: int | None,
+           names: str) -> TrackLog | VesselChoice:
+    """The track to replay (``mmsi``'s, the own ship's, or the only vessel's), or the
+    vessels to choose from."""
     for number, v in sentences.vessels.items():
         if v.reports:
             by_mmsi.setdefault(number, []).append(v.track(sentences.own.files, sentences.own.bad))

@@ -435,6 +435,7 @@ class ContactSpace:
         # its contact memory twice. Floes at rest leave the dynamic set one by one instead, as
         # static bodies (``rest``, ``wake``; sim_core/ice/resting.py decides when).
         self.space.damping = math.exp(-1.0 / s.drag_time_s)  # per second: v *= damping ** dt
+        self._water = (0.0, 0.0, 0.0)  # the water's velocity (m/s) and the step (s) the gravity was set for
         hull = lib.cpBodyNewKinematic()
         lib.cpBodySetUserData(hull, ffi.cast("void *", _HULL_ID))
         ring = [tuple(p) for p in np.asarray(hull_outline, dtype=float).tolist()]
@@ -699,17 +700,18 @@ class ContactSpace:
                                tl.row_count, self._sides, self._pad, *self._grid[:5])
         return np.sort(found)
 
-    def set_water_velocity(self, velocity: np.ndarray, dt: float) -> None:
-        """Let the water move at ``velocity`` (world x east, y north, m/s) over the next step
+    def set_water_velocity(self, east: float, north: float, dt: float) -> None:
+        """Let the water move at (``east``, ``north``) m/s (world x, y) over the next step
         of dt (s): the floes' planar drag then pulls them towards it rather than to rest.
         Chipmunk's damping decays a body's velocity to zero (v <- v d + g dt, d = damping ** dt);
         a uniform acceleration g = v_w (1 - d) / dt, given as the space's gravity (which
         acts on the moving floes only, not on the kinematic hull or floes at rest), makes
         v_w the steady state: the same linear drag, relative to the water."""
-        d = self.space.damping ** dt
-        gx, gy = (float(c) * (1.0 - d) / dt for c in velocity)
-        if (gx, gy) != tuple(self.space.gravity):
-            self.space.gravity = (gx, gy)
+        if (east, north, dt) == self._water:  # most steps: as the last one
+            return
+        self._water = (east, north, dt)
+        share = (1.0 - self.space.damping ** dt) / dt
+        self.space.gravity = (east * share, north * share)
 
     def step(self, dt: float) -> None:
         """Switch the step's share of tile objects in or out, then step the engine by dt (s)."""

@@ -221,8 +221,9 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
     """Advance the breakable ice by dt seconds with the hull moving as given, in water
     moving at ``water`` (world x east, y north, m/s; None: still)."""
     st, space = data.state, data.contacts
-    still = water is None or not np.any(water)
-    space.set_water_velocity(np.zeros(2) if still else water, dt)
+    east, north = (0.0, 0.0) if water is None else (float(water[0]), float(water[1]))
+    still = east == 0.0 and north == 0.0
+    space.set_water_velocity(east, north, dt)
     # floes rest only in still water: in a current every free floe drifts, so none is calm,
     # and those at rest when it set in are woken, a step's share at a time
     rest = model.settings.rest_far_floes and still
