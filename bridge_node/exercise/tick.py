@@ -85,10 +85,6 @@ class ExerciseTick:
         self.refusals = OrderRefusals()
         self._stopped = False
 
-    def add_listener(self, listener: StepListener | Callable[[TickOutcome], None]) -> None:
-        """Give ``listener`` every later tick's outcome."""
-        self.listeners.append(as_listener(listener))
-
     def __call__(self, dt: float, now: float, send: bool = True) -> TickOutcome:
         """One tick of dt s at ``now`` (the source's clock, s); ``send`` False: a step run
         ahead, whose outputs do not go out (its alarm changes still do)."""
