@@ -1,7 +1,7 @@
 """What an instructor does to a running exercise, as typed values the world applies at a
 step's start (``step(..., commands=...)``), in the order given: freeze and resume, move the
 own ship, set the visibility, the exercise clock, the wind and the current, and fail the
-steering gear or the engine, and steer other vessels (``OtherVessel``, kept in the world and
+steering gear, the engine or a sensor (``sim_core.ship.sensors``), and steer other vessels (``OtherVessel``, kept in the world and
 moved with each step, so that a replay has them where the run had them). SI: m, m/s, rad,
 unix s. Values are checked where they are
 made (``bridge_node.exercise.commands``); here they are only applied.
@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from sim_core.ship.model import equilibrium_rps
+from sim_core.ship.sensors import SensorFailure, fail_sensor
 
 if TYPE_CHECKING:
     from sim_core.world import WorldData, WorldModel
@@ -118,8 +119,8 @@ class RemoveVessel:
     mmsi: int
 
 
-Command = (Freeze | Reposition | SetEnvironment | SetClock | SteeringFailure | EngineFailure | AddVessel | MoveVessel
-           | SteerVessel | RemoveVessel)
+Command = (Freeze | Reposition | SetEnvironment | SetClock | SteeringFailure | EngineFailure | SensorFailure
+           | AddVessel | MoveVessel | SteerVessel | RemoveVessel)
 VESSEL_COMMANDS = (AddVessel, MoveVessel, SteerVessel, RemoveVessel)
 
 
@@ -137,6 +138,8 @@ def apply_command(model: WorldModel, data: WorldData, command: Command) -> Comma
         ship.steering_pumps = command.pumps
     elif isinstance(command, EngineFailure):
         ship.power_share = command.power_share
+    elif isinstance(command, SensorFailure):
+        data.sensors = fail_sensor(data.sensors, command, ship)
     elif isinstance(command, VESSEL_COMMANDS):
         return command if _command_vessel(data.vessels, command) else None
     elif isinstance(command, Reposition) and not command.at_once:

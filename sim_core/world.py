@@ -52,6 +52,7 @@ from sim_core.ship.model import OrderRejection, ShipData, ShipModel
 from sim_core.ship.outputs import ShipOutputs, ship_outputs
 from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
 from sim_core.ship.searchlights import SearchlightMount, SearchlightOrder, SearchlightState, order_searchlight
+from sim_core.ship.sensors import SensorFaults, sensor_readings
 from sim_core.ship.wind import wind_load
 
 BREAKING_MEMORY = 2.0  # s: the bow counts as in level ice this long after it last broke a cell
@@ -85,6 +86,7 @@ class WorldData:
     environment: Environment = field(default_factory=Environment)  # as the instructor set it
     moving_to: Reposition | None = None  # a move of the ship waiting for its tiles
     vessels: dict[int, OtherVessel] = field(default_factory=dict)  # other vessels the instructor steers, by MMSI
+    sensors: SensorFaults = field(default_factory=SensorFaults)  # the instructor's sensor failures
 
 
 @dataclass(frozen=True)
@@ -150,6 +152,12 @@ class WorldEvents:
     environment: Environment = field(default_factory=Environment)  # as of the step's end
     commands: tuple[Command, ...] = ()  # the instructor's commands applied at the step's start
     vessels: tuple[tuple[int, OtherVessel], ...] = ()  # the instructor's other vessels (MMSI, copy) at its end
+    instruments: ShipOutputs | None = None  # what the sensors read (their failures applied); None: ``ship``
+
+    @property
+    def readings(self) -> ShipOutputs:
+        """The ship as the bridge's instruments read it."""
+        return self.ship if self.instruments is None else self.instruments
 
 
 def compile_world(ship: ShipModel, ice: IceModel, scene: SceneModel, origin: tuple[float, float] = (0.0, 0.0),
@@ -227,7 +235,8 @@ def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> 
     st = data.ice.state
     pose = np.column_stack([st.xy[rows], st.heave[rows], st.yaw[rows], st.roll[rows], st.pitch[rows]])
     ship = ship_outputs(data.ship, data.time, *model.origin, data.epoch + data.time, tuple(data.searchlights))
-    return WorldEvents(seq=data.seq, time=data.time, ship=ship,
+    readings = sensor_readings(ship, data.sensors, model.origin)
+    return WorldEvents(seq=data.seq, time=data.time, ship=ship, instruments=None if readings is ship else readings,
                        floe_rows=rows, floe_pose=pose, floe_status=st.status[rows].copy(),
                        floes_free=st.count(FloeStatus.FREE), floes_frozen=data.ice.frozen.count,
                        environment=data.environment,

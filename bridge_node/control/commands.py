@@ -16,6 +16,9 @@ units of the bridge (degrees, knots, metres, UTC):
 ``current``               ``speed_kn``, ``to_deg``
 ``steering_failure``      ``pumps_failed``: 0 (repaired), 1 (half the rate), 2 (stuck)
 ``engine_failure``        ``power_percent``: 100 (repaired) .. 0 (blackout)
+``sensor_failure``        ``sensor`` and ``mode``: ``gyro`` ``ok``, ``frozen`` or ``offset``
+                          (with ``offset_deg``); ``gnss`` ``ok``, ``lost`` or ``jumping``
+                          (``jump_m``, default 200); ``log`` ``ok`` or ``frozen``
 ``add_vessel``            ``mmsi``, ``name``, ``length_m``, ``beam_m``, a position (as
                           ``reposition``), ``course_deg``, ``speed_kn``
 ``move_vessel``           ``mmsi`` and a position
@@ -56,6 +59,7 @@ from sim_core.instructor import (
     SteerVessel,
     SteeringFailure,
 )
+from sim_core.ship.sensors import SENSOR_MODES, SensorFailure
 from sim_core.world import WorldData, WorldModel
 
 MAX_COMMAND_BYTES = 4096  # a command's JSON is a few hundred bytes; anything longer is refused unread
@@ -219,13 +223,40 @@ class EngineFailureCommand(_Command):
         return EngineFailure(self.power_percent / 100.0)
 
 
+class SensorFailureCommand(_Command):
+    command: Literal["sensor_failure"]
+    sensor: Literal["gyro", "gnss", "log"]
+    mode: Literal["ok", "frozen", "offset", "lost", "jumping"]
+    offset_deg: float | None = Field(None, ge=-180.0, le=180.0)
+    jump_m: float | None = Field(None, ge=10.0, le=2000.0)
+
+    @model_validator(mode="after")
+    def _mode_of_sensor(self) -> SensorFailureCommand:
+        if self.mode not in SENSOR_MODES[self.sensor]:
+            raise ValueError(f"mode {self.mode!r} is not one of the {self.sensor}'s: "
+                             f"{', '.join(SENSOR_MODES[self.sensor])}")
+        offset = (self.sensor, self.mode) == ("gyro", "offset")
+        if offset != (self.offset_deg is not None):
+            raise ValueError("offset_deg (-180 to 180) goes with sensor gyro and mode offset, and only there")
+        if self.jump_m is not None and (self.sensor, self.mode) != ("gnss", "jumping"):
+            raise ValueError("jump_m (10 to 2000) goes only with sensor gnss and mode jumping")
+        return self
+
+    def to_world(self, model: WorldModel, data: WorldData) -> Command:
+        if self.mode == "offset":
+            return SensorFailure(self.sensor, self.mode, math.radians(self.offset_deg))
+        if self.mode == "jumping":
+            return SensorFailure(self.sensor, self.mode, 200.0 if self.jump_m is None else self.jump_m)
+        return SensorFailure(self.sensor, self.mode)
+
+
 WireCommand = Annotated[FreezeCommand | RepositionCommand | VisibilityCommand | ClockCommand | WindCommand |
-                        CurrentCommand | SteeringFailureCommand | EngineFailureCommand | AddVesselCommand |
-                        MoveVesselCommand | SteerVesselCommand | RemoveVesselCommand,
+                        CurrentCommand | SteeringFailureCommand | EngineFailureCommand | SensorFailureCommand |
+                        AddVesselCommand | MoveVesselCommand | SteerVesselCommand | RemoveVesselCommand,
                         Field(discriminator="command")]
 _WIRE = TypeAdapter(WireCommand)
 COMMAND_NAMES = ("freeze", "resume", "reposition", "visibility", "clock", "wind", "current", "steering_failure",
-                 "engine_failure", "add_vessel", "move_vessel", "steer_vessel", "remove_vessel")
+                 "engine_failure", "sensor_failure", "add_vessel", "move_vessel", "steer_vessel", "remove_vessel")
 
 
 def parse_command(message: dict) -> WireCommand:
@@ -251,7 +282,7 @@ def _explain(error: dict) -> str:
 # -- the applied commands as records (session record, state stream) -----------------------
 _ENVIRONMENT_FIELDS = {"visibility", "wind_speed", "wind_from", "current_speed", "current_to"}
 _TYPES = {cls.__name__: cls for cls in (Freeze, Reposition, SetEnvironment, SetClock, SteeringFailure,
-                                        EngineFailure, AddVessel, MoveVessel, SteerVessel, RemoveVessel)}
+                                        EngineFailure, SensorFailure, AddVessel, MoveVessel, SteerVessel, RemoveVessel)}
 
 
 def command_record(command: Command) -> dict:
@@ -271,8 +302,9 @@ def command_from_record(record: dict) -> Command:
         command = cls(**fields)
         numbers = [v for v in _leaves(dataclasses.asdict(command)) if isinstance(v, float)]
         if not all(math.isfinite(v) for v in numbers) or \
-                cls is SetEnvironment and not {k for k, _ in command.changes} <= _ENVIRONMENT_FIELDS:
-            raise ValueError("a value that is not finite, or a field the environment lacks")
+                cls is SetEnvironment and not {k for k, _ in command.changes} <= _ENVIRONMENT_FIELDS or \
+                cls is SensorFailure and command.mode not in SENSOR_MODES.get(command.sensor, ()):
+            raise ValueError("a value that is not finite, a field the environment lacks, or a sensor mode unknown")
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise CommandError(f"not a command record: {record!r:.200} ({exc})") from None
     return command

@@ -16,7 +16,8 @@ from sim_core.frames.geodesy import local_to_geodetic
 
 class LinkOutputs(StepListener):
     """Every alarm change of the step raised on the hub (announced with the next state sent),
-    and the ship's state out on every link at the tick's clock."""
+    and the ship's state out on every link at the tick's clock: as its sensors read it to the
+    instruments, as it is to other simulators."""
 
     def __init__(self, hub: LinkHub) -> None:
         self.hub = hub
@@ -26,7 +27,9 @@ class LinkOutputs(StepListener):
         return now
 
     def on_step(self, outcome: TickOutcome) -> None:
-        self.hub.publish(outcome.events.ship if outcome.send else None, self.clock(outcome.now), outcome.alarms)
+        events = outcome.events
+        self.hub.publish(events.readings if outcome.send else None, self.clock(outcome.now), outcome.alarms,
+                         truth=events.ship)
 
 
 class ReplayLinkOutputs(LinkOutputs):

@@ -54,6 +54,7 @@ class Moving(Protocol):
     course_over_ground: float
     speed_over_ground: float
     rate_of_turn: float
+    fix_valid: bool
 
 
 def report_interval(speed_over_ground: float, rate_of_turn: float) -> float:
@@ -71,11 +72,13 @@ def position_report(mmsi: int, v: Moving, utc: dt.datetime, sentence: str) -> li
     """Type 1 (position report, class A, under way using engine) as ``sentence`` VDO or VDM."""
     rot = math.degrees(v.rate_of_turn) * 60.0  # deg/min; pyais encodes it as ROT_AIS
     # pyais truncates to the field's resolution: round first (0.1 kn, 1/10000 min, 0.1 deg)
-    return encode_dict({"type": 1, "mmsi": mmsi, "status": 0, "turn": max(-708.0, min(708.0, rot)),
-                        "speed": min(102.2, round(v.speed_over_ground / KNOT, 1)), "accuracy": 1,
-                        "lon": round(math.degrees(v.longitude) * 600_000) / 600_000,
-                        "lat": round(math.degrees(v.latitude) * 600_000) / 600_000,
-                        "course": round(math.degrees(v.course_over_ground), 1) % 360.0,
+    fields = {"speed": min(102.2, round(v.speed_over_ground / KNOT, 1)), "accuracy": 1,
+              "lon": round(math.degrees(v.longitude) * 600_000) / 600_000,
+              "lat": round(math.degrees(v.latitude) * 600_000) / 600_000,
+              "course": round(math.degrees(v.course_over_ground), 1) % 360.0}
+    if not v.fix_valid:  # no fix: ITU-R M.1371 "not available" values
+        fields = {"speed": 102.3, "accuracy": 0, "lon": 181.0, "lat": 91.0, "course": 360.0}
+    return encode_dict({"type": 1, "mmsi": mmsi, "status": 0, "turn": max(-708.0, min(708.0, rot)), **fields,
                         "heading": round(math.degrees(v.heading)) % 360, "second": utc.second},
                        talker_id="AI", sentence_type=sentence)
 

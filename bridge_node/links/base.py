@@ -118,6 +118,7 @@ class Vessel:
     rate_of_turn: float  # + to starboard
     length: float = 0.0
     beam: float = 0.0
+    fix_valid: bool = True  # another vessel is placed only where its position is known
 
 
 @dataclass
@@ -344,6 +345,8 @@ class Link(ABC):
     lost_errors: ClassVar[tuple[type[Exception], ...]] = (OSError,)  # a device that failed in use raises these
     lost_kind: ClassVar[str] = "device_lost"  # error kind counted for a device lost in use
     up_when_open: ClassVar[bool] = True  # False: ``connected`` waits for the peer to answer
+    simulator_peer: ClassVar[bool] = False  # True: a link to other simulators, sent the ship as it is, not as
+    # its sensors read it (``WorldEvents.instruments``)
 
     def __init__(self, settings: LinkSettings) -> None:
         self.settings = settings

@@ -49,6 +49,9 @@ def dbc_path(value: str) -> Path:
     return path if path.is_absolute() else CONFIG_DIR / path
 
 
+NOT_AVAILABLE_I32 = 0x7FFFFFFF  # a signed 32-bit NMEA 2000 field's "not available"
+
+
 def _n2k_fields(name: str, s: ShipOutputs, sid: int) -> dict:
     """Physical field values (DBC units) of one output PGN; not-available fields all ones."""
     if name == "rudder":
@@ -67,10 +70,12 @@ def _n2k_fields(name: str, s: ShipOutputs, sid: int) -> dict:
                 "Reserved": 63}
     if name == "rate_of_turn":
         return {"SID": sid, "Rate": s.rate_of_turn, "Reserved": 16777215}
-    if name == "position":
+    if name == "position":  # no fix: both fields not available (0x7FFFFFFF)
+        if not s.fix_valid:
+            return {"Latitude": NOT_AVAILABLE_I32 * 1e-7, "Longitude": NOT_AVAILABLE_I32 * 1e-7}
         return {"Latitude": math.degrees(s.latitude), "Longitude": math.degrees(s.longitude)}
-    return {"SID": sid, "CogReference": 0, "Reserved1": 63, "Cog": s.course_over_ground,
-            "Sog": s.speed_over_ground, "Reserved2": 65535}
+    cog, sog = (s.course_over_ground, s.speed_over_ground) if s.fix_valid else (6.5535, 655.35)  # 0xFFFF: n/a
+    return {"SID": sid, "CogReference": 0, "Reserved1": 63, "Cog": cog, "Sog": sog, "Reserved2": 65535}
 
 
 SERIAL_INTERFACES = frozenset({"slcan", "serial", "robotell", "seeedstudio"})  # python-can over a serial line

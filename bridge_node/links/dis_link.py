@@ -201,9 +201,11 @@ class HeardEntities:
 
 @register_link("dis")
 class DisLink(Link):
-    """Own ship out as Entity State PDUs, other simulators' entities in as vessels."""
+    """Own ship out as Entity State PDUs (where it is, whatever its sensors read), other
+    simulators' entities in as vessels."""
 
     lost_kind = "socket_lost"
+    simulator_peer = True
 
     def __init__(self, settings: DisLinkSettings) -> None:
         super().__init__(settings)

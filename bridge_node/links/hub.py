@@ -126,10 +126,12 @@ class LinkHub:
             self.active_alarms.pop(alarm.number, None)
             log.info("alarm %03d cleared: %s", alarm.number, alarm.text)
 
-    def publish(self, state: ShipOutputs | None, now: float, alarms: Sequence[Alarm] = ()) -> None:
+    def publish(self, state: ShipOutputs | None, now: float, alarms: Sequence[Alarm] = (),
+                truth: ShipOutputs | None = None) -> None:
         """Phase 2 at ``now`` (monotonic s): raise ``alarms`` (the tick's alarm changes), send
-        the state (None: nothing but the alarms, as while a replay runs ahead) and the alarm
-        changes on every link, and flush the listeners."""
+        the state (None: nothing but the alarms, as while a replay runs ahead; ``state`` is
+        what the sensors read, ``truth`` the ship as it is, for links to other simulators,
+        default ``state``) and the alarm changes on every link, and flush the listeners."""
         for alarm in alarms:
             self.raise_alarm(alarm, now)
         if state is None:
@@ -140,7 +142,7 @@ class LinkHub:
             changes += [a for a in self.active_alarms.values() if a not in changes]
         vessels = self.traffic.gather([v for link in self.links for v in link.vessels(now)], now)
         for link in self.links:
-            link.publish(state, now)
+            link.publish(truth if link.simulator_peer and truth is not None else state, now)
             link.publish_vessels(vessels, now)
             for alarm in changes:
                 link.publish_alarm(alarm, now)

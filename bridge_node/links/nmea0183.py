@@ -11,6 +11,7 @@ from __future__ import annotations
 import datetime as dt
 import math
 import re
+from dataclasses import dataclass
 
 import pynmea2
 
@@ -208,20 +209,44 @@ def _lon(rad: float) -> tuple[str, str]:
     return f"{d:03d}{(deg - d) * 60:07.4f}", "E" if rad >= 0 else "W"
 
 
+@dataclass(frozen=True)
+class _Fix:
+    """The GNSS fields of RMC, GGA and VTG: with a fix, or empty with the status that says
+    there is none (RMC V, GGA quality 0, mode N: receivers send this when they lose the fix)."""
+
+    status: str
+    position: tuple[str, str, str, str]
+    sog: str
+    cog: str
+    sog_kmh: str
+    mode: str
+    nav_status: str
+    quality: str
+    satellites: str
+    hdop: str
+    altitude: str
+
+
+def _fix_fields(s: ShipOutputs) -> _Fix:
+    if not s.fix_valid:
+        return _Fix("V", ("", "", "", ""), "", "", "", "N", "V", "0", "00", "", "")
+    # mode A (autonomous): chart plotters ignore S (simulator) fixes; nav status S (safe)
+    return _Fix("A", (*_lat(s.latitude), *_lon(s.longitude)), f"{s.speed_over_ground / KNOT:.1f}",
+                f"{math.degrees(s.course_over_ground):.1f}", f"{s.speed_over_ground * 3.6:.1f}", "A", "S", "1", "12",
+                "0.8", "15.0")
+
+
 def render_outputs(names: list[str], s: ShipOutputs, utc: dt.datetime, talkers: dict[str, str]) -> list[str]:
     """The named output sentences for a ship state, with checksums (no CR LF)."""
     hms = utc.strftime("%H%M%S.") + f"{utc.microsecond // 10000:02d}"
-    lat, ns = _lat(s.latitude)
-    lon, ew = _lon(s.longitude)
-    sog_kn, cog = s.speed_over_ground / KNOT, math.degrees(s.course_over_ground)
     rudder = f"{math.degrees(s.rudder_angle):.1f}"
+    fix = _fix_fields(s)
     build = {
-        # mode A (autonomous): chart plotters ignore S (simulator) fixes; nav status S (safe)
-        "RMC": lambda: ("RMC", (hms, "A", lat, ns, lon, ew, f"{sog_kn:.1f}", f"{cog:.1f}", utc.strftime("%d%m%y"),
-                                "", "", "A", "S")),
-        "GGA": lambda: ("GGA", (hms, lat, ns, lon, ew, "1", "12", "0.8", "15.0", "M", "25.0", "M", "", "")),
-        "VTG": lambda: ("VTG", (f"{cog:.1f}", "T", "", "M", f"{sog_kn:.1f}", "N", f"{s.speed_over_ground * 3.6:.1f}",
-                                "K", "A")),
+        "RMC": lambda: ("RMC", (hms, fix.status, *fix.position, fix.sog, fix.cog, utc.strftime("%d%m%y"), "", "",
+                                fix.mode, fix.nav_status)),
+        "GGA": lambda: ("GGA", (hms, *fix.position, fix.quality, fix.satellites, fix.hdop, fix.altitude, "M",
+                                "25.0", "M", "", "")),
+        "VTG": lambda: ("VTG", (fix.cog, "T", "", "M", fix.sog, "N", fix.sog_kmh, "K", fix.mode)),
         "ZDA": lambda: ("ZDA", (hms, f"{utc.day:02d}", f"{utc.month:02d}", f"{utc.year:04d}", "00", "00")),
         "HDT": lambda: ("HDT", (f"{math.degrees(s.heading):.1f}", "T")),
         "ROT": lambda: ("ROT", (f"{math.degrees(s.rate_of_turn) * 60.0:.1f}", "A")),

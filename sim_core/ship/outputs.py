@@ -30,6 +30,7 @@ class ShipOutputs:
     ice_resistance: float  # N
     utc: float = 0.0  # the exercise clock: UTC of this state, unix s
     searchlights: tuple[SearchlightState, ...] = ()  # every configured light as commanded, by index
+    fix_valid: bool = True  # False: no position fix (a GNSS receiver without one; ``sim_core.ship.sensors``)
 
     def as_dict(self) -> dict:
         return asdict(self)
