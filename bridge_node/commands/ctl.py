@@ -5,6 +5,9 @@ station's commands, scriptable): exit 0 with the node's reply, or 2 with the err
     icebridge ctl reposition --lat 74.01 --lon 20.05 --heading 10 --speed 6
     icebridge ctl visibility 500
     icebridge ctl steering-failure 2
+    icebridge ctl sensor-failure gnss lost
+    icebridge ctl link-fault console drop --probability 0.5
+    icebridge ctl save before-the-ridge
     icebridge ctl add-vessel 230000001 --name ODEN --length 108 --beam 31 --north 800 --east 400 --course 180 --speed 8
     icebridge ctl status --json
 """
@@ -45,7 +48,33 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                                                 "2 (rudder stuck)").add_argument("pumps_failed", type=int)
     actions.add_parser("engine-failure", help="engine power left, percent: 100 (repaired) .. 0 "
                                               "(blackout)").add_argument("power_percent", type=float)
+    _failure_actions(actions)
+    actions.add_parser("save", help="a save point of the exercise now, in its session record (icebridge run "
+                                    "--fork it)").add_argument("name", help="letters, digits, - and _ (1-40)")
     actions.add_parser("send", help="send one command given as a JSON object").add_argument("command_json")
+
+
+def _failure_actions(actions) -> None:
+    """Sensor failures and link faults."""
+    sensor = actions.add_parser("sensor-failure", help="gyro ok|frozen|offset, gnss ok|lost|jumping, log ok|frozen")
+    sensor.add_argument("sensor", choices=("gyro", "gnss", "log"))
+    sensor.add_argument("mode", choices=("ok", "frozen", "offset", "lost", "jumping"))
+    sensor.add_argument("--offset", type=float, help="the gyro's offset, deg (mode offset)")
+    sensor.add_argument("--jump", type=float, help="the GNSS position's jumps, m (mode jumping; default 200)")
+    fault = actions.add_parser("link-fault", help="a fault on one of the node's links (none: cleared)")
+    fault.add_argument("link", help="the link's name (icebridge ctl status lists them)")
+    fault.add_argument("fault", choices=("none", "disconnect", "drop", "corrupt", "duplicate", "delay"))
+    fault.add_argument("--probability", type=float, default=1.0, help="of each order (default 1)")
+    fault.add_argument("--delay", type=float, help="s (fault delay)")
+
+
+def _failure_command(args: argparse.Namespace) -> dict:
+    if args.action == "sensor-failure":
+        extra = {"offset_deg": args.offset, "jump_m": args.jump}
+        return {"command": "sensor_failure", "sensor": args.sensor, "mode": args.mode,
+                **{k: v for k, v in extra.items() if v is not None}}
+    fault = {"command": "link_fault", "link": args.link, "fault": args.fault, "probability": args.probability}
+    return fault | ({"delay_s": args.delay} if args.delay is not None else {})
 
 
 def _placed(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -111,6 +140,10 @@ def command_of(args: argparse.Namespace) -> dict:
         return {"command": "steering_failure", "pumps_failed": args.pumps_failed}
     if a == "engine-failure":
         return {"command": "engine_failure", "power_percent": args.power_percent}
+    if a in ("sensor-failure", "link-fault"):
+        return _failure_command(args)
+    if a == "save":
+        return {"command": "save", "name": args.name}
     try:
         return json.loads(args.command_json)
     except ValueError:
@@ -129,5 +162,5 @@ def run(args: argparse.Namespace) -> int:
     if args.json or args.action == "status":
         print(json.dumps(reply.get("status", reply)))
     else:
-        print(f"{args.action}: queued")
+        print(f"{args.action}: queued" + (f"; the save point will be {reply['path']}" if "path" in reply else ""))
     return 0

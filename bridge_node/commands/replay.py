@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 from rich.console import Console
 
+from bridge_node.exercise.save_point import FORK_FILE, read_save
 from bridge_node.hil.run_console import LINK_NAME as RUN_CONSOLE_LINK
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig, load_config
@@ -31,6 +32,7 @@ from bridge_node.replay.console import KeyReader, ReplayProgress, logged_text
 from bridge_node.replay.csv_track import parse_mapping
 from bridge_node.replay.engine import MAX_SPEED, MIN_SPEED, Playback, ReplayStats, Source, run_replay
 from bridge_node.replay.inputs import LOOKED_FOR, VesselChoice, check_span, load_inputs
+from bridge_node.replay.fork import resimulate_shown
 from bridge_node.replay.session import RecordedSession, SessionSource, recorded_config
 from bridge_node.replay.track import Track, TrackLog, TrackPath, TrackSource, clean_for, origin_under
 from bridge_node.reports.replay import gap_summary, plot_replay
@@ -259,6 +261,8 @@ def run(args: argparse.Namespace) -> int:
         model = build_world(cfg, args.config)
     prep = _session_replay(cfg, args, loaded, model) if isinstance(loaded, RecordedSession) else \
         _track_replay(cfg, args, loaded, origin, model)
+    if isinstance(loaded, RecordedSession) and (loaded.folder / FORK_FILE).is_file():  # a forked run's start
+        resimulate_shown(prep.model, prep.data, cfg, read_save(loaded.folder / FORK_FILE), console)
     playback = Playback(None if args.max else (args.speed or 1.0), seek_to=prep.seek_to)
     if playback.speed is not None:
         with console.status("compiling the ice kernels"):

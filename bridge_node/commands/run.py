@@ -25,15 +25,18 @@ from bridge_node.control.endpoint import ControlEndpoint
 from bridge_node.control.queue import CommandQueue
 from bridge_node.control.status import exercise_status
 from bridge_node.exercise.listeners import StreamOutput
+from bridge_node.exercise.save_point import FORK_FILE, SavePoint, read_save
 from bridge_node.exercise.tick import StepListener, TickOutcome
 from bridge_node.hil.run_console import RunConsole
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config, new_session_dir
 from bridge_node.node.errors import UserError
+from bridge_node.node.output_files import write_output
 from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.render_processes import RenderProcesses, open_stream, wait_for_renderers
 from bridge_node.node.station_process import StationProcess
 from bridge_node.node.world_setup import build_world, start_world, warm_up
+from bridge_node.replay.fork import resimulate_shown
 from bridge_node.reports.run import plot_run
 from bridge_node.reports.summary import print_summary
 from bridge_node.stream.publisher import StatePublisher
@@ -53,6 +56,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="the render processes also write the PNG channels every S simulated seconds to OUT/frames/")
     p.add_argument("--render", choices=("local", "none"), default=None,
                    help="start local render processes (default: config render.processes)")
+    p.add_argument("--fork", default=None, metavar="SAVE",
+                   help="start from a save point (icebridge ctl save NAME wrote SAVE in its run's session record): "
+                        "the record is re-simulated to it, then the run goes on live")
 
 
 def status_line(events: WorldEvents, alarms: int, station: str | None = None) -> str:
@@ -107,14 +113,23 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
         station = StationProcess(cfg, args.config, Path(args.out)) if cfg.instructor.start else nullcontext()
         status = _StatusLine(live, hub, first, station.address if cfg.instructor.start else None)
         queue = CommandQueue(cfg.control.queue, cfg.control.per_tick)
-        with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last, data, hub)) as control, \
-                station:
+        with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last, data, hub),
+                             [link.name for link in hub.links], record) as control, station:
             stats = run_realtime(model, data, hub, rate, args.duration,
                                  [StreamOutput(publisher, traffic, model.origin), status], commands=queue)
         return (stats, status.last, [link.health().as_dict() for link in hub.links],
                 [a.text for a in hub.active_alarms.values()],
                 {"endpoint": cfg.control.endpoint, "requests": dict(control.counts)},
                 station.stop() if isinstance(station, StationProcess) else None)
+
+
+def _fork(model, data, cfg, point: SavePoint, record: Path | None, console: Console) -> None:
+    """The world brought to the save point; the run's record names it (``fork.json``)."""
+    resimulate_shown(model, data, cfg, point, console)
+    if record is not None:
+        record.mkdir(parents=True, exist_ok=True)
+        write_output(record / FORK_FILE, point.as_json(), "fork point")
+    console.print(f"forked from {point.record} at step {point.seq} ({point.time:.1f} s)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -125,6 +140,7 @@ def run(args: argparse.Namespace) -> int:
     console = Console(stderr=args.json)
     out = Path(args.out)
     record = None if args.no_record else new_session_dir(cfg, args.config)
+    point = read_save(Path(args.fork).expanduser()) if args.fork else None
     local = args.render == "local" or (args.render is None and cfg.render.processes == "local")
     renderers = RenderProcesses(cfg, args.config, out, args.frames_every) if local else None
     rendered = []
@@ -137,6 +153,8 @@ def run(args: argparse.Namespace) -> int:
                 model = build_world(cfg, args.config)
                 warm_up(model, cfg)
                 data = start_world(model, cfg)
+            if point is not None:
+                _fork(model, data, cfg, point, record, console)
             stats, last, links, alarms, control, station = _loop(cfg, args, rate, model, data, publisher, renderers, record,
                                                         console, traffic)
         finally:
@@ -150,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
         "video": [r["video"] for r in rendered if "video" in r],
         "panorama": [r["panorama"] for r in rendered if "panorama" in r],
         "record": str(record) if record else None, "console": run_console.summary(), "control": control,
-        "instructor": station,
+        "instructor": station, "forked_from": {"record": point.record, "step": point.seq} if point else None,
     }
     try:  # a finished run's summary is never lost to a plotting error
         summary["plot"] = str(plot_run(stats, out / "run.png"))

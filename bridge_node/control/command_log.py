@@ -1,5 +1,5 @@
-"""The session record's ``commands.log``: every instructor command the world applied, one
-JSON line each, with the step it was applied at (``WorldEvents.seq``) and the simulated
+"""The session record's ``commands.log``: every instructor command the node (a link fault,
+a save point) and the world applied, one JSON line each, with the step it was applied at (``WorldEvents.seq``) and the simulated
 time, in the world's own terms (SI, exactly as applied), so that a replay of the record
 applies the same commands at the same steps. Lines are written and flushed as they come
 (commands are rare, and a crash must not lose one); a torn last line is skipped on reading.
@@ -10,7 +10,7 @@ import json
 from collections import Counter
 from pathlib import Path
 
-from bridge_node.control.commands import CommandError, command_from_record, command_record
+from bridge_node.control.commands import CommandError, NodeCommand, command_from_record, command_record
 from bridge_node.exercise.tick import StepListener, TickOutcome
 from bridge_node.links.record_reader import complete_lines
 from bridge_node.links.session_record import cut_torn_tail
@@ -29,10 +29,11 @@ class CommandLog(StepListener):
 
     def on_step(self, outcome: TickOutcome) -> None:
         events = outcome.events
-        for command in events.commands:
+        applied = (*outcome.node_commands, *events.commands)
+        for command in applied:
             self._file.write(json.dumps({"seq": events.seq, "time": events.time,
                                          "command": command_record(command)}) + "\n")
-        if events.commands:
+        if applied:
             self._file.flush()
 
     def stop(self) -> None:
@@ -40,11 +41,11 @@ class CommandLog(StepListener):
             self._file.close()
 
 
-def read_commands(path: Path) -> tuple[dict[int, list[Command]], Counter]:
+def read_commands(path: Path) -> tuple[dict[int, list[Command | NodeCommand]], Counter]:
     """The commands of a ``commands.log`` by the step they were applied at, and counts of
     torn and malformed lines."""
     lines, counts = complete_lines(path)
-    by_step: dict[int, list[Command]] = {}
+    by_step: dict[int, list[Command | NodeCommand]] = {}
     for line in lines:
         try:
             entry = json.loads(line)

@@ -19,6 +19,11 @@ units of the bridge (degrees, knots, metres, UTC):
 ``sensor_failure``        ``sensor`` and ``mode``: ``gyro`` ``ok``, ``frozen`` or ``offset``
                           (with ``offset_deg``); ``gnss`` ``ok``, ``lost`` or ``jumping``
                           (``jump_m``, default 200); ``log`` ``ok`` or ``frozen``
+``link_fault``            ``link`` (a link's name), ``fault``: ``none`` (cleared),
+                          ``disconnect``, ``drop``, ``corrupt``, ``duplicate``, ``delay``
+                          (``delay_s``); ``probability`` (default 1)
+``save``                  ``name``: the exercise's state now, a save point in the session
+                          record's ``saves/NAME.json`` (``icebridge run --fork`` it)
 ``add_vessel``            ``mmsi``, ``name``, ``length_m``, ``beam_m``, a position (as
                           ``reposition``), ``course_deg``, ``speed_kn``
 ``move_vessel``           ``mmsi`` and a position
@@ -42,7 +47,9 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
 
+from bridge_node.exercise.save_point import SAVE_NAME, SaveRequest
 from bridge_node.links.ais import SIX_BIT_TEXT
+from bridge_node.links.faults import LINK_FAULT_KINDS, LinkFault
 from sim_core.frames.geodesy import geodetic_to_local
 from sim_core.frames.units import KNOT
 from sim_core.instructor import (
@@ -250,13 +257,42 @@ class SensorFailureCommand(_Command):
         return SensorFailure(self.sensor, self.mode)
 
 
+class LinkFaultCommand(_Command):
+    command: Literal["link_fault"]
+    link: str = Field(min_length=1, max_length=64)
+    fault: Literal[LINK_FAULT_KINDS]
+    probability: float = Field(1.0, ge=0.0, le=1.0)
+    delay_s: float | None = Field(None, gt=0.0, le=10.0)
+
+    @model_validator(mode="after")
+    def _delay_with_delay(self) -> LinkFaultCommand:
+        if (self.fault == "delay") != (self.delay_s is not None):
+            raise ValueError("delay_s (0 to 10 s) goes with fault delay, and only there")
+        return self
+
+    def to_world(self, model: WorldModel, data: WorldData) -> LinkFault:
+        """The fault, seeded with the step that applies it (a replay draws the same)."""
+        return LinkFault(self.link, self.fault, self.probability, self.delay_s or 0.0, data.seq + 1)
+
+
+class SaveCommand(_Command):
+    command: Literal["save"]
+    name: str = Field(pattern=SAVE_NAME)
+
+    def to_world(self, model: WorldModel, data: WorldData) -> SaveRequest:
+        return SaveRequest(self.name)
+
+
+NodeCommand = LinkFault | SaveRequest  # applied by the node at a tick, not by the world
+NODE_COMMANDS = (LinkFault, SaveRequest)
 WireCommand = Annotated[FreezeCommand | RepositionCommand | VisibilityCommand | ClockCommand | WindCommand |
                         CurrentCommand | SteeringFailureCommand | EngineFailureCommand | SensorFailureCommand |
-                        AddVesselCommand | MoveVesselCommand | SteerVesselCommand | RemoveVesselCommand,
-                        Field(discriminator="command")]
+                        AddVesselCommand | MoveVesselCommand | SteerVesselCommand | RemoveVesselCommand |
+                        LinkFaultCommand | SaveCommand, Field(discriminator="command")]
 _WIRE = TypeAdapter(WireCommand)
 COMMAND_NAMES = ("freeze", "resume", "reposition", "visibility", "clock", "wind", "current", "steering_failure",
-                 "engine_failure", "sensor_failure", "add_vessel", "move_vessel", "steer_vessel", "remove_vessel")
+                 "engine_failure", "sensor_failure", "link_fault", "save", "add_vessel", "move_vessel", "steer_vessel",
+                 "remove_vessel")
 
 
 def parse_command(message: dict) -> WireCommand:
@@ -282,16 +318,17 @@ def _explain(error: dict) -> str:
 # -- the applied commands as records (session record, state stream) -----------------------
 _ENVIRONMENT_FIELDS = {"visibility", "wind_speed", "wind_from", "current_speed", "current_to"}
 _TYPES = {cls.__name__: cls for cls in (Freeze, Reposition, SetEnvironment, SetClock, SteeringFailure,
-                                        EngineFailure, SensorFailure, AddVessel, MoveVessel, SteerVessel, RemoveVessel)}
+                                        EngineFailure, SensorFailure, AddVessel, MoveVessel, SteerVessel, RemoveVessel,
+                                        LinkFault, SaveRequest)}
 
 
-def command_record(command: Command) -> dict:
-    """An applied world command as a JSON-able dict (SI values, exactly as applied)."""
+def command_record(command: Command | NodeCommand) -> dict:
+    """An applied world or node command as a JSON-able dict (SI values, exactly as applied)."""
     return {"type": type(command).__name__, **dataclasses.asdict(command)}
 
 
-def command_from_record(record: dict) -> Command:
-    """The world command a record holds; CommandError for one that is not."""
+def command_from_record(record: dict) -> Command | NodeCommand:
+    """The world or node command a record holds; CommandError for one that is not."""
     try:
         cls = _TYPES[record["type"]]
         fields = {k: v for k, v in record.items() if k != "type"}
@@ -303,8 +340,9 @@ def command_from_record(record: dict) -> Command:
         numbers = [v for v in _leaves(dataclasses.asdict(command)) if isinstance(v, float)]
         if not all(math.isfinite(v) for v in numbers) or \
                 cls is SetEnvironment and not {k for k, _ in command.changes} <= _ENVIRONMENT_FIELDS or \
-                cls is SensorFailure and command.mode not in SENSOR_MODES.get(command.sensor, ()):
-            raise ValueError("a value that is not finite, a field the environment lacks, or a sensor mode unknown")
+                cls is SensorFailure and command.mode not in SENSOR_MODES.get(command.sensor, ()) or \
+                cls is LinkFault and (command.kind not in LINK_FAULT_KINDS or not 0.0 <= command.probability <= 1.0):
+            raise ValueError("a value that is not finite, a field the environment lacks, or a kind unknown")
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise CommandError(f"not a command record: {record!r:.200} ({exc})") from None
     return command

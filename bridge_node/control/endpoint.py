@@ -19,13 +19,22 @@ import json
 import threading
 import time
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from pathlib import Path
 
 import zmq
 
-from bridge_node.control.commands import MAX_COMMAND_BYTES, CommandError, parse_command
+from bridge_node.control.commands import (
+    MAX_COMMAND_BYTES,
+    CommandError,
+    LinkFaultCommand,
+    SaveCommand,
+    WireCommand,
+    parse_command,
+)
 from bridge_node.control.queue import CommandQueue
 from bridge_node.control.settings import ControlSettings
+from bridge_node.exercise.save_point import SAVES_FOLDER
 from bridge_node.node.errors import UserError
 
 MAX_MESSAGE_BYTES = 65536  # ZeroMQ drops larger messages, and the connection of their sender
@@ -38,8 +47,11 @@ class ControlEndpoint:
     """Serves the control endpoint while started; ``status()`` gives the exercise's state
     for status requests. A context manager; stopping twice is safe."""
 
-    def __init__(self, settings: ControlSettings, queue: CommandQueue, status: Callable[[], dict]) -> None:
+    def __init__(self, settings: ControlSettings, queue: CommandQueue, status: Callable[[], dict],
+                 links: Sequence[str] = (), record: Path | None = None) -> None:
         self.settings, self.queue, self.status = settings, queue, status
+        self.links, self.record = tuple(links), record  # the links' names; the session record's folder
+        self._save_names: set[str] = set()  # save points asked for (a file is written at its tick)
         self.token = settings.access_token()
         if settings.allow_network and self.token is None:
             raise UserError("control.allow_network = true needs an access token: set control.token or the "
@@ -122,9 +134,27 @@ class ControlEndpoint:
     def _command(self, message: object) -> dict:
         try:
             command = parse_command(message)
+            extra = self._node_check(command)
         except CommandError as exc:
             return self._refuse("invalid", str(exc))
         if not self.queue.put(command):
             return self._refuse("busy", f"{self.queue.capacity} commands already wait for the physics; refused")
         self.counts["accepted"] += 1
-        return {"ok": True, "queued": command.command}
+        return {"ok": True, "queued": command.command, **extra}
+
+    def _node_check(self, command: WireCommand) -> dict:
+        """What a command to the node needs of this node (a link it has, a record to save
+        in); CommandError if it is not there. Returns what the reply adds (a save's path)."""
+        if isinstance(command, LinkFaultCommand) and command.link not in self.links:
+            raise CommandError(f"link = {json.dumps(command.link)}: no such link; the node's links: "
+                               f"{', '.join(self.links) or 'none'}")
+        if not isinstance(command, SaveCommand):
+            return {}
+        if self.record is None:
+            raise CommandError("save: this run keeps no session record (--no-record): there is nothing to "
+                               "re-simulate a save point from")
+        path = self.record / SAVES_FOLDER / f"{command.name}.json"
+        if path.exists() or command.name in self._save_names:
+            raise CommandError(f"name = {json.dumps(command.name)}: the save point {path} exists already")
+        self._save_names.add(command.name)
+        return {"path": str(path.resolve())}

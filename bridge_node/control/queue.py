@@ -7,7 +7,7 @@ from collections import deque
 from collections.abc import Sequence
 from typing import Protocol
 
-from bridge_node.control.commands import WireCommand
+from bridge_node.control.commands import NodeCommand, WireCommand
 from sim_core.instructor import Command
 from sim_core.world import WorldData, WorldModel
 
@@ -19,8 +19,8 @@ class CommandSource(Protocol):
     """Where a tick's instructor commands come from (the control endpoint's queue, a
     session record in a replay)."""
 
-    def take(self, model: WorldModel, data: WorldData) -> tuple[Command, ...]:
-        """The world commands for the step about to be taken."""
+    def take(self, model: WorldModel, data: WorldData) -> tuple[Command | NodeCommand, ...]:
+        """The world's and the node's commands for the step about to be taken."""
 
 
 class CommandQueue:
@@ -39,8 +39,8 @@ class CommandQueue:
             self._waiting.append(command)
             return True
 
-    def take(self, model: WorldModel, data: WorldData) -> tuple[Command, ...]:
-        """At most ``per_tick`` commands, oldest first, as world commands made against the
+    def take(self, model: WorldModel, data: WorldData) -> tuple[Command | NodeCommand, ...]:
+        """At most ``per_tick`` commands, oldest first, as world (or node) commands made against the
         world as it is now (a time of day keeps today's date; a position is placed on the
         field)."""
         with self._lock:

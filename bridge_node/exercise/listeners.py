@@ -1,17 +1,58 @@
 """The listeners a tick's outcome goes to, in one place: the links (alarm changes raised,
 the ship's state out), the state stream (the render processes, the instructor station),
 and, in a replay, the links run on the source's clock with the console's orders ignored.
-The session record's tick log is ``bridge_node.node.tick_record.TickRecord``."""
+The session record's tick log is ``bridge_node.node.tick_record.TickRecord``; its save
+points are written by ``SaveWriter``."""
 from __future__ import annotations
 
+import logging
+import threading
 import time
+from pathlib import Path
 
+from bridge_node.exercise.save_point import SAVES_FOLDER, SavePoint, state_of
 from bridge_node.exercise.tick import StepListener, TickOutcome
 from bridge_node.links.base import Vessel
 from bridge_node.links.hub import LinkHub
+from bridge_node.node.errors import UserError
+from bridge_node.node.output_files import write_output
 from bridge_node.stream.publisher import StatePublisher
 from bridge_node.traffic.picture import TrafficPicture
 from sim_core.frames.geodesy import local_to_geodetic
+
+
+log = logging.getLogger(__name__)
+
+
+class SaveWriter(StepListener):
+    """Writes the save points asked for (``SaveRequest``) into the session record's
+    ``saves/`` folder, on a thread of their own (the tick never waits for the disk)."""
+
+    def __init__(self, record: Path) -> None:
+        self.record = Path(record)
+        self._writers: list[threading.Thread] = []
+
+    def on_step(self, outcome: TickOutcome) -> None:
+        events = outcome.events
+        for request in outcome.saves:
+            point = SavePoint(str(self.record.resolve()), events.seq, events.time, state_of(events))
+            path = self.record / SAVES_FOLDER / f"{request.name}.json"
+            writer = threading.Thread(target=self._write, args=(path, point.as_json()), name="icebridge-save")
+            writer.start()
+            self._writers.append(writer)
+
+    @staticmethod
+    def _write(path: Path, text: str) -> None:
+        try:
+            path.parent.mkdir(exist_ok=True)
+            write_output(path, text, "save point")
+            log.info("save point %s written", path)
+        except (OSError, UserError) as exc:
+            log.error("save point %s not written: %s", path, exc)
+
+    def stop(self) -> None:
+        for writer in self._writers:
+            writer.join()
 
 
 class LinkOutputs(StepListener):

@@ -1,9 +1,10 @@
 """One tick for every mode, fanned out as python-can's ``Notifier`` fans out to ``Listener``.
 
-A tick takes the orders of its step from one ``OrderSource`` (the live links and their
-arbiter, a session record's links fed from the record, a track log) and the instructor's
-commands from one ``CommandSource`` (the control endpoint's queue, a session record),
-steps the world by dt with them (the commands applied first, at the step's start), notes
+A tick takes the instructor's commands from one ``CommandSource`` (the control endpoint's
+queue, a session record) and the orders of its step from one ``OrderSource`` (the live
+links and their arbiter, a session record's links fed from the record, a track log); the
+commands to the node act first (a fault put on a link before it is polled, a save point
+asked for), then the world steps by dt (its commands applied at the step's start), notes
 the orders the ship refused, and hands one ``TickOutcome`` (the step's ``WorldEvents``, the
 orders, every alarm change of the step, the tick's clock) to its listeners: link outputs,
 the state stream, the session record, the status line, the traffic picture. ``run``, ``links monitor``, ``replay`` of a track and of a session all
@@ -18,7 +19,10 @@ from typing import Protocol
 
 from bridge_node.control.queue import CommandSource
 from bridge_node.links.arbiter import Decision
+from bridge_node.control.commands import NODE_COMMANDS, NodeCommand
+from bridge_node.exercise.save_point import SaveRequest
 from bridge_node.links.base import Alarm
+from bridge_node.links.faults import LinkFault
 from bridge_node.node.order_refusals import OrderRefusals
 from sim_core.world import Controls, WorldData, WorldEvents, WorldModel, step
 
@@ -29,6 +33,10 @@ class OrderSource(Protocol):
     def poll(self, now: float) -> Decision:
         """The orders for the step about to be taken at ``now`` (the source's clock, s), and
         the alarm changes they bring (not yet raised)."""
+
+    def fault_link(self, fault: LinkFault, now: float) -> None:
+        """Put the instructor's fault on a link (only the live links are given one: a
+        replay's source applies the recorded faults itself)."""
 
 
 @dataclass(frozen=True)
@@ -44,6 +52,12 @@ class TickOutcome:
     now: float
     input_time: float | None
     send: bool = True
+    node_commands: tuple[NodeCommand, ...] = ()  # the instructor's commands to the node applied at the tick
+
+    @property
+    def saves(self) -> list[SaveRequest]:
+        """The save points asked for at this tick."""
+        return [c for c in self.node_commands if isinstance(c, SaveRequest)]
 
 
 class StepListener:
@@ -88,13 +102,17 @@ class ExerciseTick:
     def __call__(self, dt: float, now: float, send: bool = True) -> TickOutcome:
         """One tick of dt s at ``now`` (the source's clock, s); ``send`` False: a step run
         ahead, whose outputs do not go out (its alarm changes still do)."""
+        taken = self.commands.take(self.model, self.data) if self.commands is not None else ()
+        node = tuple(c for c in taken if isinstance(c, NODE_COMMANDS))
+        for fault in (c for c in node if isinstance(c, LinkFault)):
+            self.orders.fault_link(fault, now)
         decision = self.orders.poll(now)
-        commands = self.commands.take(self.model, self.data) if self.commands is not None else ()
         for listener in self.listeners:
             listener.on_polled(self.data.seq, now)
-        events = step(self.model, self.data, dt, decision.controls, commands)
+        events = step(self.model, self.data, dt, decision.controls,
+                      tuple(c for c in taken if not isinstance(c, NODE_COMMANDS)))
         alarms = (*decision.alarms, *self.refusals.note(events.rejected, now))
-        outcome = TickOutcome(events, decision.controls, alarms, now, decision.input_time, send)
+        outcome = TickOutcome(events, decision.controls, alarms, now, decision.input_time, send, node)
         for listener in self.listeners:
             listener.on_step(outcome)
         return outcome

@@ -28,6 +28,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, ClassVar
 
+from bridge_node.links.faults import FaultyLine, LinkFault
 from sim_core.ship.orders import OrderKind
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.ship.searchlights import MAX_SEARCHLIGHTS, SearchlightOrder
@@ -133,10 +134,12 @@ class LinkHealth:
     opening: bool = False  # the device is being opened on the worker thread
     errors: Counter = field(default_factory=Counter)  # kind -> count
     last_error: str = ""  # why the device last failed, in the OS's or the library's own words
+    fault: str | None = None  # the instructor's fault on the link (``bridge_node.links.faults``), if any
 
     def as_dict(self) -> dict:
         return {"name": self.name, "connected": self.connected, "inputs": self.inputs, "outputs": self.outputs,
-                "reconnects": self.reconnects, "opening": self.opening, "errors": dict(self.errors), "last_error": self.last_error}
+                "reconnects": self.reconnects, "opening": self.opening, "errors": dict(self.errors),
+                "last_error": self.last_error, "fault": self.fault}
 
 
 def device_error_texts(exc: BaseException) -> tuple[str, list[str]]:
@@ -359,6 +362,7 @@ class Link(ABC):
         self._opener: _Opener | None = None  # the device being opened
         self._failed = False  # a real failure since the link was last up
         self._down_reasons: list[str] = []  # short forms of why the device last failed
+        self._fault: FaultyLine | None = None  # the instructor's fault on the link
 
     def open(self, wait: float | None = OPEN_WAIT_S) -> None:
         """Open the device (on the opener's thread), waiting up to ``wait`` s for it (None:
@@ -408,6 +412,8 @@ class Link(ABC):
         if not self._active:
             return []
         if self.device is None:
+            if self._fault is not None and self._fault.disconnects:
+                return []
             if self._opener is None and self._backoff.ready(now):
                 self._health.reconnects += 1
                 self._start_open()
@@ -424,8 +430,29 @@ class Link(ABC):
         except self.lost_errors as exc:
             self._note_failure(exc, "lost")
             self._lost(now)
+        if self._fault is not None:
+            inputs = self._fault.orders(inputs, now, self._count_error)
+            self._fault = None if self._fault.over else self._fault
         self._health.inputs += len(inputs)
         return inputs
+
+    def set_fault(self, fault: LinkFault, now: float) -> None:
+        """Put the instructor's ``fault`` on the link (kind "none": clear it) at ``now`` (s);
+        a disconnect closes the device until the fault is cleared. Orders a delay holds
+        still come, when due, after the fault changes."""
+        line = FaultyLine(fault)
+        line.held = self._fault.held if self._fault is not None else []
+        self._fault = None if line.over else line
+        self._health.fault = None if fault.kind == "none" else fault.kind
+        if fault.kind != "disconnect" or not self._active:
+            return
+        if self._opener is not None:
+            self._opener.abandon()
+            self._opener, self._health.opening = None, False
+        if self.device is not None:
+            self._lost(now, "fault_disconnect")
+        self._failed, self._health.connected = True, False
+        self._down_reasons = ["disconnected by the instructor"]
 
     @abstractmethod
     def publish(self, state: ShipOutputs, now: float) -> None:

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from bridge_node.links.arbiter import Decision, OrderArbiter
 from bridge_node.links.base import OPEN_WAIT_S, Alarm, ControlInput, Link, Listener
+from bridge_node.links.faults import LinkFault
 from bridge_node.links.registry import make_link
 from bridge_node.links.session_record import SessionRecord
 from bridge_node.links.settings import ArbitrationSettings, LinkSettings
@@ -114,6 +115,12 @@ class LinkHub:
                 self._down.symmetric_difference_update({number})
                 decision.alarms.append(Alarm(number, link.down_text() if down else f"link {link.name} up", down))
         return decision
+
+    def fault_link(self, fault: LinkFault, now: float) -> None:
+        """Put the instructor's ``fault`` on the link it names (none: nothing)."""
+        for link in self.links:
+            if link.name == fault.link:
+                link.set_fault(fault, now)
 
     def raise_alarm(self, alarm: Alarm, now: float) -> None:
         """Raise (``alarm.active``) or clear an alarm; it is announced at the next ``publish``."""

@@ -31,7 +31,7 @@ import numpy as np
 
 from bridge_node.control.command_log import CommandLog
 from bridge_node.control.queue import CommandSource
-from bridge_node.exercise.listeners import LinkOutputs, WorldTraffic
+from bridge_node.exercise.listeners import LinkOutputs, SaveWriter, WorldTraffic
 from bridge_node.exercise.pacer import Pacer
 from bridge_node.exercise.tick import ExerciseTick, StepListener, TickOutcome
 from bridge_node.links.hub import LinkHub
@@ -142,13 +142,13 @@ def live_tick(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float,
               listeners: Sequence[StepListener | Callable[[TickOutcome], None]] = (),
               commands: CommandSource | None = None) -> ExerciseTick:
     """The tick of a live exercise: orders from the hub's links, the instructor's
-    ``commands``, outcomes to the session record's tick and command logs (where the hub
-    records), the links, then ``listeners``."""
+    ``commands``, outcomes to the session record's tick and command logs and its save
+    points (where the hub records), the links, then ``listeners``."""
     records = []
     if hub.record is not None:
         ticks = TickRecord(hub.record.folder, 1.0 / rate_hz)
         hub.add_listener(ticks)  # it counts the links' reads; stopped with the hub's other listeners
-        records = [ticks, CommandLog(hub.record.folder)]
+        records = [ticks, CommandLog(hub.record.folder), SaveWriter(hub.record.folder)]
     return ExerciseTick(model, data, hub, [*records, WorldTraffic(hub.traffic, model.origin), LinkOutputs(hub),
                                           *listeners], commands)
 

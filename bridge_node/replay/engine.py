@@ -122,7 +122,7 @@ class ReplayStats:
         return path
 
 
-class _StepOrders:
+class StepOrders:
     """A replay source as the tick's order and command source: ``clock`` reads step k's
     inputs and returns its clock, then ``poll`` and ``take`` hand the tick its orders and
     commands, and it moves on to step k+1."""
@@ -148,7 +148,7 @@ class _StepOrders:
 
 
 def _stats_listener(stats: ReplayStats, model: WorldModel, data: WorldData,
-                    orders: _StepOrders) -> Callable[[TickOutcome], None]:
+                    orders: StepOrders) -> Callable[[TickOutcome], None]:
     """A listener adding each step to ``stats`` (logged time at the step's end)."""
     source = orders.source
 
@@ -181,7 +181,7 @@ def run_replay(model: WorldModel, data: WorldData, source: Source, playback: Pla
     is called about every 0.2 s of wall time (and while paused) and returns the keys
     pressed since."""
     stats = ReplayStats()
-    orders = _StepOrders(source)
+    orders = StepOrders(source)
     links = ReplayLinkOutputs(hub) if hub is not None else None
     world_traffic = WorldTraffic(hub.traffic, model.origin) if hub is not None else None
     stream = StreamOutput(publisher, hub.traffic if hub else None, model.origin) if publisher is not None else None

@@ -21,8 +21,10 @@ from pathlib import Path
 import can
 
 from bridge_node.control.command_log import COMMANDS_FILE, read_commands
+from bridge_node.control.commands import NODE_COMMANDS
 from bridge_node.links.base import Alarm, ControlInput, Link
 from bridge_node.links.can_link import CanLink
+from bridge_node.links.faults import LinkFault
 from bridge_node.links.hub import LinkHub
 from bridge_node.links.modbus_link import register_order
 from bridge_node.links.nmea_link import NmeaLink
@@ -50,7 +52,7 @@ class RecordedSession:
     inputs: list[dict[str, list]]
     exact: bool
     bad: Counter = field(default_factory=Counter)
-    commands: dict[int, list[Command]] = field(default_factory=dict)  # step -> instructor commands applied
+    commands: dict[int, list] = field(default_factory=dict)  # step -> instructor commands applied (world's, node's)
 
     @property
     def reads(self) -> Counter:
@@ -203,9 +205,12 @@ class SessionSource:
 
     def _feed(self, tick: Tick, inputs: dict[str, list]) -> None:
         by_name = {link.name: link for link in self.links}
+        for link in self.links:  # one reopened after a fault: opened before it is fed, as the run's was read
+            if link.device is None:
+                link.await_open(None)
         for record in inputs["nmea0183"]:
             link = by_name.get(record.link)
-            if isinstance(link, NmeaLink):
+            if isinstance(link, NmeaLink) and link.device is not None:
                 link.device.port.write((record.sentence + "\r\n").encode("ascii", errors="replace"))
         for msg in inputs["can"]:  # the frame's link by its recorded channel, else the first CAN link
             link = self._can_channels.get(str(msg.channel), next(iter(self._can_channels.values()), None))
@@ -221,14 +226,19 @@ class SessionSource:
         return self.session.ticks[k].unix
 
     def commands(self, k: int) -> tuple[Command, ...]:
-        """The instructor's commands the recorded run applied at tick k's step."""
-        return tuple(self.session.commands.get(self.session.ticks[k].seq + 1, ()))
+        """The instructor's commands the recorded run's world applied at tick k's step."""
+        return tuple(c for c in self._applied(k) if not isinstance(c, NODE_COMMANDS))
+
+    def _applied(self, k: int) -> list:
+        return self.session.commands.get(self.session.ticks[k].seq + 1, [])
 
     def inputs(self, k: int) -> tuple[Controls, list[Alarm], float]:
         """Tick k: its inputs read by the links, the orders arbitrated; returns the
         controls for the step, the alarm changes and the tick's clock (monotonic s)."""
         tick = self.session.ticks[k]
         now = tick.monotonic
+        for fault in (c for c in self._applied(k) if isinstance(c, LinkFault)):  # as the run put them, before its poll
+            self.hub.fault_link(fault, now)
         self._feed(tick, self.session.inputs[k])
         decision = self.hub.poll(now)
         for bus in self.feeds.values():  # what the CAN links sent (address claims): not needed
