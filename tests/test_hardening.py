@@ -15,7 +15,7 @@ import can
 import psutil
 import pytest
 import tomli_w
-from conftest import REPO, exercise_toml, run_cli
+from conftest import REPO, exercise_toml, fuzz_budget, run_cli
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from links_helpers import console_frame
@@ -165,11 +165,11 @@ def paths_of(node, prefix=()):
         yield from paths_of(value, prefix + (key,))
 
 
-MUTANTS = int(os.environ.get("ICEBRIDGE_MUTANTS", "2000"))  # more for an exploring run
+MUTANTS = fuzz_budget(2000)  # more for an exploring run
 
 
 @settings(max_examples=MUTANTS, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture],
-          derandomize=MUTANTS == 2000)  # the suite's run is the same every time; exploring runs are random
+          )
 @given(st.sampled_from([DEFAULT_CONFIG, CONSOLE]), st.data())
 def test_mutated_configs_are_clean_errors_or_valid_configs(tmp_path, seed, data):
     doc = tomllib.loads(seed.read_text())

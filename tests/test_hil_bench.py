@@ -136,6 +136,19 @@ def test_modbus_bad_replies_over_tcp(node_toml, tmp_path):
     assert len(reads) == primary["inputs"] + primary["errors"]["out_of_range"]
 
 
+def test_scenarios_of_other_link_kinds_get_their_own_bench_in_one_command(node_toml, tmp_path):
+    """Issue 30, item 10: a scenario names the link kinds it needs, and one ``hil run`` gives
+    each its bench (here a CAN bus-off and a Modbus server's bad replies)."""
+    junit = tmp_path / "hil.xml"
+    r = hil_run(SCENARIOS / "can_bus_off.toml", SCENARIOS / "modbus_bad_replies.toml", "--node-config", node_toml,
+                "--junit", junit, out=tmp_path / "out")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "starting the node (can console" in r.stdout and "starting the node (modbus console" in r.stdout
+    suites = ET.parse(junit).getroot()
+    assert suites.attrib["failures"] == "0"
+    assert [s.attrib["name"] for s in suites] == ["CAN bus-off and recovery", "Modbus bad replies"]
+
+
 def test_the_session_record_folder_is_not_doubled_for_a_relative_run_folder(tmp_path, monkeypatch):
     """``hil run`` names its run folder relative to the working directory; the node reads a
     relative ``paths.session_dir`` from its config's folder, which is that run folder, so the

@@ -51,7 +51,10 @@ def test_cli_errors_are_one_clear_line(tmp_path):
     r = run_cli("hil", "run", str(bad), "--out", str(tmp_path / "out"))
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert f"{bad}:10: expect.0.quantity = 'rudder'" in r.stderr and "rudder_angle" in r.stderr
-    handover = str(REPO / "config" / "scenarios" / "arbitration_handover.toml")
+    handover = tmp_path / "handover_any_kinds.toml"  # the shipped one without its kinds: --links decides
+    handover.write_text("\n".join(line for line in (REPO / "config" / "scenarios" / "arbitration_handover.toml")
+                                   .read_text().splitlines() if not line.startswith("kinds")))
+    handover = str(handover)
     cases = [(["hil", "run", handover], "needs a backup end; give --links PRIMARY,BACKUP"),
              (["hil", "run", handover, "--links", "can,lin"], "--links 'can,lin'")]
     cfg = tmp_path / "console.toml"
@@ -124,3 +127,14 @@ def test_console_config_roles_are_unique(tmp_path):
     '''))
     with pytest.raises(ConfigError, match="role.s. .'primary'. given twice"):
         load_console_config(cfg)
+
+
+def test_a_scenarios_link_kinds_are_one_per_link(tmp_path):
+    path = tmp_path / "kinds.toml"
+    path.write_text('name = "kinds"\nlinks = ["primary"]\nkinds = ["can", "nmea"]\n\n'
+                    '[[expect]]\nafter_s = 0.0\nwithin_s = 1.0\nalarm = 101\n')
+    with pytest.raises(ConfigError, match="give one link kind for each of links"):
+        load_scenario(path)
+    path.write_text(path.read_text().replace('["can", "nmea"]', '["lin"]'))
+    with pytest.raises(ConfigError, match="kinds.0 = 'lin'"):
+        load_scenario(path)

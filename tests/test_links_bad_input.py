@@ -4,6 +4,7 @@ import math
 import time
 
 import can
+from conftest import fuzz_budget
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
@@ -33,19 +34,19 @@ def outcome(line: str):
     return out
 
 
-@settings(max_examples=3000, deadline=None)
+@settings(max_examples=fuzz_budget(3000), deadline=None)
 @given(st.text(max_size=120))
 def test_random_text_is_an_order_or_a_counted_error(text):
     outcome(text)
 
 
-@settings(max_examples=2000, deadline=None)
+@settings(max_examples=fuzz_budget(2000), deadline=None)
 @given(st.binary(max_size=100))
 def test_random_bytes_as_received_never_crash(data):
     outcome(data.decode("ascii", errors="replace"))
 
 
-@settings(max_examples=2000, deadline=None)
+@settings(max_examples=fuzz_budget(2000), deadline=None)
 @given(st.sampled_from(ORDERS), st.integers(0, 80), st.integers(0, 80), st.characters())
 def test_truncated_or_corrupted_orders_are_rejected(line, cut, where, char):
     truncated = line[:cut]
@@ -60,7 +61,7 @@ def test_truncated_or_corrupted_orders_are_rejected(line, cut, where, char):
         assert isinstance(result, str) or corrupted.upper() == line.upper()
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=fuzz_budget(300), deadline=None)
 @given(st.sampled_from(["-nan", "nan", "inf", "1e400", "-1e400"]))
 def test_nan_and_infinite_fields_are_rejected(value):
     assert outcome(str(ROR("RC", "ROR", (value, "A", "", "V", "B")))) in ("bad_field", "out_of_range")
@@ -97,7 +98,7 @@ def decoded_or_one_error(msg: can.Message) -> list[ControlInput]:
     return out
 
 
-@settings(max_examples=3000, deadline=None)
+@settings(max_examples=fuzz_budget(3000), deadline=None)
 @given(st.integers(0, 0x1FFFFFFF), st.binary(max_size=8), st.booleans(), st.booleans())
 @example(0xEA0000, b"\x00\x00\x00", True, False)  # an ISO request: answered, neither order nor error
 def test_random_can_frames_are_orders_or_counted(can_id, data, extended, error_frame):
@@ -105,13 +106,13 @@ def test_random_can_frames_are_orders_or_counted(can_id, data, extended, error_f
                                      is_extended_id=extended, is_error_frame=error_frame))
 
 
-@settings(max_examples=2000, deadline=None)
+@settings(max_examples=fuzz_budget(2000), deadline=None)
 @given(st.sampled_from([0xFF50, 0xFF51, 127245]), st.binary(max_size=8), st.integers(0, 0xFF))
 def test_console_pgns_with_any_payload_are_orders_or_counted(pgn, data, source):
     decoded_or_one_error(can.Message(arbitration_id=identifier(6, pgn, source), data=data, is_extended_id=True))
 
 
-@settings(max_examples=2000, deadline=None)
+@settings(max_examples=fuzz_budget(2000), deadline=None)
 @given(st.integers(0, 0xFFFF), st.sampled_from(["rudder", "lever", "telegraph"]), st.sampled_from(["int16", "uint16"]),
        st.floats(1e-6, 10) | st.floats(-10, -1e-6))  # every scale the config allows, in that range
 def test_any_register_value_is_an_order_or_an_error_kind(raw, order, kind, scale):
@@ -120,7 +121,7 @@ def test_any_register_value_is_an_order_or_an_error_kind(raw, order, kind, scale
     assert out in ("out_of_range", "bad_field") or isinstance(out, ControlInput)
 
 
-@settings(max_examples=500, deadline=None)
+@settings(max_examples=fuzz_budget(500), deadline=None)
 @given(st.binary(min_size=9, max_size=223), st.integers(0, 7))
 def test_fast_packet_frames_carry_the_payload(payload, seq):
     frames = fast_packet_frames(payload, seq)

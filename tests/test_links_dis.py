@@ -12,7 +12,7 @@ import zlib
 
 import numpy as np
 import pytest
-from conftest import free_port
+from conftest import free_port, fuzz_budget
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from links_helpers import STATE, node_config, tick, wait_for
@@ -211,7 +211,7 @@ def test_dis_goes_off_the_host_only_when_allowed():
     node_config([{"type": "dis", "name": "dis", "send_to": ["192.168.1.20:3000"], "allow_network": True}])
 
 
-@settings(max_examples=2000, deadline=None)
+@settings(max_examples=fuzz_budget(2000), deadline=None)
 @given(st.binary(max_size=200), st.integers(0, 143), st.integers(0, 255))
 def test_any_datagram_is_a_vessel_or_a_counted_kind(data, where, value):
     """Random datagrams, and real PDUs with one byte changed, never crash the parser."""

@@ -14,10 +14,10 @@ profile in conftest.py draws the same ones each run). Issue 30 asks for 20 000 i
 ``ICEBRIDGE_FUZZ_EXAMPLES=20000 ICEBRIDGE_HYPOTHESIS=explore pytest tests/test_replay_fuzz.py``.
 """
 import math
-import os
 import tempfile
 from pathlib import Path
 
+from conftest import fuzz_budget
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from replay_logs import ais_lines, ais_static, csv_text, gpx_text, nmea_lines, sentence, tick_log, voyage
@@ -32,7 +32,7 @@ from bridge_node.replay.sentences import SentenceLog
 from bridge_node.replay.session import RecordedSession
 from bridge_node.replay.track import TrackLog
 
-EXAMPLES = int(os.environ.get("ICEBRIDGE_FUZZ_EXAMPLES", "200"))
+EXAMPLES = fuzz_budget(200)
 FUZZ = settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 HOSTILE = ["99999", "-9999", "nan", "inf", "-inf", "1e400", "1e308", "-1", "0", "", "360", "511", "91", "181",
            "9" * 30, "9" * 5000, "x" * 140_000, '"', "+24:00", "99999999999", "2023-11-14T22:13:20+99:00",

@@ -3,7 +3,9 @@ judged only from what comes back on the instrument outputs.
 
 Times are seconds from the scenario's start (``at_s``, ``after_s``). Console links are named
 by their role: ``primary`` and ``backup`` give orders (the node's first and second source),
-``panel`` is the instrument and alarm panel (NMEA 0183, listen only). Units as a bench tester
+``panel`` is the instrument and alarm panel (NMEA 0183, listen only). A scenario written for
+some link kinds names them (``kinds``, one per link: can, nmea, modbus), and ``hil run``
+gives it a bench of those kinds; without ``kinds`` it runs over ``--links``. Units as a bench tester
 reads them: deg, rpm, deg/min, deg/s, percent; SI inside (``Expectation.bounds_si``).
 """
 from __future__ import annotations
@@ -21,6 +23,7 @@ from sim_core.ship.searchlights import MAX_SEARCHLIGHTS
 
 ROLES = ("primary", "backup", "panel")
 ORDER_ROLES = ("primary", "backup")
+LINK_KINDS = ("can", "nmea", "modbus")  # what a console end can be (``hil run --links``)
 # quantity -> (unit in scenario files, SI per unit)
 QUANTITIES = {"rudder_angle": ("deg", math.radians(1.0)), "shaft_speed": ("rpm", 1.0 / 60.0),
               "heading": ("deg", math.radians(1.0)), "rate_of_turn": ("deg/min", math.radians(1.0) / 60.0),
@@ -154,12 +157,15 @@ class Scenario(Params):
     description: str = ""
     seed: int = Field(0, ge=0, le=2**32 - 1)
     links: list[Literal[ORDER_ROLES]] = Field(["primary"], min_length=1)
+    kinds: list[Literal[LINK_KINDS]] | None = Field(None, min_length=1, max_length=2)  # per link; None: --links
     actions: list[Action] = Field(default_factory=list)
     faults: list[Fault] = Field(default_factory=list)
     expect: list[Expectation] = Field(min_length=1)
 
     @model_validator(mode="after")
     def _roles(self) -> "Scenario":
+        if self.kinds is not None and len(self.kinds) != len(self.links):
+            raise ValueError(f"kinds = {self.kinds}: give one link kind for each of links = {self.links}")
         for what, items in (("actions", self.actions), ("faults", self.faults)):
             for i, item in enumerate(items):
                 if item.link in ORDER_ROLES and item.link not in self.links:

@@ -107,6 +107,22 @@ def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
     return events, input_time, traffic
 
 
+def _good_record(record: object) -> bool:
+    """Every field of a ship's outputs (or a searchlight's state) of its type: bool flags
+    true or false, numbers finite (not text, not a flag), the lights each good."""
+    for f in dataclasses.fields(record):
+        value = getattr(record, f.name)
+        if f.name == "searchlights":
+            good = isinstance(value, tuple) and all(_good_record(light) for light in value)
+        elif f.type in ("bool", bool):
+            good = isinstance(value, bool)
+        else:
+            good = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+        if not good:
+            return False
+    return True
+
+
 def _check_bounds(events: WorldEvents, input_time: object) -> None:
     """CodecError unless the message fits a view: numbers in range, arrays consistent."""
     p = events.placed
@@ -123,8 +139,7 @@ def _check_bounds(events: WorldEvents, input_time: object) -> None:
         not (np.isfinite(events.floe_pose).all() and np.isfinite(p.corner).all()
              and np.isfinite(events.frozen_floes["pose"]).all()) and "a pose that is not finite",
         not all(math.isfinite(v) for v in (events.time, *events.ice_load)) and "a time or load that is not finite",
-        not all(math.isfinite(v) for v in dataclasses.astuple(events.ship) if isinstance(v, float))
-        and "a ship value that is not finite",
+        not _good_record(events.ship) and "a ship value that is not a finite number, or a flag not true or false",
         input_time is not None and not (isinstance(input_time, float) and math.isfinite(input_time))
         and "an input time that is not a finite number",
         events.ice_load.shape != (3,) and "an ice load of the wrong shape",
