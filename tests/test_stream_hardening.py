@@ -57,7 +57,10 @@ def test_messages_out_of_a_views_bounds_are_codec_errors(world):
                    [TOPIC, b"[" * 100_000 + b"]" * 100_000, *good[2:]],  # nested past the stack
                    _with_header(good, input_time=float("nan")),
                    _with_header(good, environment={"visibility": -1.0}),
-                   _with_header(good, arrays=[["<i8", [2 ** 40]]] * (len(good) - 3))):
+                   _with_header(good, arrays=[["<i8", [2 ** 40]]] * (len(good) - 3)),
+                   _with_header(good, arrays=[["<M8[s]" if k == 14 else d, shape]  # a date array (fuzz found it)
+                                              for k, (d, shape) in enumerate(json.loads(good[1])["arrays"])]),
+                   _with_header(good, ship=json.loads(good[1])["ship"] | {"north": ""})):  # text for a number
         with pytest.raises(CodecError):
             decode(frames)
 

@@ -7,6 +7,7 @@ A user's mistake (bad config, bad argument) prints one clear message and exits w
 from __future__ import annotations
 
 import argparse
+import importlib.metadata
 import signal
 import sys
 from types import ModuleType
@@ -61,8 +62,17 @@ def _add(sub, name: str, module: ModuleType, help_text: str) -> None:
     p.set_defaults(handler=module.run)
 
 
+INTRODUCTION = """IceBridge: a ship-bridge integration node for full-mission ice-navigation simulators. It
+reads the bridge console's helm and engine orders (CAN, NMEA 0183, Modbus), steers a ship
+model through sea ice that breaks as in the reference paper, sends the ship's state to the
+bridge instruments and renders the projector channels. Start with `icebridge run`; the
+documentation is in docs/ (build the site with `mkdocs build`) and README.md."""
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="icebridge", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="icebridge", description=INTRODUCTION,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, (first, second) in COMMANDS.items():
         if isinstance(second, dict):
@@ -73,6 +83,14 @@ def build_parser() -> argparse.ArgumentParser:
         else:
             _add(sub, name, first, second)
     return parser
+
+
+def _version() -> str:
+    """The installed package's version (the source tree's when it is not installed)."""
+    try:
+        return importlib.metadata.version("icebridge")
+    except importlib.metadata.PackageNotFoundError:
+        return "(not installed)"
 
 
 # options naming where a command writes: checked before any work starts

@@ -35,6 +35,7 @@ HEARTBEAT = b"h"  # [HEARTBEAT, b"<seq>"]: the last sequence number published
 _PLACED = [f.name for f in dataclasses.fields(PlacedTiles)]
 _ARRAYS = ("thawed", "frozen", "broken_by_hull", "broken_by_contact", "floe_rows", "floe_pose", "floe_status",
            "ice_load", "frozen_floes")
+FRAME_NAMES = (*_PLACED, *_ARRAYS)  # the array frames, in order, after the header
 _WIRE = {"floe_pose": np.float32, "floe_rows": np.int32, "broken_by_hull": np.int32,
          "broken_by_contact": np.int32, "frozen_floes": FROZEN_FLOE_EVENT}
 
@@ -82,7 +83,10 @@ def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
         specs = header["arrays"]
         if len(specs) != len(_PLACED) + len(_ARRAYS) or len(frames) != 3 + len(specs):
             raise CodecError("wrong number of frames")
-        arrays = [np.frombuffer(f, dtype=np.dtype(d)).reshape(shape) for f, (d, shape) in zip(frames[2:-1], specs)]
+        dtypes = [np.dtype(d) for d, _ in specs]
+        if any(d.kind not in "iufV" or d.hasobject for d in dtypes):  # numbers and raw records only
+            raise CodecError("malformed state message: an array of a type the stream does not carry")
+        arrays = [np.frombuffer(f, dtype=d).reshape(shape) for f, d, (_, shape) in zip(frames[2:-1], dtypes, specs)]
         traffic = np.frombuffer(frames[-1], dtype=TRAFFIC_DTYPE).copy()  # writable, as WorldView.traffic starts
         placed = PlacedTiles(*arrays[:len(_PLACED)])
         named = dict(zip(_ARRAYS, arrays[len(_PLACED):]))
