@@ -8,7 +8,7 @@ import pytest
 from bridge_node.exercise.pacer import Pacer
 from bridge_node.exercise.tick import ExerciseTick, StepListener
 from bridge_node.links.arbiter import Decision
-from bridge_node.links.base import Alarm, ControlInput
+from bridge_node.links.messages import Alarm, ControlInput
 from bridge_node.node.config import load_config
 from bridge_node.node.world_setup import open_water_world
 from sim_core.ship.orders import OrderKind

@@ -20,7 +20,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from links_helpers import console_frame
 
-from bridge_node.links.base import Traffic
+from bridge_node.links.messages import Traffic
 from bridge_node.links.can_link import CanLink
 from bridge_node.links.modbus_link import RegisterAccess
 from bridge_node.links.n2k_frames import identifier

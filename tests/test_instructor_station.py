@@ -9,14 +9,9 @@ from __future__ import annotations
 import io
 import json
 import math
-import os
-import shutil
-import signal
 import subprocess
 import sys
 import time
-import urllib.error
-import urllib.request
 from pathlib import Path
 
 import numpy as np
@@ -24,30 +19,27 @@ import pytest
 from PIL import Image
 
 from bridge_node.control.client import request
+from bridge_node.exercise.save_point import read_save
 from bridge_node.node.network import free_port
+from bridge_node.station.harness import (
+    chromium,
+    ctl_status,
+    http,
+    node_and_station,
+    open_page,
+    require_chromium,
+    start,
+    stop,
+    wait_until,
+)
 from bridge_node.station.wire import unpack
 
 REPO = Path(__file__).resolve().parent.parent
-CHROMIUM, DRIVER = shutil.which("chromium"), shutil.which("chromedriver")
-if not (CHROMIUM and DRIVER):  # a failure, not a skip: the browser checks must run wherever the suite does
-    raise RuntimeError("the instructor station's tests need chromium and chromium-driver: run scripts/setup.sh, "
-                       "which installs them")
+require_chromium()  # a failure, not a skip: the browser checks must run wherever the suite does
 TOKEN = "instructor-test-token-0123456789"
 SHIP_RGB = (232, 51, 31)  # MAP_COLORS.ship in map.js
 FLOE_RGB = (247, 251, 254)  # MAP_COLORS.floe
 LEVEL_ICE_RGB = (210, 221, 230)  # MAP_COLORS.ice
-
-
-def wait_until(predicate, timeout: float, what: str, every: float = 0.1):
-    """The predicate's first truthy value, polled until ``timeout`` s; fails naming ``what``."""
-    deadline = time.monotonic() + timeout
-    while True:
-        value = predicate()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
-        time.sleep(every)
 
 
 def write_config(folder: Path, stream: tuple[int, int], control: int, port: int, extra: str = "") -> Path:
@@ -65,91 +57,22 @@ def write_config(folder: Path, stream: tuple[int, int], control: int, port: int,
     return path
 
 
-def start(folder: Path, name: str, *args: str) -> subprocess.Popen:
-    out = open(folder / f"{name}.log", "w")
-    return subprocess.Popen([sys.executable, "-m", "bridge_node", *args], cwd=REPO, stdout=out, stderr=subprocess.STDOUT,
-                            env={**os.environ, "ICEBRIDGE_TOKEN": ""})
-
-
-def stop(proc: subprocess.Popen) -> None:
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(15)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(5)
-
-
-def ctl_status(config: Path) -> dict:
-    """The node's status as ``icebridge ctl status`` prints it."""
-    done = subprocess.run([sys.executable, "-m", "bridge_node", "ctl", "--config", str(config), "status"],
-                          cwd=REPO, capture_output=True, text=True, timeout=60)
-    assert done.returncode == 0, done.stderr
-    return json.loads(done.stdout)
-
-
 @pytest.fixture(scope="module")
 def exercise(tmp_path_factory):
     """A running node and a station on it: (config, station URL, folder)."""
     folder = tmp_path_factory.mktemp("station")
     stream, control, port = (free_port(), free_port()), free_port(), free_port()
     config = write_config(folder, stream, control, port)
-    node = start(folder, "node", "run", "--config", str(config), "--render", "none", "--duration", "600",
-                 "--json", "--out", str(folder / "out"))
-    station = start(folder, "station", "instructor", "--config", str(config))
-    try:
-        wait_until(lambda: node.poll() is None and _answers(control), 180, "the node's control endpoint")
-        url = f"http://127.0.0.1:{port}/"
-        wait_until(lambda: station.poll() is None and _http(url)[0] == 200, 120, "the station's page")
+    url = f"http://127.0.0.1:{port}/"
+    with node_and_station(folder, config, f"tcp://127.0.0.1:{control}", url, "--render", "none", "--duration", "600",
+                          "--json", "--out", str(folder / "out")):
         yield config, url, folder
-    finally:
-        stop(station)
-        stop(node)
-        for name in ("node", "station"):
-            print(name, (folder / f"{name}.log").read_text()[-2000:])
-
-
-def _answers(port: int) -> bool:
-    try:
-        return bool(request(f"tcp://127.0.0.1:{port}", {"request": "status"}, None, 1.0).get("ok"))
-    except Exception:  # noqa: BLE001 -- not up yet
-        return False
-
-
-def _http(url: str, headers: dict | None = None) -> tuple[int, str]:
-    try:
-        with urllib.request.urlopen(urllib.request.Request(url, headers=headers or {}), timeout=5) as r:
-            return r.status, r.read().decode("latin-1")
-    except urllib.error.HTTPError as exc:
-        return exc.code, exc.read().decode("latin-1")
-    except OSError:
-        return 0, ""
 
 
 @pytest.fixture(scope="module")
 def browser():
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-
-    options = webdriver.ChromeOptions()
-    options.binary_location = CHROMIUM
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--window-size=1400,900",
-                "--force-device-scale-factor=1"):
-        options.add_argument(arg)
-    driver = webdriver.Chrome(service=Service(DRIVER), options=options)
-    driver.set_page_load_timeout(30)
-    try:
+    with chromium() as driver:
         yield driver
-    finally:
-        driver.quit()
-
-
-def open_page(browser, url: str, floes: int = 1) -> None:
-    browser.get(url)
-    wait_until(lambda: browser.execute_script("return window.stationStats && window.stationStats.frames > 3 && "
-                                              f"window.stationStats.floes >= {floes}"), 60,
-               f"frames with at least {floes} live floes on the page")
 
 
 def screenshot(browser) -> np.ndarray:
@@ -284,6 +207,54 @@ def test_a_refused_command_is_shown(exercise, browser):
     assert "50" in reply.text and "err" in reply.get_attribute("class")
 
 
+def test_links_sensor_failures_and_a_save_point_from_the_page(exercise, browser):
+    config, url, folder = exercise
+    open_page(browser, url)
+    text = lambda element: browser.find_element("id", element).text
+    state = lambda: browser.execute_script(  # the link's state badge: its text and background colour
+        "const s = document.querySelector('#links [data-link=instruments] .state');"
+        "return s && [s.textContent, getComputedStyle(s).backgroundColor.match(/\\d+/g).map(Number)];")
+
+    def apply(form: str, **fields: str) -> None:  # set a form's fields as if chosen, and click its button
+        browser.execute_script("for (const [k, v] of Object.entries(arguments[1])) { const e = document.getElementById(k);"
+                               "e.value = v; e.dispatchEvent(new Event('change')); }"
+                               "document.querySelector(`#${arguments[0]} button`).click();", form, fields)
+
+    def logged(what: str) -> str:
+        return wait_until(lambda: what in (t := text("log")) and t, 15, f"{what!r} in the event log")
+
+    assert wait_until(state, 20, "the link in the Links card")[0] == "up"
+    try:
+        apply("link-fault-form", **{"lf-link": "instruments", "lf-fault": "disconnect"})
+        wait_until(lambda: (h := ctl_status(config)["links"][0])["fault"] == "disconnect" and not h["connected"], 20,
+                   "the node's link disconnected")
+        red, green, blue = wait_until(lambda: (s := state())[0] == "down" and s, 15, "the link down on the page")[1]
+        assert red > 2 * green and red > 2 * blue, "a link down is not shown red"
+        assert "link instruments: fault disconnect" in logged("link instruments down") and "node alarm" in text("alarms")
+        apply("link-fault-form", **{"lf-fault": "none"})
+        wait_until(lambda: state()[0] == "up", 30, "the link up again on the page")
+        logged("link instruments up")
+        apply("gyro-form", **{"gyro-mode": "offset", "gyro-offset": "-12.5"})
+        apply("gnss-form", **{"gnss-mode": "jumping", "gnss-jump": "500"})
+        wait_until(lambda: ctl_status(config)["sensors"] == {"gyro": "offset", "gnss": "jumping", "log": "ok"}, 20,
+                   "the node's gyro offset and GNSS jumping")
+        assert "sensor failure: GNSS position jumping 500 m" in logged("sensor failure: gyro offset -12.5 deg")
+        wait_until(lambda: "sensor: gyro offset" in text("alarms"), 10, "the gyro among the alarms")
+        assert "gyro offset, GNSS jumping" in text("failures-now")
+        apply("gyro-form", **{"gyro-mode": "ok"})
+        apply("gnss-form", **{"gnss-mode": "ok"})
+        wait_until(lambda: "sensor:" not in text("alarms"), 20, "the sensor alarms cleared")
+    finally:  # the other tests find the link up and the sensors well
+        for command in ({"command": "link_fault", "link": "instruments", "fault": "none"},
+                        {"command": "sensor_failure", "sensor": "gyro", "mode": "ok"},
+                        {"command": "sensor_failure", "sensor": "gnss", "mode": "ok"}):
+            request(_endpoint(config), {"command": command}, None)
+    apply("save-form", **{"save-name": "from-the-page"})
+    path = Path(wait_until(lambda: "writes" in (t := text("save-reply")) and t.rsplit(" ", 1)[1], 10, "the save's path"))
+    point = wait_until(lambda: path.is_file() and read_save(path), 20, "the save point written")
+    assert path.parents[2] == (folder / "sessions").resolve() and point.seq > 0 and "save point" in text("log")
+
+
 def test_token_asked_with_the_network_opened(exercise, tmp_path, browser):
     config, _, folder = exercise
     stream = [int(line.rsplit(":", 1)[1].rstrip('"')) for line in config.read_text().splitlines()
@@ -294,11 +265,11 @@ def test_token_asked_with_the_network_opened(exercise, tmp_path, browser):
     station = start(folder, "guarded", "instructor", "--config", str(guarded))
     url = f"http://127.0.0.1:{port}/"
     try:
-        wait_until(lambda: station.poll() is None and _http(url)[0] == 401, 120, "the guarded station")
-        assert "Access token" in _http(url)[1]
-        assert _http(url + "static/station.js")[0] == 401
-        assert _http(url, {"Authorization": f"Bearer {TOKEN}"})[0] == 200
-        assert _http(url + "?token=wrong-token-0123456789")[0] == 401
+        wait_until(lambda: station.poll() is None and http(url)[0] == 401, 120, "the guarded station")
+        assert "Access token" in http(url)[1]
+        assert http(url + "static/station.js")[0] == 401
+        assert http(url, {"Authorization": f"Bearer {TOKEN}"})[0] == 200
+        assert http(url + "?token=wrong-token-0123456789")[0] == 401
         _websocket_refused(port)
         assert _websocket_hello(port, TOKEN)["type"] == "hello"
         browser.get(url)  # the login page, then the station with the token's cookie
@@ -366,8 +337,8 @@ def test_debrief_of_the_session_record(exercise, browser, tmp_path):
                     "--port", str(port))
     try:
         url = f"http://127.0.0.1:{port}/"
-        wait_until(lambda: station.poll() is None and _http(url)[0] == 200, 120, "the debrief page")
-        assert _http(url + "plots.png")[1][1:4] == "PNG"
+        wait_until(lambda: station.poll() is None and http(url)[0] == 200, 120, "the debrief page")
+        assert http(url + "plots.png")[1][1:4] == "PNG"
         browser.get(url)
         wait_until(lambda: browser.execute_script("return !!(playback.data && map.frame)"), 30, "the record played")
         assert browser.find_element("id", "debrief-card").is_displayed()

@@ -13,7 +13,7 @@ from links_helpers import STATE, node_config, tick
 from pyais import decode
 
 from bridge_node.links.ais import AisReporter, AisSettings, report_interval
-from bridge_node.links.base import Vessel
+from bridge_node.links.messages import Vessel
 from bridge_node.links.hub import LinkHub
 from sim_core.frames.units import KNOT
 

@@ -5,7 +5,7 @@ import math
 import pytest
 
 from bridge_node.links.arbiter import ALARM_NUMBERS, OrderArbiter
-from bridge_node.links.base import ControlInput
+from bridge_node.links.messages import ControlInput
 from bridge_node.links.settings import ArbitrationSettings
 from sim_core.ship.orders import OrderKind
 

@@ -8,7 +8,7 @@ from conftest import fuzz_budget
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from bridge_node.links.base import ControlInput
+from bridge_node.links.messages import ControlInput
 from bridge_node.links.can_link import CanLink
 from bridge_node.links.modbus_link import register_order
 from bridge_node.links.n2k_frames import fast_packet_frames, identifier, parse_identifier

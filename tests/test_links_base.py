@@ -13,7 +13,9 @@ import pytest
 from links_helpers import STATE, console_frame, node_config, tick
 
 from bridge_node.links import session_record
-from bridge_node.links.base import LINK_TYPES, Backoff, ControlInput, Link, Listener, Traffic
+from bridge_node.links.base import LINK_TYPES, Link
+from bridge_node.links.device_io import Backoff
+from bridge_node.links.messages import ControlInput, Listener, Traffic
 from bridge_node.links.can_link import CONFIG_DIR, CanLink
 from bridge_node.links.hub import LinkHub
 from bridge_node.links.modbus_link import ModbusLink, RegisterAccess

@@ -7,7 +7,6 @@ finite and every row within the view. Budget: ``conftest.fuzz_budget``."""
 import json
 import math
 import tomllib
-from pathlib import Path
 
 import numpy as np
 import pytest

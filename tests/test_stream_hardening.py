@@ -9,7 +9,6 @@ import stat
 
 import numpy as np
 import pytest
-import zmq
 from conftest import exercise_config
 
 from bridge_node.node.network import free_port

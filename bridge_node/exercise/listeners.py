@@ -12,7 +12,7 @@ from pathlib import Path
 
 from bridge_node.exercise.save_point import SAVES_FOLDER, SavePoint, state_of
 from bridge_node.exercise.tick import StepListener, TickOutcome
-from bridge_node.links.base import Vessel
+from bridge_node.links.messages import Vessel
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.errors import UserError
 from bridge_node.node.output_files import write_output

@@ -28,7 +28,7 @@ from pymodbus.simulator import DataType, SimData, SimDevice
 
 from bridge_node.hil.scenario import Fault
 from bridge_node.hil.settings import CanConsoleSettings, ModbusConsoleSettings, NmeaConsoleSettings
-from bridge_node.links.base import ETL_POSITIONS
+from bridge_node.links.messages import ETL_POSITIONS
 from bridge_node.links.can_link import N2K_DBC, dbc_path, load_dbc
 from bridge_node.links.modbus_link import raw_register, register_value
 from bridge_node.links.n2k_frames import identifier, parse_identifier

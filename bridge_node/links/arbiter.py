@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from bridge_node.links.base import Alarm, ControlInput
+from bridge_node.links.messages import Alarm, ControlInput
 from bridge_node.links.settings import ArbitrationSettings
 from sim_core.ship.orders import OrderKind
 from sim_core.world import Controls

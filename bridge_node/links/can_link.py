@@ -16,8 +16,9 @@ from pathlib import Path
 import can
 import cantools
 
-from bridge_node.links.base import (ETL_POSITIONS, ControlInput, Link, QueuedWriter, RateSchedule, register_link,
-                                    searchlight_order)
+from bridge_node.links.base import Link, register_link
+from bridge_node.links.device_io import QueuedWriter, RateSchedule
+from bridge_node.links.messages import ETL_POSITIONS, ControlInput, searchlight_order
 from bridge_node.links.n2k_frames import fast_packet_frames, identifier, parse_identifier
 from bridge_node.links.n2k_network import FAST_PACKET_PGNS, GLOBAL_ADDRESS, NETWORK_PGNS, Frame, NetworkManager
 from bridge_node.links.settings import CanLinkSettings

@@ -34,7 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from bridge_node.links.ais import six_bit_text
-from bridge_node.links.base import ControlInput, Link, Vessel, register_link
+from bridge_node.links.base import Link, register_link
+from bridge_node.links.messages import ControlInput, Vessel
 from bridge_node.links.settings import DisLinkSettings
 from sim_core.ship.outputs import ShipOutputs
 

@@ -13,10 +13,8 @@ from __future__ import annotations
 import random
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    from bridge_node.links.base import ControlInput
+from bridge_node.links.messages import ControlInput
 
 LINK_FAULT_KINDS = ("none", "disconnect", "drop", "corrupt", "duplicate", "delay")
 

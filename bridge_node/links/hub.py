@@ -19,7 +19,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from bridge_node.links.arbiter import Decision, OrderArbiter
-from bridge_node.links.base import OPEN_WAIT_S, Alarm, ControlInput, Link, Listener
+from bridge_node.links.base import OPEN_WAIT_S, Link
+from bridge_node.links.messages import Alarm, ControlInput, Listener
 from bridge_node.links.faults import LinkFault
 from bridge_node.links.registry import make_link
 from bridge_node.links.session_record import SessionRecord

@@ -25,8 +25,9 @@ from dataclasses import dataclass
 from pymodbus.client import ModbusSerialClient, ModbusTcpClient
 from pymodbus.exceptions import ModbusException
 
-from bridge_node.links.base import (ETL_POSITIONS, RUDDER_ORDER_LIMIT_DEG, Backoff, ControlInput, Link, register_link,
-                                    searchlight_order)
+from bridge_node.links.base import Link, register_link
+from bridge_node.links.device_io import Backoff
+from bridge_node.links.messages import ETL_POSITIONS, RUDDER_ORDER_LIMIT_DEG, ControlInput, searchlight_order
 from bridge_node.links.settings import ModbusLinkSettings, RegisterSpec, WriteSpec
 from sim_core.frames.units import KNOT
 from sim_core.ship.orders import OrderKind

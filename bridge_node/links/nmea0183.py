@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import pynmea2
 
-from bridge_node.links.base import ETL_POSITIONS, RUDDER_ORDER_LIMIT_DEG, Alarm, ControlInput, searchlight_order
+from bridge_node.links.messages import ETL_POSITIONS, RUDDER_ORDER_LIMIT_DEG, Alarm, ControlInput, searchlight_order
 from sim_core.frames.units import KNOT
 from sim_core.ship.orders import OrderKind
 from sim_core.ship.outputs import ShipOutputs

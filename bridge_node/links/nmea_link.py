@@ -17,7 +17,9 @@ from collections.abc import Iterator
 import serial
 
 from bridge_node.links.ais import AisReporter
-from bridge_node.links.base import Alarm, ControlInput, Link, QueuedWriter, RateSchedule, Vessel, register_link
+from bridge_node.links.base import Link, register_link
+from bridge_node.links.device_io import QueuedWriter, RateSchedule
+from bridge_node.links.messages import Alarm, ControlInput, Vessel
 from bridge_node.links.nmea0183 import SentenceError, parse_order, render_alarm, render_outputs
 from bridge_node.links.settings import NmeaLinkSettings
 from bridge_node.node.network import is_loopback_host

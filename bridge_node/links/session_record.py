@@ -21,7 +21,7 @@ from pathlib import Path
 
 import can
 
-from bridge_node.links.base import Listener, Traffic
+from bridge_node.links.messages import Listener, Traffic
 
 FLUSH_PERIOD = 0.5  # s
 log = logging.getLogger("icebridge.record")

@@ -13,7 +13,7 @@ from __future__ import annotations
 import logging
 from collections import Counter, deque
 
-from bridge_node.links.base import Alarm
+from bridge_node.links.messages import Alarm
 from sim_core.ship.model import OrderRejection
 
 log = logging.getLogger("icebridge.orders")

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from bridge_node.exercise.tick import StepListener
-from bridge_node.links.base import Listener, Traffic
+from bridge_node.links.messages import Listener, Traffic
 from bridge_node.links.record_reader import complete_lines, record_time
 from bridge_node.links.session_record import FLUSH_PERIOD, cut_torn_tail
 

@@ -25,7 +25,7 @@ from bridge_node.exercise.listeners import ReplayLinkOutputs, StreamOutput, Worl
 from bridge_node.exercise.pacer import Pacer
 from bridge_node.exercise.tick import ExerciseTick, TickOutcome
 from bridge_node.links.arbiter import Decision
-from bridge_node.links.base import Alarm
+from bridge_node.links.messages import Alarm
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.order_refusals import OrderRefusals
 from bridge_node.node.output_files import OutputFile

@@ -22,7 +22,8 @@ import can
 
 from bridge_node.control.command_log import COMMANDS_FILE, read_commands
 from bridge_node.control.commands import NODE_COMMANDS
-from bridge_node.links.base import Alarm, ControlInput, Link
+from bridge_node.links.base import Link
+from bridge_node.links.messages import Alarm, ControlInput
 from bridge_node.links.can_link import CanLink
 from bridge_node.links.faults import LinkFault
 from bridge_node.links.hub import LinkHub

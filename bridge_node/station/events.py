@@ -1,5 +1,6 @@
 """The station's event log (instructor commands the world applied, refused orders, alarms
-raised and cleared) and its alarms: what the stream and the control endpoint show."""
+raised and cleared, links going down and up) and its alarms: what the stream and the
+control endpoint's status replies show."""
 from __future__ import annotations
 
 import datetime as dt
@@ -7,6 +8,8 @@ import math
 import time
 from collections import deque
 
+from bridge_node.exercise.save_point import SaveRequest
+from bridge_node.links.faults import LinkFault
 from sim_core.frames.units import KNOT
 from sim_core.instructor import (
     Command,
@@ -17,6 +20,7 @@ from sim_core.instructor import (
     SetEnvironment,
     SteeringFailure,
 )
+from sim_core.ship.sensors import SensorFailure
 from sim_core.world import WorldEvents
 
 LOG_MAX = 500  # events kept (a late browser gets these)
@@ -24,10 +28,33 @@ REFUSED_SHOWN_S = 10.0  # s a refused order stays among the alarms
 _ENVIRONMENT = {"visibility": ("visibility", 1.0, "m"), "wind_speed": ("wind", 1.0 / KNOT, "kn"),
                 "wind_from": ("wind from", 180.0 / math.pi, "deg"), "current_speed": ("current", 1.0 / KNOT, "kn"),
                 "current_to": ("current to", 180.0 / math.pi, "deg")}
+# (sensor, mode) -> what the instruments show: an alarm's text, and a failure's with its amount
+SENSOR_NAMES = {"gyro": "gyro", "gnss": "GNSS", "log": "speed log"}
+SENSOR_TEXT = {("gyro", "frozen"): "gyro frozen", ("gyro", "offset"): "gyro offset", ("gnss", "lost"): "GNSS fix lost",
+               ("gnss", "jumping"): "GNSS position jumping", ("log", "frozen"): "speed log frozen"}
 
 
-def describe(command: Command) -> tuple[str, str]:
-    """The kind ("command", "failure") and one line of text of an applied world command."""
+def _sensor_text(failure: SensorFailure) -> str:
+    if failure.mode == "ok":
+        return f"{SENSOR_NAMES.get(failure.sensor, failure.sensor)} repaired"
+    text = "sensor failure: " + SENSOR_TEXT.get((failure.sensor, failure.mode), f"{failure.sensor} {failure.mode}")
+    if (failure.sensor, failure.mode) == ("gyro", "offset"):
+        return f"{text} {math.degrees(failure.amount):+.1f} deg"
+    return f"{text} {failure.amount:.0f} m" if (failure.sensor, failure.mode) == ("gnss", "jumping") else text
+
+
+def _link_fault_text(fault: LinkFault) -> str:
+    if fault.kind == "none":
+        return f"link {fault.link}: fault cleared"
+    if fault.kind == "disconnect":
+        return f"link {fault.link}: fault disconnect"
+    delay = f", {fault.delay_s:g} s" if fault.kind == "delay" else ""
+    return f"link {fault.link}: fault {fault.kind} (probability {fault.probability:g}{delay})"
+
+
+def describe(command: Command | LinkFault | SaveRequest) -> tuple[str, str]:
+    """The kind ("command", "failure") and one line of text of an applied world command, or
+    of a node command of a session record (a link fault, a save point)."""
     if isinstance(command, Freeze):
         return "command", "exercise frozen" if command.frozen else "exercise resumed"
     if isinstance(command, Reposition):
@@ -49,7 +76,33 @@ def describe(command: Command) -> tuple[str, str]:
         text = "engine repaired (full power)" if share >= 1.0 else (
             "engine failure: blackout" if share <= 0.0 else f"engine failure: power limited to {share * 100:.0f} %")
         return "failure", text
+    if isinstance(command, SensorFailure):
+        return "failure", _sensor_text(command)
+    if isinstance(command, LinkFault):
+        return "failure", _link_fault_text(command)
+    if isinstance(command, SaveRequest):
+        return "command", f"save point {command.name}"
     return "command", type(command).__name__
+
+
+def _fault(health: dict | None) -> str | None:
+    fault = None if health is None else health.get("fault")
+    return None if fault == "none" else fault
+
+
+def link_changes(before: dict | None, now: dict) -> list[tuple[str, str]]:
+    """The events (kind, text) between two status replies' health of one link: down (with
+    its last error) or up, and its fault put on or cleared. ``before`` None: the link is
+    first seen, and only a link down (not being opened) or with a fault is news."""
+    name, up = now.get("name"), bool(now.get("connected"))
+    events = []
+    if (not up and not now.get("opening")) if before is None else bool(before.get("connected")) != up:
+        error = now.get("last_error")
+        events.append(("cleared", f"link {name} up") if up else
+                      ("alarm", f"link {name} down" + (f": {error}" if error else "")))
+    if _fault(now) != _fault(before):
+        events.append(("failure", f"link {name}: fault {_fault(now)}" if _fault(now) else f"link {name}: fault cleared"))
+    return events
 
 
 class EventLog:
@@ -58,8 +111,13 @@ class EventLog:
     def __init__(self) -> None:
         self._events: deque[dict] = deque(maxlen=LOG_MAX)
         self._next = 1
-        self.steering = 2  # pumps working, as the last command seen set them
+        self.steering = 2  # pumps working, as the last failure seen (stream or status) set them
         self.power = 1.0
+        self.sensors = {"gyro": "ok", "gnss": "ok", "log": "ok"}
+        self._failure_seq = -1  # the step of the last failure seen on the stream
+        self._status: dict | None = None  # the last status reply taken
+        self.links: dict[str, dict] = {}  # name -> health, as the last status reply gave it
+        self._node_alarms: list[str] = []
         self._refused: tuple[float, str] | None = None  # (monotonic, text) of the last refused order
         self._alarms: set[str] = set()
 
@@ -69,6 +127,12 @@ class EventLog:
                              "utc": None if utc is None else dt.datetime.fromtimestamp(utc, dt.timezone.utc)
                              .strftime("%H:%M:%S"), "wall": time.time()})
         self._next += 1
+
+    def joined(self, seq: int, sim_time: float, utc: float) -> None:
+        """The station joined a node's stream (anew: the node may have restarted): logged, and
+        the node's next status reply is taken for its failures."""
+        self._failure_seq = -1
+        self.add("station", f"joined the state stream at step {seq}", sim_time, utc)
 
     def since(self, last_id: int) -> tuple[dict, ...]:
         """Events after ``last_id`` (the oldest kept if it was dropped)."""
@@ -83,11 +147,34 @@ class EventLog:
                 self.steering = command.pumps
             elif isinstance(command, EngineFailure):
                 self.power = command.power_share
+            elif isinstance(command, SensorFailure):
+                self.sensors = {**self.sensors, command.sensor: command.mode}
+            if isinstance(command, (SteeringFailure, EngineFailure, SensorFailure)):
+                self._failure_seq = events.seq
         for rejection in events.rejected:
             text = f"{rejection.order} order {'refused' if rejection.refused else 'limited'}: {rejection.text}"
             if self._refused is None or self._refused[1] != text or time.monotonic() - self._refused[0] > 5.0:
                 self.add("order", text, events.time, events.ship.utc)
             self._refused = (time.monotonic(), text)
+
+    def on_status(self, status: dict | None, sim_time: float | None = None, utc: float | None = None) -> None:
+        """Take a status reply of the node (each once): its failures where it is newer than the
+        last failure seen on the stream (the node knows those applied before this station
+        joined), its alarms, and its links' health, logging a link that went down or up or
+        whose fault changed. A node without some of these fields keeps what was known."""
+        if status is None or status is self._status:
+            return
+        self._status = status
+        if status.get("seq", -1) >= self._failure_seq:
+            self.steering = status.get("steering_pumps", self.steering)
+            self.power = status.get("power_percent", self.power * 100.0) / 100.0
+            self.sensors = {**self.sensors, **status.get("sensors", {})}
+        self._node_alarms = [f"node alarm {a.get('number')}: {a.get('text')}" for a in status.get("alarms", [])]
+        links = {str(h.get("name")): h for h in status.get("links", [])}
+        for name, health in links.items():
+            for kind, text in link_changes(self.links.get(name), health):
+                self.add(kind, text, sim_time, utc)
+        self.links = links
 
     def alarms(self, stream_age_s: float | None, control_error: str | None, sim_time: float | None = None,
                utc: float | None = None) -> list[str]:
@@ -104,8 +191,11 @@ class EventLog:
                                                else "one pump failed (half rate)"))
         if self.power < 1.0:
             active.append("engine: blackout" if self.power <= 0.0 else f"engine: {self.power * 100:.0f} % power")
+        active += ["sensor: " + SENSOR_TEXT.get((k, mode), f"{k} {mode}") for k, mode in self.sensors.items()
+                   if mode != "ok"]
         if self._refused is not None and time.monotonic() - self._refused[0] < REFUSED_SHOWN_S:
             active.append(f"order refused or limited: {self._refused[1]}")
+        active += self._node_alarms
         now = set(active)
         for text in sorted(now - self._alarms):
             self.add("alarm", text, sim_time, utc)

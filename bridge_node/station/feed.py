@@ -1,7 +1,8 @@
 """The station's feed: a thread that follows the node's state stream (a ``StateSubscriber``,
 joining from a snapshot and resynchronising after a gap) and makes a ``Frame`` of the
 picture ``rate_hz`` times a second, and a thread that asks the control endpoint for the
-exercise's status every few seconds (its health on the page)."""
+exercise's status every few seconds (its health, its links' health, the failures and
+alarms it knows, on the page)."""
 from __future__ import annotations
 
 import logging
@@ -92,8 +93,7 @@ class Feed:
         except StreamError:
             return False
         self.picture.reset()
-        self.picture.log.add("station", f"joined the state stream at step {sub.view.seq}", sub.view.time,
-                             sub.view.ship.utc)
+        self.picture.log.joined(sub.view.seq, sub.view.time, sub.view.ship.utc)
         return True
 
     def _follow(self, sub: StateSubscriber) -> None:
@@ -117,15 +117,15 @@ class Feed:
 
     def _make_frame(self, sub: StateSubscriber, age_s: float) -> None:
         started = time.perf_counter()
-        alarms = self.picture.log.alarms(age_s, self.control.error, sub.view.time, sub.view.ship.utc)
-        log, status = self.picture.log, self.control.status or {}
-        # the node's status knows the orders and the failures applied before this station joined
-        failures = {"pumps_failed": 2 - status.get("steering_pumps", log.steering),
-                    "power_percent": status.get("power_percent", round(log.power * 100.0, 1))}
+        log, view, status = self.picture.log, sub.view, self.control.status  # replaced whole by its thread
+        log.on_status(status, view.time, view.ship.utc)
+        alarms = log.alarms(age_s, self.control.error, view.time, view.ship.utc)
+        failures = {"pumps_failed": 2 - log.steering, "power_percent": round(log.power * 100.0, 1),
+                    "sensors": log.sensors}
         extra = {"alarms": alarms, "stream": {"age_s": round(age_s, 2), "resyncs": sub.resyncs, "lost": sub.lost},
-                 "failures": failures,
-                 "control": {"error": self.control.error, "rudder_order_deg": status.get("rudder_order_deg")}}
-        frame = self.picture.frame(sub.view, extra)
+                 "failures": failures, "links": None if status is None else list(log.links.values()),
+                 "control": {"error": self.control.error, "rudder_order_deg": (status or {}).get("rudder_order_deg")}}
+        frame = self.picture.frame(view, extra)
         self.build_ms = [*self.build_ms[-999:], (time.perf_counter() - started) * 1e3]
         self.frames += 1
         self.on_frame(frame)

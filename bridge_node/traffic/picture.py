@@ -12,7 +12,7 @@ from typing import Protocol
 
 import numpy as np
 
-from bridge_node.links.base import Vessel
+from bridge_node.links.messages import Vessel
 from bridge_node.stream.world_view import TRAFFIC_DTYPE
 from sim_core.frames.geodesy import geodetic_to_local
 

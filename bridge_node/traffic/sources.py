@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bridge_node.links.base import Vessel
+from bridge_node.links.messages import Vessel
 from bridge_node.links.dis_link import HeardEntities, PduError
 from bridge_node.links.settings import DisLinkSettings
 from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, NodeConfig, resolve_path

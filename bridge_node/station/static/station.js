@@ -69,8 +69,8 @@ function onFrame(h, arrays) {
   shipPanel(h);
   envPanel(e);
   alarms(h.alarms);
-  const f = h.failures;
-  $("failures-now").textContent = `seen on the stream: steering ${["both pumps working", "one pump failed", "both pumps failed"][f.pumps_failed]}, engine ${f.power_percent} % power`;
+  failuresNow(h.failures);
+  linksPanel(h.links);
   for (const ev of h.events) logRow(ev);
   if (first) fillForms(h);
   $("map-stats").textContent = `${h.counts.free} live floes · ${h.counts.frozen_floes} frozen · ${h.counts.tiles_live}/${h.counts.tiles_frozen} tiles live/frozen · ${map.stats.fps.toFixed(0)} fps`;
@@ -144,8 +144,10 @@ function send(command) {
 function onReply(msg) {
   const name = pending.get(msg.id) || msg.command || "command";
   pending.delete(msg.id);
-  showReply(name, msg.ok, msg.ok ? "queued by the node" : msg.error);
+  const path = msg.ok && msg.reply && msg.reply.path;  // a save point's file, written at the node's next step
+  showReply(name, msg.ok, msg.ok ? (path ? `queued by the node; it writes ${path}` : "queued by the node") : msg.error);
   if (!msg.ok) logRow({ kind: "refused", text: `${name}: ${msg.error}`, time: null, utc: null, wall: Date.now() / 1000 });
+  if (path) logRow({ kind: "command", text: `save point ${path}`, time: null, utc: null, wall: Date.now() / 1000 });
 }
 
 function showReply(name, ok, text) {
