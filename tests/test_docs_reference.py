@@ -1,6 +1,10 @@
 """The documentation's reference pages are made from the code: a key added to a settings
 model is in the config reference with its type, default, range and description, with no
 edit to the docs; and the site builds strictly (no broken link, every page in the nav)."""
+import subprocess
+import sys
+
+from conftest import REPO
 from pydantic import Field
 
 from bridge_node.node.config import NodeConfig
@@ -34,3 +38,11 @@ def test_every_reference_page_is_made_and_names_what_the_code_has():
     assert "| `RMC` | `GP` |" in pages["reference/interfaces.md"] and "PGN 129025" in pages["reference/interfaces.md"]
     assert "`fix_valid`" in pages["reference/stream.md"] and "`ice_load`" in pages["reference/stream.md"]
 
+
+
+def test_the_site_builds_strictly(tmp_path):
+    built = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp_path / "site")],
+                           cwd=REPO, capture_output=True, text=True, timeout=240)
+    assert built.returncode == 0, built.stderr[-3000:]
+    config_page = (tmp_path / "site" / "reference" / "config" / "index.html").read_text()
+    assert "start_speed_kn" in config_page

@@ -30,7 +30,8 @@ N2K_DBC = CONFIG_DIR / "nmea2000.dbc"
 ID_MASK = 0x03FFFF00  # match any priority and source
 MAX_FRAMES_PER_POLL = 1000
 RUDDER_PGN = 127245
-# output name -> (DBC message, PGN, priority); the priorities of canboat's database (docs/canboat.json)
+# output name -> (DBC message, PGN, priority); the priorities of canboat's PGN database
+# (docs/canboat.json in canboat's repository, not in this one)
 OUTPUTS = {"rudder": ("Rudder", 127245, 2), "engine_rapid": ("EngineRapid", 127488, 2),
            "engine_dynamic": ("EngineDynamic", 127489, 2), "heading": ("VesselHeading", 127250, 2),
            "rate_of_turn": ("RateOfTurn", 127251, 2), "position": ("PositionRapid", 129025, 2),

@@ -37,7 +37,7 @@ PRODUCT_INFORMATION, PGN_LIST, HEARTBEAT = 126996, 126464, 126993
 NETWORK_PGNS = frozenset({ADDRESS_CLAIM, ISO_REQUEST})  # taken from any device, not orders
 TRANSMITTED = (ADDRESS_CLAIM, ISO_ACKNOWLEDGEMENT, PRODUCT_INFORMATION, PGN_LIST, HEARTBEAT)
 FAST_PACKET_PGNS = frozenset({PRODUCT_INFORMATION, PGN_LIST})
-# priorities of canboat's database (docs/canboat.json)
+# priorities of canboat's PGN database (canboat's own docs/canboat.json, not in this repository)
 PRIORITY = {ADDRESS_CLAIM: 6, ISO_REQUEST: 6, ISO_ACKNOWLEDGEMENT: 6, PRODUCT_INFORMATION: 6, PGN_LIST: 6,
             HEARTBEAT: 7}
 NULL_ADDRESS, GLOBAL_ADDRESS = 254, 255

@@ -14,7 +14,7 @@ Two models:
     (l_c ~ h^(3/4)), so the count per area goes as l_c^-2 ~ h^(-3/2). Calibrated to the same
     h = 1.0 m point (855..1515). Against ``paper`` it gives 2.1x the pieces at 0.5 m, 7x at
     0.2 m, 19x at 0.1 m and 0.85x at 1.5 m: the paper's line is far flatter than plate
-    theory (table in the README).
+    theory (table in docs/design/prefracture.md).
 """
 from __future__ import annotations
 

@@ -16,8 +16,8 @@ cell by the Voronoi property: the cell holding a point is the one with the neare
 contact point lies on the loaded cell's boundary, and the neighbour across that boundary is
 already broken (that is where the striker came from), so the nearest seed among the tile's
 intact cells names the loaded cell; a sphere collider lies inside its cell, so there the
-answer is exact. The seeds are searched in one k-d tree per template, in the template's
-frame. Breaking moves a cell's shape from its tile body to a new dynamic body. Colliders
+answer is exact. The seeds are searched in a uniform grid of buckets per template, in the
+template's frame (``_seed_grid``). Breaking moves a cell's shape from its tile body to a new dynamic body. Colliders
 (mesh or sphere) carry the floe-floe contact, but the hull breaks whatever it touches
 geometrically: the hull's overlap with intact cells is tested against their true outlines
 (separating axes, in numba), not through the engine. The hull is a kinematic body driven
