@@ -181,10 +181,11 @@ def run(args: argparse.Namespace) -> int:
     os.nice(args.niceness)
     cfg = load_config(args.config)
     _check(args)
-    cfg = select_channels(cfg, args.channels.split(",") if args.channels else None)
+    cfg = cfg.model_copy(update={"render": select_channels(cfg.render, args.channels.split(",") if args.channels
+                                                           else None)})
     publish, snapshot = endpoints(cfg.stream, args.connect)
     model = build_world(cfg, args.config)
-    channels = open_channels(cfg, model)
+    channels = open_channels(cfg.render, model)
     summary: dict = {"channels": [c.name for c in cfg.render.channels], "publish": publish}
     with StateSubscriber(publish, snapshot, timeout_s=args.wait) as sub:
         try:

@@ -38,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
         for _ in range(steps):
             step(model, data, DT)
             progress.advance(task)
-    channels = open_channels(cfg, model)
+    channels = open_channels(cfg.render, model)
     view = WorldView()
     view.apply(snapshot(model, data))
     t0 = time.perf_counter()
