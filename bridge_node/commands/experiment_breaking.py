@@ -55,9 +55,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="out", help="folder for the pictures (default: out)")
 
 
-def run(args: argparse.Namespace) -> int:
-    cfg = load_config(args.config)
-    ship = load_ship(cfg.ship.name, args.config)
+def _checked(args: argparse.Namespace, cfg) -> tuple[list[float], list[float], list[str], float]:
+    """The thicknesses (m), speeds (kn), collider setups and tile side (m) asked for;
+    UserError for any outside its range."""
     thicknesses = _floats(args.thickness, "--thickness")
     speeds = _floats(args.speed, "--speed")
     setups = [s.strip() for s in args.colliders.split(",") if s.strip()]
@@ -79,7 +79,13 @@ def run(args: argparse.Namespace) -> int:
     side = cfg.fracture.tile_side if args.tile_side is None else args.tile_side
     if not 30.0 <= side <= 400.0:
         raise UserError(f"--tile-side {side} is outside the allowed range [30, 400] m")
+    return thicknesses, speeds, setups, side
 
+
+def run(args: argparse.Namespace) -> int:
+    cfg = load_config(args.config)
+    ship = load_ship(cfg.ship.name, args.config)
+    thicknesses, speeds, setups, side = _checked(args, cfg)
     seeds = [cfg.fracture.seed + k for k in range(args.seeds)]
     combos = [(h, c, v) for h in thicknesses for c in setups for v in speeds]
     results: list[BreakingMedians] = []
