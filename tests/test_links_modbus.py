@@ -10,7 +10,7 @@ from conftest import free_port
 from links_helpers import STATE, node_config, order_collector, pty_pair, tick, wait_for
 from modbus_console import ModbusConsole
 
-from bridge_node.hil.console_links import ModbusConsole as ConsoleModbus
+from bridge_node.hil.console_modbus import ModbusConsole as ConsoleModbus
 from bridge_node.hil.console_links import Order
 from bridge_node.hil.scenario import Fault
 from bridge_node.hil.settings import ModbusConsoleSettings

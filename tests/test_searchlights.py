@@ -15,7 +15,8 @@ import pytest
 from conftest import exercise_toml, free_port
 from links_helpers import STATE, node_config, pty_pair, wait_for
 
-from bridge_node.hil.console_links import Order, make_console_link
+from bridge_node.hil.console_links import Order
+from bridge_node.hil.console_registry import make_console_link
 from bridge_node.hil.scenario import Action
 from bridge_node.hil.settings import ConsoleConfig
 from bridge_node.links.hub import LinkHub

@@ -14,7 +14,8 @@ from collections.abc import Callable
 from contextlib import ExitStack
 from dataclasses import dataclass, field
 
-from bridge_node.hil.console_links import AlarmReading, ConsoleLink, Order, Reading, make_console_link
+from bridge_node.hil.console_links import AlarmReading, ConsoleLink, Order, Reading
+from bridge_node.hil.console_registry import make_console_link
 from bridge_node.hil.scenario import QUANTITIES, Expectation, Fault, Scenario
 from bridge_node.hil.settings import ConsoleConfig
 from bridge_node.node.errors import UserError
