@@ -7,7 +7,7 @@ import pytest
 from sim_core.fracture.tile_template import FractureSettings, build_tile
 from sim_core.frames.hull_contour import waterline_contour
 from sim_core.ice import resting
-from sim_core.ice.contact import Contacts
+from sim_core.ice.contact_kernels import Contacts
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.model import IceDynamicsSettings, compile_ice_model
 from sim_core.ice.step import HullMotion, ice_step

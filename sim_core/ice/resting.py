@@ -23,7 +23,7 @@ import math
 import numba
 import numpy as np
 
-from sim_core.ice.contact import Contacts
+from sim_core.ice.contact_kernels import Contacts
 from sim_core.ice.model import IceModel
 from sim_core.ice.tiles import IceData
 from sim_core.ice.vertical import settled

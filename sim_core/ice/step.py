@@ -22,10 +22,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from sim_core.ice import contact, resting
+from sim_core.ice import contact_kernels, resting
 from sim_core.ice import vertical
 from sim_core.ice.breaking import pushed_hard
-from sim_core.ice.contact import Contacts
+from sim_core.ice.contact_kernels import Contacts
 from sim_core.ice.floes import BreakCause, FloeState
 from sim_core.ice.model import IceModel, vertical_substeps
 from sim_core.ice.tiles import IceData, break_cells
@@ -261,7 +261,7 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
 
 def warm_up(model: IceModel, data: IceData) -> None:
     """Load every compiled kernel the ice step uses, so that no step waits for a compile."""
-    contact.warm_up()
+    contact_kernels.warm_up()
     _hard_pushes(np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2)),
                  np.zeros(0, dtype=np.uint8), np.zeros((0, 2), np.float32), np.zeros(0, dtype=np.int32), model.mass,
                  model.k_impact, model.ride_load, model.edge_capacity)

@@ -21,7 +21,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from sim_core.ice.contact import ContactSpace, TileBodies
+from sim_core.ice.chipmunk_bodies import TileBodies
+from sim_core.ice.contact import ContactSpace
 from sim_core.ice.floes import BreakCause, FloeState, FloeStatus, FrozenFloes, TilePlacement
 from sim_core.ice.model import IceModel, placed_centroids
 

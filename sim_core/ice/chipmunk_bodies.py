@@ -1,0 +1,131 @@
+"""Chipmunk's C objects for the ice: the codes a body's user data holds, the shape filters, a
+floe's collider made on a C body, and a placed tile's static body with its cells' shapes
+(``TileBodies``).
+
+The contact space (``sim_core.ice.contact``) drives Chipmunk through the C API that pymunk
+bundles (``pymunk._chipmunk``), not through pymunk's Python classes, for the floes: a pymunk
+``Body`` or ``Shape`` is a Python object in a reference cycle with its cffi handle, so
+thousands of them cost seconds of creation per tile swap, pauses of a tenth of a second
+whenever Python's cyclic collector walks them, and about a kilobyte each. A floe here costs
+its C body and shape and two pointers in an array, and a body names its floe directly: its
+user data is the floe's code (``ROW0 + row``, ``TILE0 + placement`` for a tile's static
+body, ``HULL_ID``), which ``pymunk.batch`` returns as the body id.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pymunk
+from pymunk._chipmunk import ffi, lib
+
+HULL_ROW = -1
+NOT_A_FLOE = -2  # bodies that are not floes (the space's own static body)
+TILE_CODE = -3  # a contact on tile t's static body is coded TILE_CODE - t
+HULL_ID, ROW0, TILE0 = 1, 2, 1 << 40  # body user data: the hull, floe rows, tile bodies
+HULL_BIT, FLOE_BIT = 1, 2
+INTACT_IN, FLOE_IN = 1, 2  # TileBodies.in_space flags
+HULL_FILTER = (0, HULL_BIT, FLOE_BIT)  # Chipmunk shape filters: (group, categories, mask)
+FLOE_FILTER = (0, FLOE_BIT, HULL_BIT | FLOE_BIT)
+NO_CONTACT = (0, 0, 0)  # floes under the hull, and floes shedding their contacts before they rest
+IDENTITY = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)  # cpTransform
+
+
+def ptr_of(cdata) -> int:
+    return int(ffi.cast("uintptr_t", cdata))
+
+
+def shape_at(ptr: int):
+    return ffi.cast("cpShape *", ptr)
+
+
+def body_at(ptr: int):
+    return ffi.cast("cpBody *", ptr)
+
+
+def new_shape(body, ring: list, radius: float, centre: tuple[float, float], sphere: bool, friction: float) -> int:
+    """A floe collider on a C body: a circle of radius about centre, or the convex polygon
+    ring [(x, y), ...], both in the body's frame (m)."""
+    if sphere:
+        shape = lib.cpCircleShapeNew(body, radius, centre)
+    else:
+        shape = lib.cpPolyShapeNew(body, len(ring), ffi.new("cpVect[]", ring), IDENTITY, 0.0)
+    lib.cpShapeSetFriction(shape, friction)
+    lib.cpShapeSetFilter(shape, FLOE_FILTER)
+    return ptr_of(shape)
+
+
+class TileBodies:
+    """Engine objects of one placed tile, by row offset in the tile (0 = none): the static
+    body holding its intact cells, their shapes, and its free floes' bodies and shapes;
+    which of them are in the space; and the offsets still to switch in or out."""
+
+    def __init__(self, count: int) -> None:
+        self.body = ptr_of(lib.cpBodyNewStatic())
+        self.intact = np.zeros(count, dtype=np.uintp)
+        self.floe_body = np.zeros(count, dtype=np.uintp)
+        self.floe_shape = np.zeros(count, dtype=np.uintp)
+        self.in_space = np.zeros(count, dtype=np.uint8)  # INTACT_IN | FLOE_IN
+        self.queue = np.zeros(0, dtype=np.int64)  # offsets to switch in (entering) or out (leaving)
+
+    def insert(self, space, offsets: np.ndarray) -> int:
+        """Add the built objects at offsets to the space; returns how many went in."""
+        flags = self.in_space[offsets]
+        cells = offsets[(self.intact[offsets] != 0) & (flags & INTACT_IN == 0)]
+        floes = offsets[(self.floe_body[offsets] != 0) & (flags & FLOE_IN == 0)]
+        add_shape, add_body, cast = lib.cpSpaceAddShape, lib.cpSpaceAddBody, ffi.cast
+        for p in self.intact[cells].tolist():
+            add_shape(space, cast("cpShape *", p))
+        for b, p in zip(self.floe_body[floes].tolist(), self.floe_shape[floes].tolist()):
+            add_body(space, cast("cpBody *", b))
+            add_shape(space, cast("cpShape *", p))
+        self.in_space[cells] |= INTACT_IN
+        self.in_space[floes] |= FLOE_IN
+        return len(cells) + 2 * len(floes)
+
+    def remove(self, space, offsets: np.ndarray) -> int:
+        """Take the objects at offsets out of the space and free them; returns how many."""
+        flags = self.in_space[offsets]
+        cast = ffi.cast
+        cells = offsets[self.intact[offsets] != 0]
+        for p, inside in zip(self.intact[cells].tolist(), (flags[self.intact[offsets] != 0] & INTACT_IN).tolist()):
+            shape = cast("cpShape *", p)
+            if inside:
+                lib.cpSpaceRemoveShape(space, shape)
+            lib.cpShapeFree(shape)
+        has_floe = self.floe_body[offsets] != 0
+        floes = offsets[has_floe]
+        for b, p, inside in zip(self.floe_body[floes].tolist(), self.floe_shape[floes].tolist(),
+                                (flags[has_floe] & FLOE_IN).tolist()):
+            body, shape = cast("cpBody *", b), cast("cpShape *", p)
+            if inside:
+                lib.cpSpaceRemoveShape(space, shape)
+                if lib.cpBodyGetSpace(body) != ffi.NULL:  # a resting floe's body is not (``rest``)
+                    lib.cpSpaceRemoveBody(space, body)
+            lib.cpShapeFree(shape)
+            lib.cpBodyFree(body)
+        self.intact[offsets] = self.floe_body[offsets] = self.floe_shape[offsets] = 0
+        self.in_space[offsets] = 0
+        return len(cells) + 2 * len(floes)
+
+    def built(self) -> np.ndarray:
+        """Offsets holding any object."""
+        return np.nonzero((self.intact != 0) | (self.floe_body != 0))[0]
+
+    def release(self, space) -> None:
+        """Take everything out of the space and free it, the static body last."""
+        self.remove(space, self.built())
+        body = body_at(self.body)
+        if lib.cpBodyGetSpace(body) != ffi.NULL:
+            lib.cpSpaceRemoveBody(space, body)
+        lib.cpBodyFree(body)
+        self.body = 0
+
+
+def free_all(space: pymunk.Space, tiles: dict, leaving: list, hull: tuple[int, int]) -> None:
+    """Free every C object the contact space made, before the space itself goes."""
+    for bodies in [*tiles.values(), *(b for _, b in leaving)]:
+        bodies.release(space._space)
+    hull_body, hull_shape = body_at(hull[0]), shape_at(hull[1])
+    lib.cpSpaceRemoveShape(space._space, hull_shape)
+    lib.cpSpaceRemoveBody(space._space, hull_body)
+    lib.cpShapeFree(hull_shape)
+    lib.cpBodyFree(hull_body)
