@@ -27,12 +27,21 @@ class MapView {
     this.pick = null;           // callback while picking a position
     this.ghost = null;          // {x, y, heading} of a picked position
     this.plan = null;           // a debrief's whole track, drawn faint
-    this.dirty = true;
+    this._dirty = false;
+    this._drawSoon = () => { this._asked = false; if (this._dirty) this.draw(); };
     this.stats = { frames: 0, draws: 0, fps: 0, drawMs: 0, applyMs: 0, floes: 0, _t0: performance.now(), _n: 0 };
     window.stationStats = this.stats;
     this._input();
-    const loop = () => { if (this.dirty) this.draw(); requestAnimationFrame(loop); };
-    requestAnimationFrame(loop);
+    this.dirty = true;
+  }
+
+  // a change to draw: drawn at the next animation frame (none is asked for while nothing
+  // changes, so that an idle page leaves the CPU alone)
+  get dirty() { return this._dirty; }
+
+  set dirty(value) {
+    this._dirty = value;
+    if (value && !this._asked) { this._asked = true; requestAnimationFrame(this._drawSoon); }
   }
 
   // -- data ------------------------------------------------------------------------------

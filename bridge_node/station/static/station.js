@@ -53,7 +53,16 @@ function onText(msg) {
 
 function showWaiting(text) { $("waiting").hidden = false; $("waiting").textContent = text; }
 
-function badge(id, ok, text) { const b = $(id); b.textContent = text; b.className = `badge ${ok ? "ok" : "bad"}`; }
+function badge(id, ok, text) {
+  const b = $(id), cls = `badge ${ok ? "ok" : "bad"}`;
+  setText(b, text);
+  if (b.className !== cls) b.className = cls;
+}
+
+// the page's values change a few digits a frame: only what changed is written, as writing a
+// whole table ten times a second kept the browser's layout busy
+function setText(element, text) { if (element.textContent !== text) element.textContent = text; }
+function setHtml(element, html) { if (element.cachedHtml !== html) { element.innerHTML = html; element.cachedHtml = html; } }
 
 function onFrame(h, arrays) {
   const first = !lastFrame;
@@ -61,8 +70,8 @@ function onFrame(h, arrays) {
   map.applyFrame(h, arrays);
   lastFrame = h;
   const s = h.ship, e = h.environment;
-  $("utc").textContent = s.utc.slice(11, 19);
-  $("sim-time").textContent = `${h.time.toFixed(1)} s`;
+  setText($("utc"), s.utc.slice(11, 19));
+  setText($("sim-time"), `${h.time.toFixed(1)} s`);
   $("frozen-badge").hidden = !e.frozen;
   badge("link-stream", h.stream.age_s < 2, h.stream.age_s < 2 ? "stream" : `stream silent ${h.stream.age_s.toFixed(0)} s`);
   badge("link-control", !h.control.error, h.control.error ? `control: ${h.control.error}` : "control");
@@ -73,11 +82,12 @@ function onFrame(h, arrays) {
   linksPanel(h.links);
   for (const ev of h.events) logRow(ev);
   if (first) fillForms(h);
-  $("map-stats").textContent = `${h.counts.free} live floes · ${h.counts.frozen_floes} frozen · ${h.counts.tiles_live}/${h.counts.tiles_frozen} tiles live/frozen · ${map.stats.fps.toFixed(0)} fps`;
+  setText($("map-stats"), `${h.counts.free} live floes · ${h.counts.frozen_floes} frozen · ${h.counts.tiles_live}/${h.counts.tiles_frozen} tiles live/frozen · ${map.stats.fps.toFixed(0)} fps`);
 }
 
 function rows(table, pairs) {
-  table.innerHTML = pairs.map(([k, v]) => `<tr><td>${k}</td><td>${v}</td></tr>`).join("");
+  if (table.rows.length !== pairs.length) table.innerHTML = "<tr><td></td><td></td></tr>".repeat(pairs.length);
+  pairs.forEach((pair, i) => pair.forEach((html, j) => setHtml(table.rows[i].cells[j], html)));
 }
 
 const fix = (v, n) => (Number.isFinite(v) ? (Math.abs(v) < 0.5 * 10 ** -n ? 0 : v).toFixed(n) : "–");
@@ -115,9 +125,7 @@ function envPanel(e) {
 }
 
 function alarms(list) {
-  const ul = $("alarms");
-  const html = list.length ? list.map((a) => `<li>${escapeHtml(a)}</li>`).join("") : `<li class="muted">none</li>`;
-  if (ul.innerHTML !== html) ul.innerHTML = html;
+  setHtml($("alarms"), list.length ? list.map((a) => `<li>${escapeHtml(a)}</li>`).join("") : `<li class="muted">none</li>`);
 }
 
 function escapeHtml(t) { return String(t).replace(/[&<>"]/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;" }[c])); }
