@@ -13,7 +13,8 @@ from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.camera import channel_camera
 from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
 from bridge_node.render.meshes import CELL_VERTEX, cell_vertices, template_meshes
-from bridge_node.render.renderer import SceneRenderer, _FloeBuffer, _FloeCopies, horizon_split
+from bridge_node.render.floe_buffers import FloeBuffer, FloeCopies, horizon_split
+from bridge_node.render.renderer import SceneRenderer
 from bridge_node.render.settings import ChannelSettings, RenderSettings
 from bridge_node.render.warp import WarpError, write_pfm
 from bridge_node.stream.world_view import WorldView
@@ -159,8 +160,8 @@ def test_a_tiles_floe_buffer_keeps_every_triangle_over_its_growth(ctx, exercise,
     model, _ = exercise
     renderer = SceneRenderer(ctx, model, RenderSettings(channels=[channel()]))
     mesh = renderer.meshes[0]
-    buf = _FloeCopies(ctx, renderer.floe, mesh) if copies else \
-        _FloeBuffer(ctx, renderer.floe, renderer.mesh_vbos[0], mesh.index.dtype)
+    buf = FloeCopies(ctx, renderer.floe, mesh) if copies else \
+        FloeBuffer(ctx, renderer.floe, renderer.mesh_vbos[0], mesh.index.dtype)
     cells = np.array_split(np.arange(len(mesh.start) - 1), 12)
     parts = [mesh.corners(c, sides=s) for _ in range(3) for c in cells for s in (False, True)]
     for part in parts:  # appended in parts, as cells break, over the storages' growth

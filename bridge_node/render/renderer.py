@@ -29,32 +29,20 @@ and the ship's place.
 from __future__ import annotations
 
 import math
-from datetime import datetime, timezone
 
 import moderngl
 import numpy as np
 
-from bridge_node.render import shaders
-from bridge_node.render.camera import (
-    Camera,
-    channel_camera,
-    set_matrix,
-    ship_matrix,
-    visible_boxes,
-)
-from bridge_node.render.meshes import TemplateMesh, cell_rasters, rim_rasters, template_meshes
-from bridge_node.render.settings import (
-    ChannelSettings,
-    RenderSettings,
-    eye_point,
-)
-from bridge_node.render.shaders import POSE_WIDTH
+from bridge_node.render import object_shaders, shaders
+from bridge_node.render.camera import Camera, channel_camera, set_matrix, ship_matrix, visible_boxes
+from bridge_node.render.floe_buffers import FloeBuffer, horizon_split
+from bridge_node.render.meshes import cell_rasters, rim_rasters, template_meshes
+from bridge_node.render.scene_uploads import POSE_NAMES, POSE_UNITS, SceneUploads
+from bridge_node.render.settings import ChannelSettings, RenderSettings, eye_point
 from bridge_node.render.ship_mesh import load_ship, nav_lights, ship_triangles
-from bridge_node.render.sky import Sky, sky_for
+from bridge_node.render.sky import Sky
 from bridge_node.render.textures import relief_noise
-from bridge_node.stream.world_view import Placement, WorldView
-from sim_core.frames.geodesy import local_to_geodetic
-from sim_core.ice.floes import FloeStatus
+from bridge_node.stream.world_view import WorldView
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.world import WorldModel
 
@@ -64,153 +52,12 @@ MAX_TILES = 4096 * 4096  # tile table of 8 bytes per tile: 134 MB of texture at 
 RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m tiles)
 WATER = (0.04, 0.09, 0.11)  # the sea's body colour (albedo of the light it sends back up)
 NOISE_UNIT = 8  # texture unit of the relief noise
-POSE_NAMES, POSE_UNITS = ("pose_q", "pose_t"), (4, 5)  # the floe pose textures and their units
 STATUS_UNIT = 7  # texture unit of the status texture
-PATCHES = 61 * 59  # snow patches the floes' tops are given (the floe shader's grid of them)
 NAV_LIGHT_LUX = 10.0  # lux: daylight below which navigation lights show at full strength (civil dusk)
 EYE_WHITE_LUX = 40.0  # lux a surface needs to look white to eyes adapted to the night
 
 
-def pose_textures(pose: np.ndarray) -> np.ndarray:
-    """The pose textures' texels (2, n, 4) of poses (n, 6): x, y, heave (m), yaw, roll, pitch
-    (rad): the unit quaternion (x, y, z, w) of Rz(yaw) Ry(pitch) Rx(roll), floe to world;
-    the place (x, y, heave, 0)."""
-    x, y, z, yaw, roll, pitch = pose.T
-    cy, sy, cp, sp, cr, sr = (f(a / 2) for a in (yaw, pitch, roll) for f in (np.cos, np.sin))
-    quaternion = [cy * cp * sr - sy * sp * cr, cy * sp * cr + sy * cp * sr, sy * cp * cr - cy * sp * sr,
-                  cy * cp * cr + sy * sp * sr]
-    return np.array([np.column_stack(quaternion), np.column_stack([x, y, z, np.zeros_like(x)])])
-
-
-def _clip(poly: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """The part of a convex polygon (n, k) where the linear function f (values at its
-    vertices) is <= 0, as a triangle fan's triangles (3 m, k)."""
-    out = []
-    for a, b, fa, fb in zip(poly, np.roll(poly, -1, 0), f, np.roll(f, -1)):
-        if fa <= 0:
-            out.append(a)
-        if (fa <= 0) != (fb <= 0):
-            out.append(a + (b - a) * (fa / (fa - fb)))
-    if len(out) < 3:
-        return np.zeros((0, poly.shape[1]))
-    return np.array([v for k in range(1, len(out) - 1) for v in (out[0], out[k], out[k + 1])])
-
-
-def horizon_split(cam: Camera, tx: float, ty: float, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
-    """The screen split along the horizon for the environment pass (below, over the band
-    of pixels the horizon's anti-aliasing spans) and the sky pass (above): triangles of
-    (NDC x, y, view ray x, y, z), the rays linear in the screen; tx, ty: tangents of half
-    the fields of view. The split lies where the ray's z is one pixel's change of it (on
-    both axes) above 0: past the half pixel that the environment pass blends."""
-    corners = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
-    rays = -cam.view[2, :3] + corners[:, :1] * tx * cam.view[0, :3] + corners[:, 1:] * ty * cam.view[1, :3]
-    band = 2.0 * (abs(tx * cam.view[0, 2]) / width + abs(ty * cam.view[1, 2]) / height)
-    quad, f = np.hstack([corners, rays]), rays[:, 2] - band
-    return _clip(quad, f), _clip(quad, -f)
-
-
-def _write_entries(tex: moderngl.Texture, lines: int, first: int, values: np.ndarray) -> None:
-    """Write values (n, ...) to a texture's frozen entries first .. first + n - 1, which run
-    along its lines from the last line down (``shaders.entry_texel``)."""
-    end = first + len(values)
-    for line in range(first // POSE_WIDTH, (end - 1) // POSE_WIDTH + 1):
-        a, b = max(first, line * POSE_WIDTH), min(end, (line + 1) * POSE_WIDTH)
-        tex.write(np.ascontiguousarray(values[a - first:b - first]).tobytes(),
-                  viewport=(a % POSE_WIDTH, lines - 1 - line, b - a, 1))
-
-
-def _grown(ctx: moderngl.Context, buf: moderngl.Buffer | None, used: int, size: int,
-           least: int = 1 << 16) -> moderngl.Buffer:
-    """`buf` if it holds `size` bytes, else a buffer of at least twice its size (and `least`
-    bytes) holding its first `used` bytes (`buf` released)."""
-    if buf is not None and size <= buf.size:
-        return buf
-    new = ctx.buffer(reserve=max(size, 2 * (buf.size if buf else 0), least))
-    if buf is not None:
-        ctx.copy_buffer(new, buf, used)
-        buf.release()
-    return new
-
-
-class _FloeBuffer:
-    """Triangles of one tile's broken floes (tops or sides): indices into the vertices its
-    template shares with every tile laid with it (``meshes.TemplateMesh``), appended to as
-    cells break; the storage doubles when full, from ``least`` bytes (0: a buffer that is
-    written once, a frozen tile's, holds just what it is given). Only indices are kept per
-    floe."""
-
-    def __init__(self, ctx: moderngl.Context, program: moderngl.Program, vbo: moderngl.Buffer | None,
-                 index_type: np.dtype, least: int = 1 << 16) -> None:
-        self.ctx, self.program, self.vbo, self.index_type = ctx, program, vbo, np.dtype(index_type)
-        self.least = least
-        self.ibo = self.vao = None
-        self._bound: tuple = (None, None)  # the (vertex, index) buffers of the vertex array
-        self.indices = 0
-
-    def append(self, index: np.ndarray) -> None:
-        """Append triangles, as their corners' indices into the vertices."""
-        size = self.index_type.itemsize
-        self.ibo = _grown(self.ctx, self.ibo, self.indices * size, (self.indices + len(index)) * size, self.least)
-        if self._bound != (self.vbo, self.ibo):
-            if self.vao is not None:
-                self.vao.release()
-            self.vao = self.ctx.vertex_array(self.program, [(self.vbo, "3f 3f i", "in_pos", "in_normal", "in_cell")],
-                                             self.ibo, index_element_size=size)
-            self._bound = self.vbo, self.ibo
-        self.ibo.write(index.astype(self.index_type).tobytes(), offset=self.indices * size)
-        self.indices += len(index)
-
-    def render(self) -> None:
-        if self.indices:
-            self.vao.render(vertices=self.indices)
-
-    def release(self) -> None:
-        """Free the index storage (the template's vertices stay, shared)."""
-        for obj in (self.vao, self.ibo):
-            if obj is not None:
-                obj.release()
-        self.ibo = self.vao = None
-        self._bound = (None, None)
-        self.indices = 0
-
-    @property
-    def nbytes(self) -> int:
-        """Bytes of storage held."""
-        return self.ibo.size if self.ibo is not None else 0
-
-
-class _FloeCopies(_FloeBuffer):
-    """A ``_FloeBuffer`` that keeps its own copy of its floes' vertices, for a live tile: on
-    llvmpipe, a tile's draw that fetches its vertices from the whole template's took about a
-    twentieth of the frame more than one that fetches them from its own few (3 channels at
-    1280x720, 3000 floes). Live floes are a few thousand; frozen ones index the template's."""
-
-    def __init__(self, ctx: moderngl.Context, program: moderngl.Program, mesh: TemplateMesh) -> None:
-        super().__init__(ctx, program, None, mesh.index.dtype)
-        self.template_vertices, self.vertex_count = mesh.vertices, 0
-
-    def append(self, index: np.ndarray) -> None:
-        """Append triangles, as their corners' indices into the template's vertices."""
-        ids, local = np.unique(index, return_inverse=True)  # the cells' vertices, each once
-        stride = self.template_vertices.itemsize
-        self.vbo = _grown(self.ctx, self.vbo, self.vertex_count * stride, (self.vertex_count + len(ids)) * stride,
-                          self.least)
-        self.vbo.write(self.template_vertices[ids].tobytes(), offset=self.vertex_count * stride)
-        super().append(local.ravel() + self.vertex_count)
-        self.vertex_count += len(ids)
-
-    def release(self) -> None:
-        super().release()
-        if self.vbo is not None:
-            self.vbo.release()
-        self.vbo, self.vertex_count = None, 0
-
-    @property
-    def nbytes(self) -> int:
-        return super().nbytes + (self.vbo.size if self.vbo is not None else 0)
-
-
-class SceneRenderer:
+class SceneRenderer(SceneUploads):
     """GPU resources of one world; draws it for any channel."""
 
     def __init__(self, ctx: moderngl.Context, model: WorldModel, settings: RenderSettings) -> None:
@@ -233,7 +80,7 @@ class SceneRenderer:
         hull = ship_triangles(mesh)
         self.ship_vao = ctx.vertex_array(self.ship, [(ctx.buffer(hull.tobytes()), "3f 3f 3f", "in_pos", "in_normal",
                                                       "in_colour")])
-        self.nav = ctx.program(vertex_shader=shaders.NAV_VS, fragment_shader=shaders.NAV_FS)
+        self.nav = ctx.program(vertex_shader=object_shaders.NAV_VS, fragment_shader=object_shaders.NAV_FS)
         points = nav_lights(model.ship.particulars, mesh.bounds)
         self.nav_vao = ctx.vertex_array(self.nav, [(ctx.buffer(points.tobytes()), "3f 3f 2f", "in_pos", "in_colour",
                                                     "in_sector")])
@@ -246,7 +93,7 @@ class SceneRenderer:
         raster = np.dstack([cells, rim_rasters(cells, self.raster_size, self.rim_px), np.zeros_like(cells)])
         self.cell_raster = ctx.texture((self.raster_size, raster.shape[0]), 4, raster.tobytes(), dtype="u2")
         self.cell_raster.filter = moderngl.NEAREST, moderngl.NEAREST
-        self.tile_floes: dict[int, tuple[_FloeBuffer, _FloeBuffer]] = {}  # placement -> (tops, sides)
+        self.tile_floes: dict[int, tuple[FloeBuffer, FloeBuffer]] = {}  # placement -> (tops, sides)
         self._tile_draw: dict[int, dict] = {}  # placement -> the floe program's uniforms for its tile
         self._sides_due: set[int] = set()  # frozen placements whose side faces are made when first needed
         self._drawn = np.zeros(0, dtype=bool)  # by row: its triangles are in its tile's buffers
@@ -272,12 +119,13 @@ class SceneRenderer:
         """The shader programs (with ``lights`` searchlights) and the screen-space buffers of
         the environment, sky and blend band."""
         ctx = self.ctx
-        self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=shaders.with_lights(shaders.ENV_FS, lights))
-        self.floe = ctx.program(vertex_shader=shaders.FLOE_VS,
-                                fragment_shader=shaders.with_lights(shaders.FLOE_FS, lights))
-        self.ship = ctx.program(vertex_shader=shaders.SHIP_VS,
-                                fragment_shader=shaders.with_lights(shaders.SHIP_FS, lights))
-        self.band = ctx.program(vertex_shader=shaders.BAND_VS, fragment_shader=shaders.BAND_FS)
+        self.env = ctx.program(vertex_shader=shaders.ENV_VS,
+                               fragment_shader=shaders.with_lights(shaders.ENV_FS, lights))
+        self.floe = ctx.program(vertex_shader=object_shaders.FLOE_VS,
+                                fragment_shader=shaders.with_lights(object_shaders.FLOE_FS, lights))
+        self.ship = ctx.program(vertex_shader=object_shaders.SHIP_VS,
+                                fragment_shader=shaders.with_lights(object_shaders.SHIP_FS, lights))
+        self.band = ctx.program(vertex_shader=object_shaders.BAND_VS, fragment_shader=object_shaders.BAND_FS)
         self.band_buf = ctx.buffer(reserve=2 * 6 * 2 * 4)
         self.band_vao = ctx.vertex_array(self.band, [(self.band_buf, "2f", "in_ndc")])
         self.sky_prog = ctx.program(vertex_shader=shaders.ENV_VS,
@@ -287,193 +135,7 @@ class SceneRenderer:
         self.sky_vao = ctx.vertex_array(self.sky_prog, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
 
     # -- per frame uploads ----------------------------------------------------------------
-    def update(self, view: WorldView) -> None:
-        """Upload what changed in the view since the last call: tiles given rows (new or
-        thawed) and tiles frozen, the triangles of newly broken floes, and the poses of the
-        rows that changed; and take the sky of the view's time and place."""
-        changes = view.take_changes()
-        lat, lon = local_to_geodetic(view.ship.north, view.ship.east, *self.model.origin)
-        self.sky = sky_for(datetime.fromtimestamp(view.ship.utc, timezone.utc), lat, lon)  # the exercise clock
-        for k in changes.frozen:
-            self._freeze(view, k)
-        for k in changes.placements:
-            self._place(view, k)
-        if self._ensure_capacity(view):
-            self._upload_rows(view, 0, view.rows)
-            for k in self._frozen:
-                self._upload_frozen(view, k)
-        else:
-            self._upload_rows(view, changes.rows_from, changes.rows_to)
-            for k in changes.frozen:
-                if k in self._frozen:
-                    self._upload_frozen(view, k)
-        self._append_broken(view, changes.broken)
 
-    def _write_tile_info(self, p: Placement, first_entry: int, breakable: bool) -> None:
-        nx = self.model.scene.nx
-        thickness = self.tile_thickness.view("i4")[p.tile]
-        info = np.array([first_entry, p.template | (p.quarter_turns << 16), thickness, int(breakable)], "i4")
-        self.tile_info.write(info.tobytes(), viewport=(p.tile % nx, p.tile // nx, 1, 1))
-
-    def _drop_floes(self, k: int) -> None:
-        for buf in self.tile_floes.pop(k, ()):
-            buf.release()
-        self._tile_draw.pop(k, None)
-        self._sides_due.discard(k)
-
-    def _new_floes(self, k: int, p: Placement, first: int) -> None:
-        """Empty triangle buffers for tile k, and its uniforms: its first row (negative for
-        a frozen tile, whose entries ``_give_entries`` numbers), its snow patches (each floe
-        its own, by field tile and cell) and its ice thickness."""
-        mesh = self.meshes[p.template]
-        if first < 0:  # frozen: indices into the template's vertices, written once
-            self.tile_floes[k] = (_FloeBuffer(self.ctx, self.floe, self.mesh_vbos[p.template], mesh.index.dtype, 0),
-                                  _FloeBuffer(self.ctx, self.floe, self.mesh_vbos[p.template], mesh.index.dtype, 0))
-        else:
-            self.tile_floes[k] = (_FloeCopies(self.ctx, self.floe, mesh), _FloeCopies(self.ctx, self.floe, mesh))
-        self._tile_draw[k] = {"first": first, "first_floe": 0, "frozen": first < 0,
-                              "patch_base": p.tile * 7919 % PATCHES, "thickness": self.template_thickness[p.template]}
-
-    def _place(self, view: WorldView, k: int) -> None:
-        """A tile given rows (laid, or thawed): its cells by row; its floes drawn anew as
-        their rows break (a thawed tile's all come as broken)."""
-        p = view.placements[k]
-        self._drop_floes(k)
-        self._frozen.pop(k, None)
-        self._grow_drawn(view.rows)
-        self._drawn[p.row_start:p.row_start + p.row_count] = False
-        self._write_tile_info(p, p.row_start, True)
-        self._new_floes(k, p, p.row_start)
-
-    def _freeze(self, view: WorldView, k: int) -> None:
-        """A tile frozen: its floes get pose entries of their own, and its cells status
-        entries that name each broken cell's floe (numbered from the top of the textures
-        down; its rows go to other tiles); its floes' tops are drawn from these, their sides
-        made when first needed. A frozen tile without floes is level ice like the
-        unbreakable slab."""
-        p, floes = view.placements[k], view.frozen_floes[k]
-        self._drop_floes(k)
-        if not len(floes):
-            self._frozen.pop(k, None)
-            self._write_tile_info(p, 0, False)
-            return
-        self._new_floes(k, p, -1)
-        self._give_entries(view, k)
-        self.tile_floes[k][0].append(self.meshes[p.template].corners(floes["cell"].astype(np.int64), sides=False))
-        self._sides_due.add(k)
-
-    def _give_entries(self, view: WorldView, k: int) -> None:
-        """Number frozen tile k's floes and cells after the entries given so far, and point
-        its tile table entry and its draw's uniforms at them."""
-        p = view.placements[k]
-        self._frozen[k] = self._frozen_floes, self._frozen_cells
-        self._write_tile_info(p, -1 - self._frozen_cells, True)
-        self._tile_draw[k].update(first=-1 - self._frozen_cells, first_floe=self._frozen_floes)
-        self._frozen_floes += len(view.frozen_floes[k])
-        self._frozen_cells += self.model.ice.templates[p.template].n_cells
-
-    def _sides(self, view: WorldView, k: int) -> _FloeBuffer:
-        """Tile k's side faces, made now for a frozen tile that has not needed them yet."""
-        if k in self._sides_due:
-            self._sides_due.discard(k)
-            cells = view.frozen_floes[k]["cell"].astype(np.int64)
-            self.tile_floes[k][1].append(self.meshes[view.placements[k].template].corners(cells, sides=True))
-        return self.tile_floes[k][1]
-
-    def _grow_drawn(self, rows: int) -> None:
-        if len(self._drawn) < rows:
-            self._drawn = np.concatenate([self._drawn, np.zeros(rows - len(self._drawn), bool)])
-
-    def _append_broken(self, view: WorldView, broken: np.ndarray) -> None:
-        """Append the triangles of newly broken cells (still broken, in a live tile) to their
-        tile's buffers."""
-        self._grow_drawn(view.rows)
-        new = np.unique(broken)
-        new = new[(view.status[new] == FloeStatus.FREE) & ~self._drawn[new]]
-        self._drawn[new] = True
-        tile, start = self._row_tile(view, new)
-        for k in np.unique(tile).tolist():
-            cells = new[tile == k] - start[tile == k][0]
-            mesh = self.meshes[view.placements[k].template]
-            for buf, sides in zip(self.tile_floes[k], (False, True)):
-                buf.append(mesh.corners(cells, sides))
-
-    @staticmethod
-    def _row_tile(view: WorldView, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Live placement of each row, and that placement's first row (a placement's rows
-        are contiguous)."""
-        live = sorted((p.row_start, k) for k, p in view.placements.items() if k not in view.frozen and p.row_count)
-        starts = np.array([a for a, _ in live], dtype=np.int64)
-        at = np.searchsorted(starts, rows, side="right") - 1
-        return np.array([k for _, k in live], dtype=np.int64)[at], starts[at]
-
-    def _ensure_capacity(self, view: WorldView) -> bool:
-        """Grow the pose and status textures to hold the view's rows (from the first line up)
-        and the frozen tiles' entries (from the last line down), those renumbered without the
-        entries of tiles since thawed or frozen anew; True if they were (re)made, so that
-        everything must be uploaded again."""
-        lines = max(1, math.ceil(view.rows / POSE_WIDTH))
-        if (lines + math.ceil(self._frozen_floes / POSE_WIDTH) <= self._pose_lines
-                and lines + math.ceil(self._frozen_cells / POSE_WIDTH) <= self._status_lines):
-            return False
-        self._frozen_floes = self._frozen_cells = 0
-        for k in list(self._frozen):
-            self._give_entries(view, k)
-        pose_lines = lines + math.ceil(self._frozen_floes / POSE_WIDTH)
-        status_lines = lines + math.ceil(self._frozen_cells / POSE_WIDTH)
-        for old in [*self.pose, self.status]:
-            if old is not None:
-                old.release()
-        self._pose_lines = max(pose_lines, 2 * self._pose_lines)
-        self._status_lines = max(status_lines, 2 * self._status_lines)
-        self.pose = [self.ctx.texture((POSE_WIDTH, self._pose_lines), 4, dtype="f4") for _ in POSE_UNITS]
-        self.status = self.ctx.texture((POSE_WIDTH, self._status_lines), 1, dtype="u2")
-        for tex in [*self.pose, self.status]:
-            tex.filter = moderngl.NEAREST, moderngl.NEAREST
-        return True
-
-    def _upload_rows(self, view: WorldView, first_row: int, end_row: int) -> None:
-        """Upload the poses and statuses of rows [first_row, end_row), whole texture lines."""
-        line0 = first_row // POSE_WIDTH
-        r0, r1 = line0 * POSE_WIDTH, end_row
-        if r1 <= r0:
-            return
-        lines = math.ceil((r1 - r0) / POSE_WIDTH)
-        n = min(lines * POSE_WIDTH, view.rows - r0)
-        texels = np.zeros((len(self.pose), lines * POSE_WIDTH, 4), dtype="f4")
-        texels[:, :n] = pose_textures(view.pose[r0:r0 + n])
-        viewport = (0, line0, POSE_WIDTH, lines)
-        for tex, line in zip(self.pose, texels):
-            tex.write(line.tobytes(), viewport=viewport)
-        status = np.zeros(lines * POSE_WIDTH, dtype=np.uint16)
-        status[:n] = view.status[r0:r0 + n]
-        self.status.write(status.tobytes(), viewport=viewport)
-
-    def _upload_frozen(self, view: WorldView, k: int) -> None:
-        """Upload a frozen tile's entries: its floes' poses, and its cells' status (1 + the
-        place of the cell's floe among the tile's floes; 0 intact)."""
-        floes, (first_floe, first_cell) = view.frozen_floes[k], self._frozen[k]
-        n_cells = self.model.ice.templates[view.placements[k].template].n_cells
-        status = np.zeros(n_cells, dtype=np.uint16)
-        status[floes["cell"]] = 1 + np.arange(len(floes))
-        for tex, texels in zip(self.pose, pose_textures(floes["pose"].astype(float)).astype("f4")):
-            _write_entries(tex, self._pose_lines, first_floe, texels)
-        _write_entries(self.status, self._status_lines, first_cell, status)
-
-    def floe_memory(self, view: WorldView) -> dict:
-        """Bytes kept for the floes of the view, on the GPU and in the view: the index buffers
-        of live and of frozen tiles, the frozen tiles' texture entries (entries of tiles since
-        thawed included) and the view's frozen records; and the sum per frozen floe."""
-        frozen = sum(b.nbytes for k, bufs in self.tile_floes.items() if k in self._frozen for b in bufs)
-        live = sum(b.nbytes for k, bufs in self.tile_floes.items() if k not in self._frozen for b in bufs)
-        entries = 32 * self._frozen_floes + 2 * self._frozen_cells  # two RGBA32F pose texels; one R16UI status
-        records = sum(f.nbytes for f in view.frozen_floes.values())
-        n = sum(len(f) for f in view.frozen_floes.values())
-        return {"frozen_floes": n, "frozen_index_bytes": frozen, "frozen_entry_bytes": entries,
-                "view_frozen_bytes": records, "live_index_bytes": live,
-                "bytes_per_frozen_floe": round((frozen + entries + records) / n, 1) if n else None}
-
-    # -- drawing --------------------------------------------------------------------------
     def draw(self, view: WorldView, channel: ChannelSettings, blend: moderngl.Texture) -> Camera:
         """Draw the scene for one channel into the bound framebuffer, its columns scaled by
         the blend texture (width x 1 float: the channel's edge-blend factors)."""
@@ -579,8 +241,8 @@ class SceneRenderer:
         keys = list(self.tile_floes)
         corner = np.array([view.placements[k].corner for k in keys], dtype=float)
         side = self.model.scene.side
-        lo = np.column_stack([corner - FLOE_DRIFT_MARGIN, np.full(len(keys), -shaders.SEEN_DEPTH)])
-        hi = np.column_stack([corner + side + FLOE_DRIFT_MARGIN, np.full(len(keys), shaders.SEEN_DEPTH)])
+        lo = np.column_stack([corner - FLOE_DRIFT_MARGIN, np.full(len(keys), -object_shaders.SEEN_DEPTH)])
+        hi = np.column_stack([corner + side + FLOE_DRIFT_MARGIN, np.full(len(keys), object_shaders.SEEN_DEPTH)])
         seen = visible_boxes(cam.view_proj, lo, hi)
         gap = np.maximum(np.maximum(lo[:, :2] - cam.eye[:2], cam.eye[:2] - hi[:, :2]), 0.0)
         dist = np.hypot(gap[:, 0], gap[:, 1])

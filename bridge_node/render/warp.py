@@ -20,7 +20,7 @@ import numpy as np
 from bridge_node.node.errors import UserError
 from bridge_node.node.input_files import read_input
 from bridge_node.node.output_files import write_output
-from bridge_node.render import shaders
+from bridge_node.render import object_shaders
 
 MAX_NODES = 4096  # grid nodes a side, at most
 MAX_PFM_BYTES = 64 + MAX_NODES * MAX_NODES * 12  # the header, and three float32 a node
@@ -71,7 +71,7 @@ class WarpMesh:
         k = np.arange(rows * cols).reshape(rows, cols)
         a, b, c, d = k[:-1, :-1], k[:-1, 1:], k[1:, :-1], k[1:, 1:]
         index = np.stack([a, b, d, a, d, c], axis=-1).astype("i4").ravel()
-        self.program = ctx.program(vertex_shader=shaders.WARP_VS, fragment_shader=shaders.WARP_FS)
+        self.program = ctx.program(vertex_shader=object_shaders.WARP_VS, fragment_shader=object_shaders.WARP_FS)
         self.vao = ctx.vertex_array(self.program, [(ctx.buffer(vertices.tobytes()), "2f 2f", "in_ndc", "in_uv")],
                                     index_buffer=ctx.buffer(index.tobytes()))
 
