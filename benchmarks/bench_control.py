@@ -28,7 +28,7 @@ from bridge_node.control.queue import CommandQueue
 from bridge_node.control.settings import ControlSettings
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config
-from bridge_node.node.network import free_port
+from bridge_node.common.network import free_port
 from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.world_setup import build_world, start_world, warm_up
 

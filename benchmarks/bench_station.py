@@ -39,7 +39,7 @@ import psutil
 from bench_render import world_with_floes
 
 from bridge_node.node.config import DEFAULT_CONFIG
-from bridge_node.node.network import free_port
+from bridge_node.common.network import free_port
 from bridge_node.station.harness import (
     chromium,
     http,

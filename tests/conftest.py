@@ -6,7 +6,7 @@ import pytest
 from hypothesis import settings as hypothesis_settings
 
 from bridge_node.node.config import NodeConfig, load_config
-from bridge_node.node.network import free_port
+from bridge_node.common.network import free_port
 from sim_core.fracture.tile_template import FractureSettings, build_tile
 
 # The suite draws the same property-test examples every run (a red CI names a bug, not a

@@ -13,7 +13,7 @@ from pathlib import Path
 import psutil
 from conftest import REPO, exercise_toml
 
-from bridge_node.node.children import private_folder
+from bridge_node.common.children import private_folder
 
 DEMO = REPO / "config" / "scenarios" / "demo_voyage.toml"
 CHANNEL = '[[render.channels]]\nname = "bow"\nwidth = 64\nheight = 36\npitch_deg = -10.0\n'

@@ -12,8 +12,8 @@ from bridge_node.control.client import request
 from bridge_node.control.endpoint import REFUSALS_PER_SECOND, ControlEndpoint
 from bridge_node.control.queue import CommandQueue
 from bridge_node.control.settings import ControlSettings
-from bridge_node.node.errors import UserError
-from bridge_node.node.network import free_port
+from bridge_node.common.errors import UserError
+from bridge_node.common.network import free_port
 
 TOKEN = "a-long-enough-token-0123"
 

@@ -18,8 +18,8 @@ from conftest import REPO, exercise_toml, run_cli
 from links_helpers import pty_pair
 
 from bridge_node.control.client import request
-from bridge_node.node.errors import UserError
-from bridge_node.node.network import free_port
+from bridge_node.common.errors import UserError
+from bridge_node.common.network import free_port
 
 
 class _Instruments:

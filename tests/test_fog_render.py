@@ -14,7 +14,7 @@ import numpy as np
 from conftest import exercise_toml
 from PIL import Image
 
-from bridge_node.node.network import free_port
+from bridge_node.common.network import free_port
 from bridge_node.station.harness import (
     chromium,
     ctl_status,

@@ -30,7 +30,7 @@ from bridge_node.links.record_reader import read_can_log, read_modbus_csv, read_
 from bridge_node.links.session_record import SessionRecord
 from bridge_node.links.settings import CanLinkSettings, NmeaLinkSettings
 from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, load_config, load_ship
-from bridge_node.node.network import free_port
+from bridge_node.common.network import free_port
 
 CONSOLE = DEFAULT_CONFIG.parent / "bridge_console.toml"
 BASE = '[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n'

@@ -13,7 +13,7 @@ from conftest import REPO
 from bridge_node.hil.scenario import load_scenario
 from bridge_node.links.record_reader import read_nmea_log
 from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, load_config, load_ship
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.render.warp import WarpError, read_pfm
 
 BASE = '[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n'
@@ -66,7 +66,7 @@ def test_endless_devices_are_refused_without_reading_them(tmp_path, device, args
 
 
 def test_a_config_over_the_size_limit_is_refused(tmp_path):
-    from bridge_node.node.input_files import TOML_LIMIT  # new in the fix: imported here, the rest runs without it
+    from bridge_node.common.input_files import TOML_LIMIT  # new in the fix: imported here, the rest runs without it
     big = tmp_path / "big.toml"
     big.write_text(BASE + "# padding\n" * (TOML_LIMIT // 10 + 1))
     with pytest.raises(ConfigError, match=rf"{re.escape(str(big))}: the config file is larger than 4 MiB"):
@@ -74,7 +74,7 @@ def test_a_config_over_the_size_limit_is_refused(tmp_path):
 
 
 def test_reads_are_bounded_even_when_the_size_is_not_known_up_front(tmp_path):
-    from bridge_node.node.input_files import read_input
+    from bridge_node.common.input_files import read_input
     path = tmp_path / "f"
     path.write_bytes(b"x" * 100)
     assert read_input(path, "log", 100) == b"x" * 100

@@ -13,8 +13,8 @@ import pytest
 from conftest import REPO
 
 from bridge_node.commands.render_node import _write_summary
-from bridge_node.node.errors import UserError
-from bridge_node.node.paths import writable_file
+from bridge_node.common.errors import UserError
+from bridge_node.common.paths import writable_file
 from bridge_node.render.video import save_png
 
 
@@ -53,7 +53,7 @@ def test_the_summary_never_replaces_a_fifo_or_a_symlink(places):
 
 def test_a_device_is_refused_before_anything_is_written():
     # new in the fix: without it this test stops here, before any write that could replace a device
-    from bridge_node.node.output_files import OutputFile
+    from bridge_node.common.output_files import OutputFile
 
     for device in ("/dev/null", "/dev/full"):
         with pytest.raises(UserError, match=f"--video = '{device}': is a character device"):
@@ -77,7 +77,7 @@ def test_a_regular_file_is_replaced_whole_and_images_need_no_extension(tmp_path)
 
 
 def test_a_path_that_becomes_a_fifo_before_the_rename_is_refused(tmp_path):
-    from bridge_node.node.output_files import OutputFile  # new in the fix
+    from bridge_node.common.output_files import OutputFile  # new in the fix
 
     path = tmp_path / "out.json"
     output = OutputFile(path, "--summary")
@@ -92,8 +92,8 @@ def test_a_failed_write_is_a_clean_error_and_keeps_the_old_file(tmp_path):
     path = tmp_path / "tile.glb"
     path.write_bytes(b"old")
     code = ("import resource, signal, sys\n"
-            "from bridge_node.node.errors import UserError\n"
-            "from bridge_node.node.output_files import write_output\n"
+            "from bridge_node.common.errors import UserError\n"
+            "from bridge_node.common.output_files import write_output\n"
             "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
             "resource.setrlimit(resource.RLIMIT_FSIZE, (1000, 1000))  # a disk that fills after 1000 bytes\n"
             "try:\n"

@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 from replay_logs import ais_lines, ais_static, csv_text, gpx_text, nmea_lines, sentence, tick_log, voyage
 
 from bridge_node.links.record_reader import check_tick_count, read_can_log, read_modbus_csv, read_nmea_log
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.node.tick_record import TICKS_FILE, read_ticks
 from bridge_node.replay.csv_track import read_csv_track, read_gpx
 from bridge_node.replay.dis_log import read_dis_log

@@ -17,7 +17,7 @@ from pydantic import ValidationError
 from replay_logs import KNOT, T0, Fix, ais_lines, at_anchor, replayed_errors, shifted, voyage
 
 from bridge_node.commands.cli import main
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.replay.csv_track import parse_mapping
 from bridge_node.replay.inputs import load_inputs
 from bridge_node.replay.settings import ReplaySettings

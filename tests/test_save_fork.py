@@ -17,8 +17,8 @@ from bridge_node.control.commands import parse_command
 from bridge_node.control.queue import CommandQueue
 from bridge_node.exercise.save_point import FORK_FILE, SAVES_FOLDER, read_save
 from bridge_node.links.hub import LinkHub
-from bridge_node.node.errors import UserError
-from bridge_node.node.network import free_port
+from bridge_node.common.errors import UserError
+from bridge_node.common.network import free_port
 from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.exercise.tick import ExerciseTick

@@ -21,7 +21,7 @@ from bridge_node.hil.scenario import Action
 from bridge_node.hil.settings import ConsoleConfig
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config
-from bridge_node.node.order_refusals import OrderRefusals
+from bridge_node.exercise.order_refusals import OrderRefusals
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, create_context
 from bridge_node.render.renderer import SceneRenderer

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from conftest import exercise_config
 
-from bridge_node.node.network import free_port
+from bridge_node.common.network import free_port
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.stream.codec import MAX_ROWS, TOPIC, CodecError, decode, encode
 from bridge_node.stream.publisher import StatePublisher

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from conftest import exercise_config
 
-from bridge_node.node.order_refusals import REFUSED_ALARM, OrderRefusals
+from bridge_node.exercise.order_refusals import REFUSED_ALARM, OrderRefusals
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.stream.world_view import WorldView
 from sim_core.fracture.tile_template import FractureSettings, build_tile

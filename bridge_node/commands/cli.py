@@ -27,9 +27,9 @@ from bridge_node.commands import (
     run,
     trial,
 )
-from bridge_node.node.children import end_with_parent
-from bridge_node.node.errors import UserError
-from bridge_node.node.paths import writable_dir, writable_file
+from bridge_node.common.children import end_with_parent
+from bridge_node.common.errors import UserError
+from bridge_node.common.paths import writable_dir, writable_file
 
 # name -> (module, help) or (help, {sub-name: (module, help)})
 COMMANDS: dict[str, tuple] = {

@@ -22,8 +22,8 @@ from bridge_node.hil.report import result_lines, write_junit
 from bridge_node.hil.scenario import Fault, load_scenario
 from bridge_node.hil.settings import load_console_config
 from bridge_node.node.config import DEFAULT_CONFIG
-from bridge_node.node.errors import UserError
-from bridge_node.node.output_files import write_output
+from bridge_node.common.errors import UserError
+from bridge_node.common.output_files import write_output
 from bridge_node.replay.console import KeyReader
 from sim_core.ship.orders import OrderKind
 from sim_core.ship.particulars import TELEGRAPH_POSITIONS

@@ -19,7 +19,7 @@ import math
 
 from bridge_node.control.client import request
 from bridge_node.node.config import load_config
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -18,7 +18,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from bridge_node.node.config import load_config, load_ship
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.reports.breaking import plot_breaking_run, plot_breaking_summary
 from sim_core.fracture.colliders import COLLIDER_SETUPS
 from sim_core.fracture.fragment_count import check_thickness

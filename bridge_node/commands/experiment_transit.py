@@ -16,7 +16,7 @@ from rich.progress import Progress
 from rich.table import Table
 
 from bridge_node.node.config import load_config
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.reports.transit import PAPER_PLATEAU, plot_channel, plot_series
 from sim_core.scene.scene import SceneSettings

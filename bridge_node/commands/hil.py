@@ -15,7 +15,7 @@ from bridge_node.hil.player import Console, ScenarioResult, play
 from bridge_node.hil.report import node_lines, result_lines, write_junit
 from bridge_node.hil.scenario import Scenario, load_scenario
 from bridge_node.hil.settings import load_console_config
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -27,9 +27,9 @@ from urllib.parse import urlsplit, urlunsplit
 import uvicorn
 
 from bridge_node.node.config import load_config
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.node.world_setup import build_world
-from bridge_node.node.output_files import write_output
+from bridge_node.common.output_files import write_output
 from bridge_node.station.debrief import debrief_message, load_debrief, plot_png
 from bridge_node.station.feed import ControlWatch, Feed
 from bridge_node.station.geometry import geometry_message

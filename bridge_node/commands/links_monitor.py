@@ -24,8 +24,8 @@ from rich.table import Table
 from bridge_node.exercise.tick import StepListener, TickOutcome
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config, new_session_dir
-from bridge_node.node.errors import UserError
-from bridge_node.node.order_refusals import OrderRefusals
+from bridge_node.common.errors import UserError
+from bridge_node.exercise.order_refusals import OrderRefusals
 from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.world_setup import open_water_world
 from sim_core.frames.units import KNOT

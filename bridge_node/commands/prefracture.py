@@ -18,8 +18,8 @@ from rich.table import Table
 from bridge_node.library.gltf import export_glb
 from bridge_node.library.templates import library_template
 from bridge_node.node.config import load_config, resolve_path
-from bridge_node.node.errors import UserError
-from bridge_node.node.paths import writable_dir
+from bridge_node.common.errors import UserError
+from bridge_node.common.paths import writable_dir
 from bridge_node.node.world_setup import field_tile_classes
 from bridge_node.reports.prefracture import plot_templates
 from sim_core.fracture.fragment_count import check_thickness

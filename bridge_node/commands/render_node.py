@@ -24,8 +24,8 @@ from pathlib import Path
 from urllib.parse import urlsplit, urlunsplit
 
 from bridge_node.node.config import load_config
-from bridge_node.node.errors import UserError
-from bridge_node.node.output_files import write_output
+from bridge_node.common.errors import UserError
+from bridge_node.common.output_files import write_output
 from bridge_node.node.realtime_loop import distribution
 from bridge_node.node.world_setup import build_world
 from bridge_node.render.channels import ChannelSet

@@ -11,7 +11,7 @@ from rich.console import Console
 from rich.progress import Progress
 
 from bridge_node.node.config import load_config
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.open_channels import open_channels
 from bridge_node.stream.world_view import WorldView

@@ -25,7 +25,7 @@ from bridge_node.exercise.save_point import FORK_FILE, read_save
 from bridge_node.hil.run_console import LINK_NAME as RUN_CONSOLE_LINK
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig, load_config
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.node.render_processes import RenderProcesses, open_stream, wait_for_renderers
 from bridge_node.node.world_setup import build_world, start_exercise, start_position, start_world, warm_up
 from bridge_node.replay.console import KeyReader, ReplayProgress, logged_text

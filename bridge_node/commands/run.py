@@ -30,8 +30,8 @@ from bridge_node.exercise.tick import StepListener, TickOutcome
 from bridge_node.hil.run_console import RunConsole
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config, new_session_dir
-from bridge_node.node.errors import UserError
-from bridge_node.node.output_files import write_output
+from bridge_node.common.errors import UserError
+from bridge_node.common.output_files import write_output
 from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.render_processes import RenderProcesses, open_stream, wait_for_renderers
 from bridge_node.node.station_process import StationProcess

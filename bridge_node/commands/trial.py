@@ -14,7 +14,7 @@ from rich.console import Console
 from rich.table import Table
 
 from bridge_node.node.config import load_config, load_ship
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.reports.trials import plot_track
 from sim_core.ship.model import compile_ship
 from sim_core.studies.trials import (

@@ -5,7 +5,7 @@ import json
 
 import zmq
 
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 
 
 def request(endpoint: str, message: dict, token: str | None, timeout_s: float = 5.0) -> dict:

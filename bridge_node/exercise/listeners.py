@@ -14,8 +14,8 @@ from bridge_node.exercise.save_point import SAVES_FOLDER, SavePoint, state_of
 from bridge_node.exercise.tick import StepListener, TickOutcome
 from bridge_node.links.messages import Vessel
 from bridge_node.links.hub import LinkHub
-from bridge_node.node.errors import UserError
-from bridge_node.node.output_files import write_output
+from bridge_node.common.errors import UserError
+from bridge_node.common.output_files import write_output
 from bridge_node.stream.publisher import StatePublisher
 from bridge_node.traffic.picture import TrafficPicture
 from sim_core.frames.geodesy import local_to_geodetic

@@ -19,8 +19,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from bridge_node.node.errors import UserError
-from bridge_node.node.input_files import read_input_text
+from bridge_node.common.errors import UserError
+from bridge_node.common.input_files import read_input_text
 from sim_core.world import WorldEvents
 
 SAVE_NAME = r"^[A-Za-z0-9_-]{1,40}$"

@@ -23,7 +23,7 @@ from bridge_node.control.commands import NODE_COMMANDS, NodeCommand
 from bridge_node.exercise.save_point import SaveRequest
 from bridge_node.links.messages import Alarm
 from bridge_node.links.faults import LinkFault
-from bridge_node.node.order_refusals import OrderRefusals
+from bridge_node.exercise.order_refusals import OrderRefusals
 from sim_core.world import Controls, WorldData, WorldEvents, WorldModel, step
 
 

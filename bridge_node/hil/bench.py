@@ -25,10 +25,10 @@ import tomli_w
 from bridge_node.hil.player import BusOff, Console, ScenarioResult, play
 from bridge_node.hil.scenario import Scenario
 from bridge_node.hil.settings import ConsoleConfig, load_console_config
-from bridge_node.node.children import child_env, ending_with_parent, private_folder, spawn
+from bridge_node.common.children import child_env, ending_with_parent, private_folder, spawn
 from bridge_node.node.config import DEFAULT_CONFIG, load_config, read_toml, resolve_path
-from bridge_node.node.errors import UserError
-from bridge_node.node.network import free_port
+from bridge_node.common.errors import UserError
+from bridge_node.common.network import free_port
 
 KINDS = {"can": "can", "nmea": "nmea0183", "nmea0183": "nmea0183", "modbus": "modbus"}
 ORDER_ROLES = ("primary", "backup")

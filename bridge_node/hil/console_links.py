@@ -25,7 +25,7 @@ import serial
 
 from bridge_node.hil.scenario import Fault
 from bridge_node.links.messages import ETL_POSITIONS
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from sim_core.ship.orders import OrderKind
 from sim_core.ship.searchlights import SearchlightOrder
 

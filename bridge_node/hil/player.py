@@ -18,7 +18,7 @@ from bridge_node.hil.console_links import AlarmReading, ConsoleLink, Order, Read
 from bridge_node.hil.console_registry import make_console_link
 from bridge_node.hil.scenario import QUANTITIES, Expectation, Fault, Scenario
 from bridge_node.hil.settings import ConsoleConfig
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from sim_core.ship.orders import OrderKind
 from sim_core.ship.searchlights import SearchlightOrder
 

@@ -6,7 +6,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from bridge_node.hil.player import ScenarioResult
-from bridge_node.node.output_files import OutputFile
+from bridge_node.common.output_files import OutputFile
 
 
 def result_lines(result: ScenarioResult) -> list[str]:

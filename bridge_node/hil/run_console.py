@@ -17,10 +17,10 @@ from pathlib import Path
 import tomli_w
 
 from bridge_node.hil.bench import STOP_TIMEOUT_S, pty_folder, wire_end
-from bridge_node.node.children import child_env, spawn
+from bridge_node.common.children import child_env, spawn
 from bridge_node.hil.scenario import load_scenario
 from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig, resolve_path
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 
 LINK_NAME = "console"  # the node's end
 INTERRUPTED = 130  # the console's exit status after Ctrl-C (which a terminal sends the run and it alike)

@@ -12,7 +12,7 @@ from pydantic import Field, model_validator
 from bridge_node.hil.scenario import ROLES
 from bridge_node.hil.toml_file import load_toml_model
 from bridge_node.links.settings import BAUD_RATES, RegisterSpec, WriteSpec
-from bridge_node.node.network import NETWORK_CAN_INTERFACES, loopback_unless, serial_port_unless
+from bridge_node.common.network import NETWORK_CAN_INTERFACES, loopback_unless, serial_port_unless
 from sim_core.params import Params, repeated
 
 Rate = Annotated[float, Field(gt=0.0, le=100.0, description="orders are sent again this often, Hz")]

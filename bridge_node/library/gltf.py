@@ -10,7 +10,7 @@ from pathlib import Path
 
 import trimesh
 
-from bridge_node.node.output_files import write_output
+from bridge_node.common.output_files import write_output
 from sim_core.fracture.tile_template import TileTemplate
 
 

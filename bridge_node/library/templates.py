@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bridge_node.node.output_files import OutputFile
+from bridge_node.common.output_files import OutputFile
 from sim_core.fracture.tile_template import FractureSettings, TileTemplate, build_tile, template_seed
 from sim_core.material import IceMaterial
 

@@ -22,7 +22,7 @@ from bridge_node.links.device_io import QueuedWriter, RateSchedule
 from bridge_node.links.messages import Alarm, ControlInput, Vessel
 from bridge_node.links.nmea0183 import SentenceError, parse_order, render_alarm, render_outputs
 from bridge_node.links.settings import NmeaLinkSettings
-from bridge_node.node.network import is_loopback_host
+from bridge_node.common.network import is_loopback_host
 from sim_core.ship.outputs import ShipOutputs
 
 MAX_PENDING = 1024  # characters of a line without its end: beyond this it is noise

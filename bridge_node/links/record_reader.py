@@ -16,8 +16,8 @@ from pathlib import Path
 import can
 from can.io.canutils import CanutilsLogReader
 
-from bridge_node.node.errors import UserError
-from bridge_node.node.input_files import LOG_LIMIT, read_input_text
+from bridge_node.common.errors import UserError
+from bridge_node.common.input_files import LOG_LIMIT, read_input_text
 
 MAX_UNIX_TIME = 1e10  # s (year 2286): a record line's unix time must lie in [0, this]
 MAX_RECORD_TICKS = 10_000_000  # ticks a record without a tick log may span (about 2.3 days at 120 Hz)

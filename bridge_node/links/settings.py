@@ -11,7 +11,7 @@ from pydantic import Field, field_validator, model_validator
 from bridge_node.links.ais import AisSettings
 from bridge_node.links.n2k_network import N2kName, N2kProduct
 from bridge_node.links.nmea0183 import COMMON_ORDER_TALKERS, DEFAULT_RATES, DEFAULT_TALKERS, TYPICAL_LENGTH
-from bridge_node.node.network import NETWORK_CAN_INTERFACES, loopback_unless, serial_port_unless
+from bridge_node.common.network import NETWORK_CAN_INTERFACES, loopback_unless, serial_port_unless
 from sim_core.params import Params
 from sim_core.ship.searchlights import MAX_SEARCHLIGHTS
 

@@ -16,10 +16,10 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 
 from bridge_node.control.settings import ControlSettings
 from bridge_node.links.settings import ArbitrationSettings, LinkSettings
-from bridge_node.node.errors import UserError
-from bridge_node.node.input_files import DBC_LIMIT, TOML_LIMIT, read_input, read_input_text
-from bridge_node.node.paths import NUL_IN_PATH, expand_user, writable_dir
-from bridge_node.node.toml_errors import shown, toml_error
+from bridge_node.common.errors import UserError
+from bridge_node.common.input_files import DBC_LIMIT, TOML_LIMIT, read_input, read_input_text
+from bridge_node.common.paths import NUL_IN_PATH, expand_user, writable_dir
+from bridge_node.common.toml_errors import shown, toml_error
 from bridge_node.render.settings import RenderSettings
 from bridge_node.render.warp import WarpError, read_pfm
 from bridge_node.replay.settings import ReplaySettings

@@ -36,7 +36,7 @@ from bridge_node.exercise.pacer import Pacer
 from bridge_node.exercise.tick import ExerciseTick, StepListener, TickOutcome
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.c_heap import give_back_free_pages, heap_in_use_mib
-from bridge_node.node.order_refusals import OrderRefusals
+from bridge_node.exercise.order_refusals import OrderRefusals
 from bridge_node.node.tick_record import TickRecord
 from sim_core.world import WorldData, WorldModel
 

@@ -23,9 +23,9 @@ from pathlib import Path
 
 import zmq
 
-from bridge_node.node.children import child_env, spawn
+from bridge_node.common.children import child_env, spawn
 from bridge_node.node.config import NodeConfig
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.stream.publisher import StatePublisher
 from bridge_node.stream.settings import StreamSettings
 

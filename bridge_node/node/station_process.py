@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from bridge_node.node.children import child_env, spawn
+from bridge_node.common.children import child_env, spawn
 from bridge_node.node.config import NodeConfig
 
 STOP_TIMEOUT_S = 10.0

@@ -14,8 +14,8 @@ from rich.progress import Progress
 
 from bridge_node.library.templates import library_template
 from bridge_node.node.config import NodeConfig, load_ship, resolve_path
-from bridge_node.node.errors import UserError
-from bridge_node.node.paths import writable_dir
+from bridge_node.common.errors import UserError
+from bridge_node.common.paths import writable_dir
 from sim_core.environment import Environment
 from sim_core.frames.units import KNOT
 from sim_core.ice.model import compile_ice_model

@@ -3,7 +3,7 @@ window when a channel is shown in a window), the scene renderer and the channel 
 A missing display or EGL is the user's to fix, and said so."""
 from __future__ import annotations
 
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.render.channels import ChannelSet, context_for
 from bridge_node.render.renderer import SceneRenderer
 from bridge_node.render.settings import RenderSettings

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from bridge_node.node.errors import UserError
-from bridge_node.node.input_files import MIB, read_input
+from bridge_node.common.errors import UserError
+from bridge_node.common.input_files import MIB, read_input
 from sim_core.ship.particulars import ShipParticulars
 
 HULL, BOOT, DECK, HOUSE, MAST = (0.50, 0.10, 0.08), (0.12, 0.12, 0.13), (0.33, 0.37, 0.34), (0.86, 0.86, 0.82), \

@@ -8,7 +8,7 @@ import av
 import numpy as np
 from PIL import Image
 
-from bridge_node.node.output_files import OutputFile
+from bridge_node.common.output_files import OutputFile
 
 MAX_VIDEO_WIDTH = 1920  # px: wider panoramas are scaled down for the video
 

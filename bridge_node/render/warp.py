@@ -17,9 +17,9 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
-from bridge_node.node.errors import UserError
-from bridge_node.node.input_files import read_input
-from bridge_node.node.output_files import write_output
+from bridge_node.common.errors import UserError
+from bridge_node.common.input_files import read_input
+from bridge_node.common.output_files import write_output
 from bridge_node.render import object_shaders
 
 MAX_NODES = 4096  # grid nodes a side, at most

@@ -19,7 +19,7 @@ import re
 import gpxpy
 import gpxpy.gpx
 
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.replay.track import TrackLog
 from sim_core.frames.units import KNOT
 

@@ -27,8 +27,8 @@ from bridge_node.exercise.tick import ExerciseTick, TickOutcome
 from bridge_node.links.arbiter import Decision
 from bridge_node.links.messages import Alarm
 from bridge_node.links.hub import LinkHub
-from bridge_node.node.order_refusals import OrderRefusals
-from bridge_node.node.output_files import OutputFile
+from bridge_node.exercise.order_refusals import OrderRefusals
+from bridge_node.common.output_files import OutputFile
 from bridge_node.stream.publisher import StatePublisher
 from sim_core.frames.geodesy import local_to_geodetic
 from sim_core.frames.units import KNOT

@@ -12,7 +12,7 @@ from rich.console import Console
 from bridge_node.exercise.save_point import FORK_FILE, SavePoint, read_save, same_state, state_of
 from bridge_node.exercise.tick import ExerciseTick
 from bridge_node.node.config import NodeConfig, load_config
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.replay.engine import StepOrders
 from bridge_node.replay.session import NODE_CONFIG, RECORD_FILES, SessionSource, read_session
 from sim_core.world import WorldData, WorldModel

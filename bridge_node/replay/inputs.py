@@ -20,8 +20,8 @@ from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
-from bridge_node.node.errors import UserError
-from bridge_node.node.input_files import LOG_LIMIT, read_input_text
+from bridge_node.common.errors import UserError
+from bridge_node.common.input_files import LOG_LIMIT, read_input_text
 from bridge_node.node.tick_record import HEADER as TICKS_HEADER
 from bridge_node.node.tick_record import TICKS_FILE
 from bridge_node.replay.csv_track import looks_like_csv_track, read_csv_track, read_gpx

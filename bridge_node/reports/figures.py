@@ -5,7 +5,7 @@ from pathlib import Path
 
 import matplotlib
 
-from bridge_node.node.output_files import OutputFile
+from bridge_node.common.output_files import OutputFile
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)

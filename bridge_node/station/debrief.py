@@ -16,7 +16,7 @@ import pynmea2
 from bridge_node.control.command_log import COMMANDS_FILE
 from bridge_node.control.commands import CommandError, command_from_record
 from bridge_node.links.record_reader import complete_lines, read_nmea_log
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.node.tick_record import TICKS_FILE, read_ticks
 from bridge_node.station.events import describe
 from bridge_node.station.wire import pack

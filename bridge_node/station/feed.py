@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable
 
 from bridge_node.control.client import request
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.station.picture import Frame, Picture
 from bridge_node.stream.subscriber import StateSubscriber, StreamError
 from sim_core.world import WorldModel

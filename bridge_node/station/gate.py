@@ -16,7 +16,7 @@ from urllib.parse import parse_qs, unquote, urlsplit
 from starlette.datastructures import Headers
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from bridge_node.node.network import is_loopback_host
+from bridge_node.common.network import is_loopback_host
 
 COOKIE = "icebridge_token"
 LOGIN_PAGE = """<!doctype html><html lang="en"><head><meta charset="utf-8"><title>IceBridge instructor: sign in</title>

@@ -22,7 +22,7 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from bridge_node.control.client import request
 from bridge_node.control.commands import MAX_COMMAND_BYTES
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.station.gate import TokenGate
 from bridge_node.station.picture import ClientCursor, Frame, message_for
 

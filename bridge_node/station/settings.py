@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pydantic import Field, model_validator
 
-from bridge_node.node.network import loopback_unless
+from bridge_node.common.network import loopback_unless
 from sim_core.params import Params
 
 

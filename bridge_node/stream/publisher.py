@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import zmq
 
-from bridge_node.node.children import private_folder
+from bridge_node.common.children import private_folder
 from bridge_node.stream.codec import HEARTBEAT, CodecError, decode, encode
 from bridge_node.stream.settings import StreamSettings
 from bridge_node.stream.world_view import WorldView

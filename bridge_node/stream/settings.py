@@ -5,7 +5,7 @@ from urllib.parse import urlsplit
 
 from pydantic import Field, model_validator
 
-from bridge_node.node.network import loopback_unless
+from bridge_node.common.network import loopback_unless
 from sim_core.params import Params
 
 

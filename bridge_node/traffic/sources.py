@@ -18,7 +18,7 @@ from bridge_node.links.messages import Vessel
 from bridge_node.links.dis_link import HeardEntities, PduError
 from bridge_node.links.settings import DisLinkSettings
 from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, NodeConfig, resolve_path
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 from bridge_node.replay.dis_log import DIS_FILE, DisRecord, read_dis_log
 from bridge_node.replay.engine import Source
 from bridge_node.replay.inputs import read_text

@@ -13,7 +13,7 @@ import os
 import stat
 from pathlib import Path
 
-from bridge_node.node.errors import UserError
+from bridge_node.common.errors import UserError
 
 MIB = 2**20
 TOML_LIMIT = 4 * MIB  # configs, ships, scenarios, console configs: kilobytes

@@ -11,8 +11,8 @@ import secrets
 from pathlib import Path
 from types import TracebackType
 
-from bridge_node.node.errors import UserError
-from bridge_node.node.paths import replaceable, writable_file
+from bridge_node.common.errors import UserError
+from bridge_node.common.paths import replaceable, writable_file
 
 
 class OutputFile:

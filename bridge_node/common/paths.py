@@ -7,8 +7,8 @@ import stat
 import tempfile
 from pathlib import Path
 
-from bridge_node.node.errors import UserError
-from bridge_node.node.input_files import file_kind
+from bridge_node.common.errors import UserError
+from bridge_node.common.input_files import file_kind
 
 NUL_IN_PATH = "a path cannot contain a NUL character"
 
