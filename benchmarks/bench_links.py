@@ -30,7 +30,7 @@ from links_helpers import STATE, console_frame, node_config, pty_pair, tick  # n
 from modbus_console import ModbusConsole  # noqa: E402
 
 from bridge_node.links.hub import LinkHub  # noqa: E402
-from bridge_node.links.nmea0183 import ROR  # noqa: E402
+from bridge_node.links.nmea0183.sentences import ROR  # noqa: E402
 
 
 def tick_cost(hub: LinkHub, peer: can.BusABC, line: serial.Serial, label: str) -> None:

@@ -81,7 +81,7 @@ def can_link():
     """The helm console's link: python-can's virtual bus, shared with this process's console."""
     from pydantic import TypeAdapter
 
-    from bridge_node.links.settings import LinkSettings
+    from bridge_node.links.registry import LinkSettings
     return TypeAdapter(LinkSettings).validate_python({"type": "can", "name": "helm", "channel": "bench-pipeline",
                                                       "allowed_sources": [0x42]})
 

@@ -14,7 +14,7 @@ import cantools
 
 from bridge_node.links.arbiter import Decision
 from bridge_node.links.hub import LinkHub
-from bridge_node.links.n2k_frames import identifier
+from bridge_node.links.can.n2k_frames import identifier
 from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig
 from sim_core.ship.outputs import ShipOutputs
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 from pyais import encode_dict
 
-from bridge_node.links.nmea0183 import checksum
+from bridge_node.links.nmea0183.sentences import checksum
 from sim_core.frames.geodesy import local_to_geodetic
 
 KNOT = 1852.0 / 3600.0

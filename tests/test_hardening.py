@@ -19,16 +19,18 @@ from conftest import REPO, exercise_toml, fuzz_budget, run_cli
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from links_helpers import console_frame
+from toml_mutants import mutated
 
 from bridge_node.links.messages import Traffic
-from bridge_node.links.can_link import CanLink
-from bridge_node.links.modbus_link import RegisterAccess
-from bridge_node.links.n2k_frames import identifier
-from bridge_node.links.nmea0183 import ROR, SentenceError, parse_order
-from bridge_node.links.nmea_link import NmeaLink
+from bridge_node.links.can.link import CanLink
+from bridge_node.links.modbus.link import RegisterAccess
+from bridge_node.links.can.n2k_frames import identifier
+from bridge_node.links.nmea0183.sentences import ROR, SentenceError, parse_order
+from bridge_node.links.nmea0183.link import NmeaLink
 from bridge_node.links.record_reader import read_can_log, read_modbus_csv, read_nmea_log
 from bridge_node.links.session_record import SessionRecord
-from bridge_node.links.settings import CanLinkSettings, NmeaLinkSettings
+from bridge_node.links.can.settings import CanLinkSettings
+from bridge_node.links.nmea0183.settings import NmeaLinkSettings
 from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, load_config, load_ship
 from bridge_node.common.network import free_port
 
@@ -95,7 +97,7 @@ def test_unusable_output_paths_are_refused_before_the_work(tmp_path):
      'allowed_sources = [66]\n', ["channel = '10.0.0.5'"]),
     ('[[links]]\nname = "c"\ntype = "can"\nallowed_sources = []\n', ["allowed_sources"]),
     ('[[links]]\nname = "c"\ntype = "can"\n', ["allowed_sources", "required"]),
-    ('[[links]]\nname = "n"\ntype = "nmea0183"\nport = ""\n', ["links.0.nmea0183.port = ''"]),
+    ('[[links]]\nname = "n"\ntype = "nmea0183"\nport = ""\n', ["links.0.port = ''"]),
     ('[[links]]\nname = "n"\ntype = "nmea0183"\n[links.rates]\nHDT = false\n', ["rates.HDT = False"]),
 ])
 def test_bad_link_values_are_config_errors(tmp_path, text, fragments):
@@ -151,20 +153,6 @@ def test_free_ports_are_never_handed_out_twice():
         s.bind(("127.0.0.1", ports[-1]))
 
 
-def mutants():
-    """Values a careless integrator might write anywhere in a config."""
-    return st.sampled_from([True, False, "", "1.0", "x" * 300, -1, 0, 1e30, -1e30, math.nan, math.inf, [], {},
-                            [1, 2], {"unknown": 1}, "/dev/zero", "socket://192.0.2.1:4001", 0x42, "any"])
-
-
-def paths_of(node, prefix=()):
-    """Every key path (tuples of keys and list indices) in a parsed TOML document."""
-    items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
-    for key, value in items:
-        yield prefix + (key,)
-        yield from paths_of(value, prefix + (key,))
-
-
 MUTANTS = fuzz_budget(2000)  # more for an exploring run
 
 
@@ -172,19 +160,7 @@ MUTANTS = fuzz_budget(2000)  # more for an exploring run
           )
 @given(st.sampled_from([DEFAULT_CONFIG, CONSOLE]), st.data())
 def test_mutated_configs_are_clean_errors_or_valid_configs(tmp_path, seed, data):
-    doc = tomllib.loads(seed.read_text())
-    for _ in range(data.draw(st.integers(1, 3))):
-        path = data.draw(st.sampled_from(list(paths_of(doc))))
-        parent = doc
-        for key in path[:-1]:
-            parent = parent[key]
-        action = data.draw(st.sampled_from(["replace", "delete", "add"]))
-        if action == "replace":
-            parent[path[-1]] = data.draw(mutants())
-        elif action == "delete" and isinstance(parent, dict):
-            del parent[path[-1]]
-        elif isinstance(parent, dict):
-            parent["unexpected_key"] = data.draw(mutants())
+    doc = mutated(tomllib.loads(seed.read_text()), data)
     cfg_file = tmp_path / "mutant.toml"
     try:
         cfg_file.write_text(tomli_w.dumps(doc))

@@ -67,5 +67,5 @@ def test_unknown_interface_rejected_when_the_config_loads(tmp_path):
     with pytest.raises(ConfigError) as err:
         load_config(cfg)
     message = str(err.value)
-    assert str(cfg) in message and "links.0.can.interface" in message
+    assert str(cfg) in message and "links.0.interface" in message
     assert "python-can has no interface 'slcn'" in message and "slcan" in message

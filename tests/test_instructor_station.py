@@ -19,7 +19,7 @@ import pytest
 from PIL import Image
 
 from bridge_node.control.client import request
-from bridge_node.exercise.save_point import read_save
+from bridge_node.control.save_point import read_save
 from bridge_node.common.network import free_port
 from bridge_node.station.harness import (
     chromium,

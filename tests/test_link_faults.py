@@ -8,8 +8,8 @@ from links_helpers import node_config
 
 from bridge_node.links.faults import LinkFault
 from bridge_node.links.hub import LinkHub
-from bridge_node.links.nmea_link import NmeaLink
-from bridge_node.links.nmea0183 import checksum
+from bridge_node.links.nmea0183.link import NmeaLink
+from bridge_node.links.nmea0183.sentences import checksum
 
 ORDER = "RCROR,{:.1f},A,,V,B"
 

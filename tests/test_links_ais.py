@@ -12,7 +12,7 @@ from gpsd_client import gpsd
 from links_helpers import STATE, node_config, tick
 from pyais import decode
 
-from bridge_node.links.ais import AisReporter, AisSettings, report_interval
+from bridge_node.links.nmea0183.ais import AisReporter, AisSettings, report_interval
 from bridge_node.links.messages import Vessel
 from bridge_node.links.hub import LinkHub
 from sim_core.frames.units import KNOT

@@ -9,12 +9,13 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from bridge_node.links.messages import ControlInput
-from bridge_node.links.can_link import CanLink
-from bridge_node.links.modbus_link import register_order
-from bridge_node.links.n2k_frames import fast_packet_frames, identifier, parse_identifier
-from bridge_node.links.n2k_network import ADDRESS_CLAIM, NETWORK_PGNS
-from bridge_node.links.nmea0183 import ETL, PRC, ROR, SentenceError, parse_order
-from bridge_node.links.settings import CanLinkSettings, RegisterSpec
+from bridge_node.links.can.link import CanLink
+from bridge_node.links.modbus.link import register_order
+from bridge_node.links.can.n2k_frames import fast_packet_frames, identifier, parse_identifier
+from bridge_node.links.can.n2k_network import ADDRESS_CLAIM, NETWORK_PGNS
+from bridge_node.links.nmea0183.sentences import ETL, PRC, ROR, SentenceError, parse_order
+from bridge_node.links.can.settings import CanLinkSettings
+from bridge_node.links.modbus.settings import RegisterSpec
 from sim_core.ship.orders import OrderKind
 
 ORDERS = [str(ROR("RC", "ROR", ("-22.0", "A", "34.0", "A", "B"))),

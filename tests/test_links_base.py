@@ -13,13 +13,14 @@ import pytest
 from links_helpers import STATE, console_frame, node_config, tick
 
 from bridge_node.links import session_record
-from bridge_node.links.base import LINK_TYPES, Link
+from bridge_node.links.base import Link
+from bridge_node.links.kind import LINK_KINDS
 from bridge_node.links.device_io import Backoff
 from bridge_node.links.messages import ControlInput, Listener, Traffic
-from bridge_node.links.can_link import CONFIG_DIR, CanLink
+from bridge_node.links.can.link import CONFIG_DIR, CanLink
 from bridge_node.links.hub import LinkHub
-from bridge_node.links.modbus_link import ModbusLink, RegisterAccess
-from bridge_node.links.nmea_link import NmeaLink
+from bridge_node.links.modbus.link import ModbusLink, RegisterAccess
+from bridge_node.links.nmea0183.link import NmeaLink
 from bridge_node.links.registry import make_link, open_link
 from bridge_node.links.session_record import SessionRecord
 
@@ -30,7 +31,7 @@ LINKS = [{"type": "can", "name": "helm_can", "channel": "icebridge-base", "allow
 
 def test_registry_builds_each_type_from_its_settings_alone():
     cfg = node_config(LINKS)
-    assert set(LINK_TYPES) >= {"can", "nmea0183", "modbus"}
+    assert set(LINK_KINDS) >= {"can", "nmea0183", "modbus", "dis"}
     links = [make_link(s) for s in cfg.links]
     assert [type(link) for link in links] == [CanLink, NmeaLink, ModbusLink]
     assert [link.name for link in links] == ["helm_can", "nmea", "io"]

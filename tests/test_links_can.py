@@ -10,7 +10,7 @@ from links_helpers import CONSOLE, STATE, console_frame, node_config, pty_pair, 
 from nmea2000.decoder import NMEA2000Decoder
 
 from bridge_node.links.hub import LinkHub
-from bridge_node.links.n2k_frames import identifier
+from bridge_node.links.can.n2k_frames import identifier
 
 
 @pytest.fixture

@@ -23,10 +23,10 @@ from opendis.RangeCoordinates import GPS
 from pyais import decode
 from pydantic import ValidationError
 
-from bridge_node.links.ais import static_report
-from bridge_node.links.dis_link import DisLink, PduError
+from bridge_node.links.nmea0183.ais import static_report
+from bridge_node.links.dis.link import DisLink, PduError
 from bridge_node.links.hub import LinkHub
-from bridge_node.links.settings import DisLinkSettings
+from bridge_node.links.dis.settings import DisLinkSettings
 from sim_core.frames.units import KNOT
 
 

@@ -10,7 +10,7 @@ import serial
 from conftest import REPO, run_cli
 from links_helpers import pty_pair
 
-from bridge_node.links.nmea0183 import PRC, ROR, checksum
+from bridge_node.links.nmea0183.sentences import PRC, ROR, checksum
 
 
 def write_config(tmp_path, port: str, udp_port: int | None = None) -> str:
@@ -129,7 +129,7 @@ def test_link_config_errors_name_the_key(tmp_path):
     cfg.write_text('[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n'
                    '[[links]]\nname = "a"\ntype = "can"\nbitrate = 5\n[arbitration]\nrudder = ["b"]\n')
     r = run_cli("links", "monitor", "--config", str(cfg), "--duration", "1")
-    assert r.returncode == 2 and "links.0.can.bitrate = 5" in r.stderr
+    assert r.returncode == 2 and "links.0.bitrate = 5" in r.stderr
     cfg.write_text('[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n'
                    '[[links]]\nname = "a"\ntype = "can"\nallowed_sources = "any"\n[arbitration]\nrudder = ["b"]\n')
     r = run_cli("links", "monitor", "--config", str(cfg), "--duration", "1")

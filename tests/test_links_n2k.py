@@ -12,11 +12,11 @@ from links_helpers import STATE, node_config, pty_pair, tick, wait_for
 from nmea2000._canboat import AddressClaimer, iso_name
 from nmea2000.decoder import NMEA2000Decoder
 
-from bridge_node.links.can_link import CanLink
+from bridge_node.links.can.link import CanLink
 from bridge_node.links.hub import LINK_DOWN_ALARM, LinkHub
-from bridge_node.links.n2k_frames import identifier
-from bridge_node.links.n2k_network import N2kName
-from bridge_node.links.settings import CanLinkSettings
+from bridge_node.links.can.n2k_frames import identifier
+from bridge_node.links.can.n2k_network import N2kName
+from bridge_node.links.can.settings import CanLinkSettings
 
 # canboat's database (github canboat/canboat docs/canboat.json, commit 01d0dc3, 2026-08-16):
 # "Priority" of every PGN the node sends

@@ -18,7 +18,7 @@ from pydantic import ValidationError
 from bridge_node.links.arbiter import OrderArbiter
 from bridge_node.links.messages import ALARM_TEXT_MAX, Alarm, ControlInput
 from bridge_node.links.hub import LINK_DOWN_ALARM, LinkHub
-from bridge_node.links.nmea0183 import ETL, PRC, ROR, SentenceError, parse_order, render_alarm
+from bridge_node.links.nmea0183.sentences import ETL, PRC, ROR, SentenceError, parse_order, render_alarm
 from bridge_node.links.settings import NAME_MAX, ArbitrationSettings
 from bridge_node.exercise.order_refusals import REFUSED_TEXT
 from sim_core.ship.orders import OrderKind

@@ -10,7 +10,7 @@ import serial
 from links_helpers import STATE, node_config, order_collector, paced_write, pty_pair, tick, wait_for
 
 from bridge_node.links.hub import LinkHub
-from bridge_node.links.nmea0183 import ETL, PRC, ROR
+from bridge_node.links.nmea0183.sentences import ETL, PRC, ROR
 
 KNOT = 1852 / 3600
 

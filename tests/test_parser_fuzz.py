@@ -14,7 +14,7 @@ import tomli_w
 from conftest import REPO, exercise_config, fuzz_budget
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_hardening import mutants, paths_of
+from toml_mutants import mutants, mutated, paths_of
 
 from bridge_node.hil.scenario import load_scenario
 from bridge_node.node.config import ConfigError
@@ -28,27 +28,10 @@ FUZZ = settings(max_examples=fuzz_budget(300), deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
 
-def _mutated(doc: dict, data) -> dict:
-    """The document with one to three keys replaced, deleted or joined by an unknown one."""
-    for _ in range(data.draw(st.integers(1, 3))):
-        path = data.draw(st.sampled_from(list(paths_of(doc))))
-        parent = doc
-        for key in path[:-1]:
-            parent = parent[key]
-        action = data.draw(st.sampled_from(["replace", "delete", "add"]))
-        if action == "replace":
-            parent[path[-1]] = data.draw(mutants())
-        elif action == "delete" and isinstance(parent, dict):
-            del parent[path[-1]]
-        elif isinstance(parent, dict):
-            parent["unexpected_key"] = data.draw(mutants())
-    return doc
-
-
 @FUZZ
 @given(st.sampled_from(SCENARIOS), st.data())
 def test_fuzz_mutated_scenarios_are_clean_errors_or_valid_scenarios(tmp_path, seed, data):
-    doc = _mutated(tomllib.loads(seed.read_text()), data)
+    doc = mutated(tomllib.loads(seed.read_text()), data)
     path = tmp_path / "mutant.toml"
     try:
         path.write_text(tomli_w.dumps(doc))
@@ -85,7 +68,7 @@ def test_fuzz_state_messages_are_codec_errors_or_apply_within_the_view(stream_wo
     frames = encode(events, 1.0)
     header = json.loads(frames[1])
     if data.draw(st.booleans()):
-        header = _mutated(header, data) if data.draw(st.booleans()) else header
+        header = mutated(header, data) if data.draw(st.booleans()) else header
         path = data.draw(st.sampled_from(list(paths_of(header))))
         parent = header
         for key in path[:-1]:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from conftest import exercise_config
 
-from bridge_node.control.command_log import COMMANDS_FILE, read_commands
+from bridge_node.exercise.command_log import COMMANDS_FILE, read_commands
 from bridge_node.control.commands import parse_command
 from bridge_node.control.queue import CommandQueue
 from bridge_node.links.hub import LinkHub
@@ -68,7 +68,7 @@ def test_a_replay_of_a_commanded_run_ends_in_its_final_state(tmp_path):
     session = load_inputs([str(record)], None, {}, 1.0 / RATE)
     assert isinstance(session, RecordedSession) and session.exact
     again = start_world(model, cfg)
-    with SessionSource(cfg, session) as source:
+    with SessionSource(cfg.links, cfg.arbitration, session) as source:
         stats = run_replay(model, again, source, Playback(None), None, None)
     assert stats.steps == len(session.ticks) and again.time == pytest.approx(live.time)
     np.testing.assert_allclose(again.ship.eta, live.ship.eta, rtol=0.0, atol=1e-6)

@@ -24,9 +24,9 @@ from replay_logs import ais_lines, ais_static, csv_text, gpx_text, nmea_lines, s
 
 from bridge_node.links.record_reader import check_tick_count, read_can_log, read_modbus_csv, read_nmea_log
 from bridge_node.common.errors import UserError
-from bridge_node.node.tick_record import TICKS_FILE, read_ticks
+from bridge_node.exercise.tick_record import TICKS_FILE, read_ticks
 from bridge_node.replay.csv_track import read_csv_track, read_gpx
-from bridge_node.replay.dis_log import read_dis_log
+from bridge_node.links.dis.kind import read_dis_log
 from bridge_node.replay.inputs import load_inputs
 from bridge_node.replay.sentences import SentenceLog
 from bridge_node.replay.session import RecordedSession
@@ -183,7 +183,7 @@ def test_session_records(tick_edits, edits, name, space):
         except ValueError:
             return
         assert math.isfinite(period) and period > 0.0
-        assert all(t.seq >= 0 and math.isfinite(t.monotonic) and math.isfinite(t.unix) and min(t.reads) >= 0
+        assert all(t.seq >= 0 and math.isfinite(t.monotonic) and math.isfinite(t.unix) and min(t.reads.values()) >= 0
                    for t in ticks)
         try:
             session = load_inputs([str(folder)], None, {}, 0.05)

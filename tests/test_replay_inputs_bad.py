@@ -20,7 +20,7 @@ from replay_logs import (
 
 from bridge_node.links.record_reader import MAX_RECORD_TICKS, check_tick_count, read_modbus_csv, read_nmea_log
 from bridge_node.common.errors import UserError
-from bridge_node.node.tick_record import TICKS_FILE, read_ticks
+from bridge_node.exercise.tick_record import TICKS_FILE, read_ticks
 from bridge_node.replay.inputs import MAX_SPAN_S, check_span, load_inputs
 from bridge_node.replay.settings import ReplaySettings
 from bridge_node.replay.track import TrackLog, TrackPath, clean_for

@@ -16,7 +16,7 @@ from replay_logs import sentence
 from bridge_node.links.hub import LinkHub
 from bridge_node.links.record_reader import read_nmea_log
 from bridge_node.node.realtime_loop import run_realtime
-from bridge_node.node.tick_record import TICKS_FILE, read_ticks
+from bridge_node.exercise.tick_record import TICKS_FILE, read_ticks
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.replay.engine import Playback, run_replay
 from bridge_node.replay.inputs import load_inputs
@@ -112,7 +112,7 @@ def test_a_recorded_session_replays_to_the_same_track_cells_and_outputs(tmp_path
     period, ticks, _ = read_ticks(record / TICKS_FILE)
     assert period == 1.0 / RATE and len(ticks) == len(session.ticks) == 120
     again = start_world(model, cfg)
-    with SessionSource(cfg, session) as source, LinkHub(cfg.links, cfg.arbitration, tmp_path / "replayed") as out:
+    with SessionSource(cfg.links, cfg.arbitration, session) as source, LinkHub(cfg.links, cfg.arbitration, tmp_path / "replayed") as out:
         stats = run_replay(model, again, source, Playback(None), out, None)
     assert stats.steps == 120 and again.time == live.time
     assert {k: source.orders[k] for k in counts} == counts  # every order decoded again
@@ -140,6 +140,6 @@ def test_a_recorded_session_replays_to_the_same_track_cells_and_outputs(tmp_path
                         1.0 / RATE)
     assert not rough.exact and abs(len(rough.ticks) - 120) <= 3
     third = start_world(model, cfg)
-    with SessionSource(cfg, rough) as source:
+    with SessionSource(cfg.links, cfg.arbitration, rough) as source:
         run_replay(model, third, source, Playback(None), None, None)
     assert math.hypot(*(third.ship.eta[:2] - live.ship.eta[:2])) < 1.0

@@ -15,7 +15,7 @@ from conftest import REPO, exercise_config, exercise_toml, run_cli
 from bridge_node.control.client import request
 from bridge_node.control.commands import parse_command
 from bridge_node.control.queue import CommandQueue
-from bridge_node.exercise.save_point import FORK_FILE, SAVES_FOLDER, read_save
+from bridge_node.control.save_point import FORK_FILE, SAVES_FOLDER, read_save
 from bridge_node.links.hub import LinkHub
 from bridge_node.common.errors import UserError
 from bridge_node.common.network import free_port
@@ -23,7 +23,7 @@ from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.exercise.tick import ExerciseTick
 from bridge_node.replay.engine import StepOrders
-from bridge_node.replay.fork import resimulate
+from bridge_node.node.fork import resimulate
 from bridge_node.replay.inputs import load_inputs
 from bridge_node.replay.session import SessionSource
 
@@ -78,7 +78,7 @@ def test_a_save_point_is_reached_again_and_its_continuation_is_the_saved_runs(tm
     _same(_state(fork), at_save[0])  # the saved state, from the record alone
 
     session = load_inputs([str(record)], None, {}, 1.0 / RATE)
-    with SessionSource(cfg, session) as source:  # the saved run's own continuation, from the fork on
+    with SessionSource(cfg.links, cfg.arbitration, session) as source:  # the saved run's own continuation, from the fork on
         orders = StepOrders(source)
         orders.k = next(k for k, t in enumerate(session.ticks) if t.seq == point.seq)
         tick = ExerciseTick(model, fork, orders, (), orders)

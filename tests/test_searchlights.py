@@ -104,7 +104,7 @@ def test_each_link_decodes_the_consoles_searchlight_order_and_counts_one_out_of_
     hub.close()
     folder = tmp_path / "record"
     session = read_session(folder, {p.name for p in folder.iterdir()}, 0.05)
-    with SessionSource(cfg, session) as source:  # the record re-simulated: the same orders again
+    with SessionSource(cfg.links, cfg.arbitration, session) as source:  # the record re-simulated: the same orders again
         replayed = [o for k in range(source.steps) for o in source.inputs(k)[0].searchlights]
     assert commanded(replayed) == commanded(got + refused) and replayed
 

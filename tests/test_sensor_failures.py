@@ -18,10 +18,10 @@ from pyais import decode
 from bridge_node.control.commands import CommandError, command_from_record, command_record, parse_command
 from bridge_node.exercise.listeners import LinkOutputs
 from bridge_node.exercise.tick import TickOutcome
-from bridge_node.links.ais import position_report
-from bridge_node.links.can_link import _n2k_fields, dbc_path, load_dbc
+from bridge_node.links.nmea0183.ais import position_report
+from bridge_node.links.can.link import _n2k_fields, dbc_path, load_dbc
 from bridge_node.links.hub import LinkHub
-from bridge_node.links.nmea0183 import render_outputs
+from bridge_node.links.nmea0183.sentences import render_outputs
 from bridge_node.node.config import load_config
 from bridge_node.node.world_setup import open_water_world
 from sim_core.instructor import Reposition

@@ -17,9 +17,10 @@ from test_links_dis import datagrams, other_simulator_pdu, receiver
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import ConfigError, load_config
 from bridge_node.traffic.settings import ScriptedVessel
-from bridge_node.replay.dis_log import read_dis_log
+from bridge_node.links.dis.kind import read_dis_log
 from bridge_node.replay.session import SessionSource, read_session
-from bridge_node.traffic.sources import ScriptedMotion, replay_traffic, traffic_picture
+from bridge_node.node.traffic_setup import traffic_picture
+from bridge_node.traffic.sources import ScriptedMotion, replay_traffic
 from sim_core.frames.geodesy import geodetic_to_local, local_to_geodetic
 from sim_core.frames.units import KNOT
 
@@ -140,8 +141,8 @@ def test_a_sessions_dis_vessels_are_heard_again_when_it_is_replayed(tmp_path):
     [rx] = [r for r in records if r.direction == "rx"]
     assert rx.pdu == pdu and rx.link == "dis" and not bad["torn"] and not bad["malformed"]
     session = read_session(tmp_path / "session", {"nmea.log"}, 0.1)  # no tick log: ticks from the line times
-    with SessionSource(cfg, session) as source:
-        picture = replay_traffic(source, 0, ORIGIN, cfg)
+    with SessionSource(cfg.links, cfg.arbitration, session) as source:
+        picture = replay_traffic(source, 0, ORIGIN, cfg.replay, cfg.links)
         assert picture.gather([], 50.0) == []  # the record's first tick: not heard yet
         [again] = picture.gather([], 50.0 + rx.unix_time - session.ticks[0].unix + 2.0)  # 2 s after it was
     expected = heard.vessels(live.time + 2.0)[0]  # the live link's own dead reckoning, 2 s on

@@ -97,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
     watch = ControlWatch(target.endpoint, token)
     feed = Feed(model, publish, snapshot, cfg.instructor.rate_hz, watch, broadcast.publish, broadcast.wait_for_node,
                 args.wait)
-    station = Station(geometry_message(model, cfg), broadcast, target, token, not cfg.instructor.allow_network,
+    station = Station(geometry_message(model, cfg.ship.name, cfg.instructor.rate_hz), broadcast, target, token, not cfg.instructor.allow_network,
                       {"mode": "live", "ship": cfg.ship.name, "stream": publish, "control": target.endpoint})
     watch.start()
     feed.start()
@@ -123,7 +123,7 @@ def _debrief(args: argparse.Namespace, cfg, token: str | None) -> int:
     sock = listen(cfg.instructor.host, args.port if args.port is not None else cfg.instructor.port)
     broadcast = Broadcast()
     broadcast.waiting = None  # nothing live to wait for
-    station = Station(geometry_message(model, cfg), broadcast, None, token, not cfg.instructor.allow_network,
+    station = Station(geometry_message(model, cfg.ship.name, cfg.instructor.rate_hz), broadcast, None, token, not cfg.instructor.allow_network,
                       {"mode": "debrief", "ship": cfg.ship.name, "record": str(debrief.folder)},
                       (debrief_message(debrief), plots))
     print(json.dumps({"url": _serve(station, sock, args, f"debrief of {debrief.folder}")}))

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 from rich.console import Console
 
-from bridge_node.exercise.save_point import FORK_FILE, read_save
+from bridge_node.control.save_point import FORK_FILE, read_save
 from bridge_node.hil.run_console import LINK_NAME as RUN_CONSOLE_LINK
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig, load_config
@@ -32,7 +32,7 @@ from bridge_node.replay.console import KeyReader, ReplayProgress, logged_text
 from bridge_node.replay.csv_track import parse_mapping
 from bridge_node.replay.engine import MAX_SPEED, MIN_SPEED, Playback, ReplayStats, Source, run_replay
 from bridge_node.replay.inputs import LOOKED_FOR, VesselChoice, check_span, load_inputs
-from bridge_node.replay.fork import resimulate_shown
+from bridge_node.node.fork import resimulate_shown
 from bridge_node.replay.session import RecordedSession, SessionSource, recorded_config
 from bridge_node.replay.track import Track, TrackLog, TrackPath, TrackSource, clean_for, origin_under
 from bridge_node.reports.replay import gap_summary, plot_replay
@@ -165,7 +165,7 @@ def _session_replay(cfg: NodeConfig, args: argparse.Namespace, session: Recorded
     if not session.ticks:
         raise UserError(f"{session.folder}: no usable track: the session record holds no tick and no input "
                         f"(looked for {LOOKED_FOR})")
-    source = SessionSource(cfg, session)
+    source = SessionSource(cfg.links, cfg.arbitration, session)
     first, last = session.ticks[0].unix, session.ticks[-1].unix + session.period
     seek = 0
     if args.start:
@@ -227,7 +227,7 @@ def _play(cfg: NodeConfig, args: argparse.Namespace, prep: _Prepared, playback: 
         try:
             if renderers:
                 renderers.start()
-            traffic = replay_traffic(prep.source, prep.seek_to, prep.model.origin, cfg)
+            traffic = replay_traffic(prep.source, prep.seek_to, prep.model.origin, cfg.replay, cfg.links)
             # the run's software console was another process, gone now: its orders come from the record
             links = [s for s in cfg.links if not (args.recorded and s.name == RUN_CONSOLE_LINK)]
             with LinkHub(links, cfg.arbitration, Path(args.record) if args.record else None, traffic) as hub, \

@@ -25,7 +25,7 @@ from bridge_node.control.endpoint import ControlEndpoint
 from bridge_node.control.queue import CommandQueue
 from bridge_node.control.status import exercise_status
 from bridge_node.exercise.listeners import StreamOutput
-from bridge_node.exercise.save_point import FORK_FILE, SavePoint, read_save
+from bridge_node.control.save_point import FORK_FILE, SavePoint, read_save
 from bridge_node.exercise.tick import StepListener, TickOutcome
 from bridge_node.hil.run_console import RunConsole
 from bridge_node.links.hub import LinkHub
@@ -36,12 +36,12 @@ from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.render_processes import RenderProcesses, open_stream, wait_for_renderers
 from bridge_node.node.station_process import StationProcess
 from bridge_node.node.world_setup import build_world, start_world, warm_up
-from bridge_node.replay.fork import resimulate_shown
-from bridge_node.reports.run import plot_run
+from bridge_node.node.fork import resimulate_shown
+from bridge_node.node.run_report import plot_run
 from bridge_node.reports.summary import print_summary
 from bridge_node.stream.publisher import StatePublisher
-from bridge_node.traffic.picture import TrafficPicture
-from bridge_node.traffic.sources import traffic_picture
+from bridge_node.links.traffic_picture import TrafficPicture
+from bridge_node.node.traffic_setup import traffic_picture
 from sim_core.frames.units import KNOT
 from sim_core.world import WorldEvents, snapshot
 

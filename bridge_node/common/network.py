@@ -4,6 +4,7 @@ from __future__ import annotations
 import ipaddress
 import re
 import socket
+from urllib.parse import urlsplit
 
 # pyserial URLs that open a network connection (socket://HOST:PORT, rfc2217://HOST:PORT),
 # also inside another URL (spy://, for one)
@@ -49,3 +50,15 @@ def free_port() -> int:
         if port not in _HANDED_OUT:
             _HANDED_OUT.add(port)
             return port
+
+
+def endpoint_host(endpoint: str, key: str) -> str:
+    """The host of a ``tcp://HOST:PORT`` endpoint; ValueError naming the key otherwise."""
+    parts = urlsplit(endpoint)
+    try:
+        port = parts.port
+    except ValueError:
+        port = None
+    if parts.scheme != "tcp" or not parts.hostname or port is None:
+        raise ValueError(f"{key} = {endpoint!r}: expected tcp://HOST:PORT")
+    return parts.hostname

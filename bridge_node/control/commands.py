@@ -47,8 +47,8 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
 
-from bridge_node.exercise.save_point import SAVE_NAME, SaveRequest
-from bridge_node.links.ais import SIX_BIT_TEXT
+from bridge_node.control.save_point import SAVE_NAME, SaveRequest
+from bridge_node.links.nmea0183.ais import SIX_BIT_TEXT
 from bridge_node.links.faults import LINK_FAULT_KINDS, LinkFault
 from sim_core.frames.geodesy import geodetic_to_local
 from sim_core.frames.units import KNOT

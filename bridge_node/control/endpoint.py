@@ -34,7 +34,7 @@ from bridge_node.control.commands import (
 )
 from bridge_node.control.queue import CommandQueue
 from bridge_node.control.settings import ControlSettings
-from bridge_node.exercise.save_point import SAVES_FOLDER
+from bridge_node.control.save_point import SAVES_FOLDER
 from bridge_node.common.errors import UserError
 
 MAX_MESSAGE_BYTES = 65536  # ZeroMQ drops larger messages, and the connection of their sender

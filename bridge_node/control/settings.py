@@ -5,8 +5,7 @@ import os
 
 from pydantic import Field, model_validator
 
-from bridge_node.common.network import loopback_unless
-from bridge_node.stream.settings import endpoint_host
+from bridge_node.common.network import endpoint_host, loopback_unless
 from sim_core.params import Params
 
 TOKEN_VARIABLE = "ICEBRIDGE_TOKEN"  # the access token, where the config does not hold it

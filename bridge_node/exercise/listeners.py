@@ -1,7 +1,7 @@
 """The listeners a tick's outcome goes to, in one place: the links (alarm changes raised,
 the ship's state out), the state stream (the render processes, the instructor station),
 and, in a replay, the links run on the source's clock with the console's orders ignored.
-The session record's tick log is ``bridge_node.node.tick_record.TickRecord``; its save
+The session record's tick log is ``bridge_node.exercise.tick_record.TickRecord``; its save
 points are written by ``SaveWriter``."""
 from __future__ import annotations
 
@@ -10,14 +10,14 @@ import threading
 import time
 from pathlib import Path
 
-from bridge_node.exercise.save_point import SAVES_FOLDER, SavePoint, state_of
+from bridge_node.control.save_point import SAVES_FOLDER, SavePoint, state_of
 from bridge_node.exercise.tick import StepListener, TickOutcome
 from bridge_node.links.messages import Vessel
 from bridge_node.links.hub import LinkHub
 from bridge_node.common.errors import UserError
 from bridge_node.common.output_files import write_output
 from bridge_node.stream.publisher import StatePublisher
-from bridge_node.traffic.picture import TrafficPicture
+from bridge_node.links.traffic_picture import TrafficPicture
 from sim_core.frames.geodesy import local_to_geodetic
 
 

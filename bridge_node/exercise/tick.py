@@ -20,7 +20,7 @@ from typing import Protocol
 from bridge_node.control.queue import CommandSource
 from bridge_node.links.arbiter import Decision
 from bridge_node.control.commands import NODE_COMMANDS, NodeCommand
-from bridge_node.exercise.save_point import SaveRequest
+from bridge_node.control.save_point import SaveRequest
 from bridge_node.links.messages import Alarm
 from bridge_node.links.faults import LinkFault
 from bridge_node.exercise.order_refusals import OrderRefusals

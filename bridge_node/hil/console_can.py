@@ -9,8 +9,8 @@ import can
 
 from bridge_node.hil.console_links import ETL_CODES, ConsoleLink, Order, Reading
 from bridge_node.hil.settings import CanConsoleSettings
-from bridge_node.links.can_link import N2K_DBC, dbc_path, load_dbc
-from bridge_node.links.n2k_frames import identifier, parse_identifier
+from bridge_node.links.can.link import N2K_DBC, dbc_path, load_dbc
+from bridge_node.links.can.n2k_frames import identifier, parse_identifier
 from sim_core.ship.orders import OrderKind
 
 # PGN -> (N2K DBC message, signal, quantity, SI per DBC unit)

@@ -15,7 +15,7 @@ from pymodbus.simulator import DataType, SimData, SimDevice
 from bridge_node.hil.console_links import ETL_CODES, ConsoleLink, Order, Reading
 from bridge_node.hil.scenario import Fault
 from bridge_node.hil.settings import ModbusConsoleSettings
-from bridge_node.links.modbus_link import raw_register, register_value
+from bridge_node.links.modbus.link import raw_register, register_value
 from sim_core.ship.orders import OrderKind
 
 

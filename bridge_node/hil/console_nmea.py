@@ -9,7 +9,7 @@ import serial
 
 from bridge_node.hil.console_links import ETL_CODES, AlarmReading, ConsoleLink, Order, Reading
 from bridge_node.hil.settings import NmeaConsoleSettings
-from bridge_node.links.nmea0183 import ETL, PRC, ROR, SEARCHLIGHT_SENTENCE, checksum
+from bridge_node.links.nmea0183.sentences import ETL, PRC, ROR, SEARCHLIGHT_SENTENCE, checksum
 from sim_core.ship.orders import OrderKind
 
 

@@ -11,7 +11,8 @@ from pydantic import Field, model_validator
 
 from bridge_node.hil.scenario import ROLES
 from bridge_node.hil.toml_file import load_toml_model
-from bridge_node.links.settings import BAUD_RATES, RegisterSpec, WriteSpec
+from bridge_node.links.modbus.settings import RegisterSpec, WriteSpec
+from bridge_node.links.settings import BAUD_RATES
 from bridge_node.common.network import NETWORK_CAN_INTERFACES, loopback_unless, serial_port_unless
 from sim_core.params import Params, repeated
 

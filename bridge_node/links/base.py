@@ -11,8 +11,8 @@ the physics tick must not wait for either. A link never raises for bad input fro
 drops the input. Raw traffic (frames, sentences, register accesses) goes to the link's
 listeners, like python-can's ``Listener``; the session record is one.
 
-Link types register themselves by their settings' ``type`` with ``@register_link``. What
-links exchange (orders, alarms, vessels, health, traffic) is in ``links.messages``; what a
+Each protocol's module registers its link class with the rest of its kind (``links.kind``).
+What links exchange (orders, alarms, vessels, health, traffic) is in ``links.messages``; what a
 device needs around it (back-off, opener thread, queued writer, rate schedule) in
 ``links.device_io``.
 """
@@ -23,7 +23,7 @@ import logging
 import time
 from abc import ABC, abstractmethod
 from collections import Counter
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, ClassVar
 
 from bridge_node.links.device_io import Backoff, Opener
@@ -42,7 +42,7 @@ from sim_core.ship.orders import OrderKind
 from sim_core.ship.outputs import ShipOutputs
 
 if TYPE_CHECKING:
-    from bridge_node.links.settings import LinkSettings
+    from bridge_node.links.settings import LinkSettingsBase
 
 log = logging.getLogger("icebridge.links")
 OPEN_WAIT_S = 5.0  # ``Link.open`` waits this long for the device; a slower one is taken up by a later poll
@@ -56,7 +56,6 @@ class Link(ABC):
     Engine orders (telegraph, lever) for another engine than the link's ``engine`` are
     counted as ``other_engine`` and dropped: the ship has one shaft."""
 
-    type_name: ClassVar[str] = ""  # the settings' ``type``; set by ``register_link``
     open_errors: ClassVar[tuple[type[Exception], ...]] = (OSError,)  # opening the device raises these
     lost_errors: ClassVar[tuple[type[Exception], ...]] = (OSError,)  # a device that failed in use raises these
     lost_kind: ClassVar[str] = "device_lost"  # error kind counted for a device lost in use
@@ -64,7 +63,7 @@ class Link(ABC):
     simulator_peer: ClassVar[bool] = False  # True: a link to other simulators, sent the ship as it is, not as
     # its sensors read it (``WorldEvents.instruments``)
 
-    def __init__(self, settings: LinkSettings) -> None:
+    def __init__(self, settings: LinkSettingsBase) -> None:
         self.settings = settings
         self.name: str = settings.name
         self.device = None
@@ -233,7 +232,7 @@ class Link(ABC):
     def _report(self, direction: str, data: object, unix_time: float | None = None) -> None:
         """Hand raw traffic to the listeners (``unix_time`` default: now)."""
         if self.listeners:
-            t = Traffic(time.time() if unix_time is None else unix_time, self.name, self.type_name, direction, data)
+            t = Traffic(time.time() if unix_time is None else unix_time, self.name, self.settings.type, direction, data)
             for listener in self.listeners:
                 listener.on_traffic(t)
 
@@ -283,15 +282,3 @@ class Link(ABC):
         self._count_error(kind)
         self._backoff.failed(now)
 
-
-LINK_TYPES: dict[str, type[Link]] = {}  # settings ``type`` -> link class
-
-
-def register_link(type_name: str) -> Callable[[type[Link]], type[Link]]:
-    """Class decorator: links of settings ``type = type_name`` are built with this class."""
-
-    def register(cls: type[Link]) -> type[Link]:
-        cls.type_name = type_name
-        LINK_TYPES[type_name] = cls
-        return cls
-    return register

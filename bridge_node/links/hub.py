@@ -24,8 +24,8 @@ from bridge_node.links.messages import Alarm, ControlInput, Listener
 from bridge_node.links.faults import LinkFault
 from bridge_node.links.registry import make_link
 from bridge_node.links.session_record import SessionRecord
-from bridge_node.links.settings import ArbitrationSettings, LinkSettings
-from bridge_node.traffic.picture import TrafficPicture
+from bridge_node.links.settings import ArbitrationSettings, LinkSettingsBase
+from bridge_node.links.traffic_picture import TrafficPicture
 from sim_core.ship.outputs import ShipOutputs
 
 log = logging.getLogger("icebridge.links")
@@ -37,7 +37,7 @@ ALARM_REPEAT_S = 10.0  # active alarms are announced again this often, s
 class LinkHub:
     """The node's links, the arbiter, the alarms and the traffic listeners."""
 
-    def __init__(self, links: Sequence[LinkSettings], arbitration: ArbitrationSettings,
+    def __init__(self, links: Sequence[LinkSettingsBase], arbitration: ArbitrationSettings,
                  record_dir: Path | None = None, traffic: TrafficPicture | None = None,
                  made: Sequence[Link] | None = None) -> None:
         """The links made from ``links``' settings, or ``made``: links already made (a

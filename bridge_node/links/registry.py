@@ -1,22 +1,26 @@
-"""Link types by the settings' ``type``: each link module registers its class with
-``@register_link``; importing them here fills ``LINK_TYPES``."""
+"""The link kinds the node knows: importing each kind's module registers it (``links.kind``).
+A new link kind is added here, by one import, and in its own folder."""
 from __future__ import annotations
 
-from bridge_node.links import can_link, dis_link, modbus_link, nmea_link  # noqa: F401  (they register themselves)
-from bridge_node.links.base import LINK_TYPES, Link
-from bridge_node.links.settings import LinkSettings
+from typing import Annotated
+
+from bridge_node.links.base import Link
+from bridge_node.links.can import kind as _can  # noqa: F401  (the kinds register themselves)
+from bridge_node.links.dis import kind as _dis  # noqa: F401
+from bridge_node.links.kind import OneOfTheKinds, link_kind
+from bridge_node.links.modbus import kind as _modbus  # noqa: F401
+from bridge_node.links.nmea0183 import kind as _nmea0183  # noqa: F401
+from bridge_node.links.settings import LinkSettingsBase
+
+LinkSettings = Annotated[LinkSettingsBase, OneOfTheKinds()]  # one ``[[links]]`` table, by its ``type``
 
 
-def make_link(settings: LinkSettings) -> Link:
+def make_link(settings: LinkSettingsBase) -> Link:
     """The link for one ``[[links]]`` table, not yet opened."""
-    try:
-        cls = LINK_TYPES[settings.type]
-    except KeyError:
-        raise ValueError(f"no link type {settings.type!r}; known: {', '.join(sorted(LINK_TYPES))}") from None
-    return cls(settings)
+    return link_kind(settings.type).link(settings)
 
 
-def open_link(settings: LinkSettings) -> Link:
+def open_link(settings: LinkSettingsBase) -> Link:
     """The link for one ``[[links]]`` table, opened (close it, or use it in a ``with``)."""
     link = make_link(settings)
     link.open()

@@ -8,16 +8,17 @@ from __future__ import annotations
 import re
 import tomllib
 from datetime import datetime, timezone
+from collections.abc import Callable
 from pathlib import Path
 from typing import Literal
 
-import cantools
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from bridge_node.control.settings import ControlSettings
-from bridge_node.links.settings import ArbitrationSettings, LinkSettings
+from bridge_node.links.registry import LinkSettings
+from bridge_node.links.settings import ArbitrationSettings
 from bridge_node.common.errors import UserError
-from bridge_node.common.input_files import DBC_LIMIT, TOML_LIMIT, read_input, read_input_text
+from bridge_node.common.input_files import TOML_LIMIT, read_input_text
 from bridge_node.common.paths import NUL_IN_PATH, expand_user, writable_dir
 from bridge_node.common.toml_errors import shown, toml_error
 from bridge_node.render.settings import RenderSettings
@@ -130,12 +131,12 @@ class NodeConfig(Params):
                 raise ValueError(f"arbitration.{order}: unknown link(s) {unknown}; links: {names}")
         udp: dict[tuple[str, int], str] = {}  # destination -> the link that sends there
         for i, link in enumerate(self.links):
-            if link.type == "nmea0183" and link.sends_udp():
-                other = udp.setdefault((link.udp_host, link.udp_port), link.name)
-                if other != link.name:
-                    raise ValueError(f"links.{i}.udp_port = {link.udp_port}: link {link.name!r} would send to "
-                                     f"{link.udp_host}:{link.udp_port} as link {other!r} does; give it another "
-                                     "udp_port, or udp_output = false")
+            destination = link.udp_destination()
+            other = destination and udp.setdefault(destination, link.name)
+            if other and other != link.name:
+                host, port = destination
+                raise ValueError(f"links.{i}.udp_port = {port}: link {link.name!r} would send to {host}:{port} as "
+                                 f"link {other!r} does; give it another udp_port, or udp_output = false")
         return self
 
 
@@ -163,8 +164,7 @@ def load_config(path: str | Path | None = None) -> NodeConfig:
     run console's script (``console.script``)."""
     path = Path(path) if path is not None else DEFAULT_CONFIG
     cfg = _load_validated(path, NodeConfig)
-    links = [link.model_copy(update={"dbc": str(_dbc_file(path, f"links.{i}.dbc", link.dbc))})
-             if link.type == "can" else link for i, link in enumerate(cfg.links)]
+    links = [link.with_files(_file_finder(path, f"links.{i}.")) for i, link in enumerate(cfg.links)]
     console = cfg.console and cfg.console.model_copy(
         update={"script": str(_config_file(path, "console.script", cfg.console.script))})
     channels = [c.model_copy(update={"warp": str(_warp_file(path, f"render.channels.{i}.warp", c.warp))})
@@ -201,21 +201,21 @@ def _config_file(config: Path, key: str, value: str) -> Path:
     return path
 
 
-def _dbc_file(config: Path, key: str, value: str) -> Path:
-    """The DBC file a CAN link names, resolved and checked: a regular, readable file of
-    sane size that cantools parses. ConfigError naming the file, key and value otherwise."""
-    where = f"{config}: {key} = {value!r}"
-    path = _config_file(config, key, value)
-    try:
-        data = read_input(path, "DBC file", DBC_LIMIT, where)
-        database_format = "dbc" if path.suffix.lower() == ".dbc" else None  # else: cantools tries each
-        text = data.decode("cp1252" if database_format else "utf-8", errors="replace")  # cantools' encodings
-        cantools.database.load_string(text, database_format=database_format, strict=False)
-    except UserError as exc:
-        raise ConfigError(str(exc)) from None
-    except Exception as exc:  # cantools raises many kinds (its own, ValueError, KeyError...) on a bad file
-        raise ConfigError(f"{where}: {path} is not a DBC file cantools can read ({type(exc).__name__})") from None
-    return path
+def _file_finder(config: Path, prefix: str) -> Callable[..., Path]:
+    """``find(key, value, check=None)`` for a table's ``with_files``: the file ``prefix + key``
+    names, resolved as ``_config_file`` does, and checked by ``check(path, where)`` where one
+    is given. ConfigError naming the file, key and value for any error."""
+
+    def find(key: str, value: str, check: Callable[[Path, str], None] | None = None) -> Path:
+        path = _config_file(config, prefix + key, value)
+        if check is not None:
+            where = f"{config}: {prefix}{key} = {value!r}"
+            try:
+                check(path, where)
+            except UserError as exc:
+                raise ConfigError(str(exc)) from None
+        return path
+    return find
 
 
 def load_ship(name: str, config_path: str | Path | None = None, key: str = "ship.name") -> ShipParticulars:

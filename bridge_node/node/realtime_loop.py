@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bridge_node.control.command_log import CommandLog
+from bridge_node.exercise.command_log import CommandLog
 from bridge_node.control.queue import CommandSource
 from bridge_node.exercise.listeners import LinkOutputs, SaveWriter, WorldTraffic
 from bridge_node.exercise.pacer import Pacer
@@ -37,7 +37,7 @@ from bridge_node.exercise.tick import ExerciseTick, StepListener, TickOutcome
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.c_heap import give_back_free_pages, heap_in_use_mib
 from bridge_node.exercise.order_refusals import OrderRefusals
-from bridge_node.node.tick_record import TickRecord
+from bridge_node.exercise.tick_record import TickRecord
 from sim_core.world import WorldData, WorldModel
 
 TRIM_EVERY_S = 5.0  # s of wall time between the C heap's page give-backs (c_heap.py)

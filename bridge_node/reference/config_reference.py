@@ -18,9 +18,14 @@ _BOUNDS = ((annotated_types.Ge, "ge", ">="), (annotated_types.Gt, "gt", ">"), (a
 
 
 def _models_in(annotation: object) -> list[type[BaseModel]]:
-    """The settings models an annotation holds (itself, a list's items, a union's members)."""
+    """The settings models an annotation holds (itself, a list's items, a union's members,
+    each registered kind of an annotation whose metadata gives its ``models()``)."""
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return [annotation]
+    if typing.get_origin(annotation) is typing.Annotated:
+        kinds = [m for m in annotation.__metadata__ if callable(getattr(m, "models", None))]
+        if kinds:
+            return [model for m in kinds for model in m.models()]
     return [m for arg in typing.get_args(annotation) for m in _models_in(arg)]
 
 

@@ -7,15 +7,16 @@ import typing
 
 import cantools
 
-from bridge_node.links.can_link import OUTPUTS, dbc_path, load_dbc
-from bridge_node.links.nmea0183 import (
+from bridge_node.links.can.link import OUTPUTS, dbc_path, load_dbc
+from bridge_node.links.nmea0183.sentences import (
     COMMON_ORDER_TALKERS,
     DEFAULT_RATES,
     DEFAULT_TALKERS,
     ORDER_SENTENCES,
     SEARCHLIGHT_SENTENCE,
 )
-from bridge_node.links.settings import CanLinkSettings, RegisterSpec, WriteSpec
+from bridge_node.links.can.settings import CanLinkSettings
+from bridge_node.links.modbus.settings import RegisterSpec, WriteSpec
 
 
 def _signals(message: cantools.database.can.Message) -> list[str]:

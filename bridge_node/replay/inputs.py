@@ -22,11 +22,11 @@ from pathlib import Path
 
 from bridge_node.common.errors import UserError
 from bridge_node.common.input_files import LOG_LIMIT, read_input_text
-from bridge_node.node.tick_record import HEADER as TICKS_HEADER
-from bridge_node.node.tick_record import TICKS_FILE
+from bridge_node.exercise.tick_record import HEADER as TICKS_HEADER
+from bridge_node.exercise.tick_record import TICKS_FILE
 from bridge_node.replay.csv_track import looks_like_csv_track, read_csv_track, read_gpx
 from bridge_node.replay.sentences import SentenceLog
-from bridge_node.replay.session import RECORD_FILES, RecordedSession, read_session
+from bridge_node.replay.session import RecordedSession, read_session, record_files
 from bridge_node.replay.track import TrackLog
 
 _CANDUMP = re.compile(r"^\(\d+\.\d+\)\s+\S+\s+[0-9A-Fa-f]+#")
@@ -55,7 +55,7 @@ def _kind(path: Path, lines: list[str], mapping: dict[str, str]) -> str:
     first = head[0].strip()
     if first.startswith(("<?xml", "<gpx")):
         return "gpx"
-    if _CANDUMP.match(first) or first == _MODBUS_HEADER or lines[0].startswith(TICKS_HEADER):
+    if _CANDUMP.match(first) or first == _MODBUS_HEADER or TICKS_HEADER.match(lines[0]):
         return "session"
     if _NODE_NMEA.match(first):
         return "session" if (path.parent / TICKS_FILE).is_file() else "node_nmea"
@@ -74,10 +74,10 @@ def read_text(path: Path) -> str:
 
 def _session_folder(path: Path) -> tuple[Path, set[str]]:
     """A session folder and the record files in it; UserError if it is not one."""
-    names = {name for name in RECORD_FILES.values() if (path / name).is_file()}
+    names = {name for name in record_files().values() if (path / name).is_file()}
     if not names and not (path / TICKS_FILE).is_file():
         raise UserError(f"{path}: a folder, but not a session record (looked for {TICKS_FILE}, "
-                        f"{', '.join(RECORD_FILES.values())})")
+                        f"{', '.join(record_files().values())})")
     return path, names
 
 
@@ -111,7 +111,7 @@ def _read_files(paths: list[str], mapping: dict[str, str]) -> tuple[list, Senten
         lines = text.splitlines()
         kind = _kind(path, lines, mapping)
         if kind == "session":
-            sessions.append((path.parent, {path.name} & set(RECORD_FILES.values())))
+            sessions.append((path.parent, {path.name} & set(record_files().values())))
         elif kind == "node_nmea":
             node_nmea.append((name, path, lines))
         elif kind == "gpx":
@@ -135,7 +135,7 @@ def _session(sessions: list[tuple[Path, set[str]]], names: str, period: float) -
     if len(folders) > 1:
         raise UserError(f"{names}: files of {len(folders)} session records; replay one at a time")
     try:
-        return read_session(folders.pop(), set().union(*(n for _, n in sessions)) or set(RECORD_FILES.values()),
+        return read_session(folders.pop(), set().union(*(n for _, n in sessions)) or set(record_files().values()),
                             period)
     except ValueError as exc:
         raise UserError(f"{sessions[0][0] / TICKS_FILE}: {exc}") from None

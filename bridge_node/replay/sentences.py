@@ -24,7 +24,7 @@ import pynmea2
 from pyais import decode as ais_decode
 from pyais.exceptions import AISBaseException
 
-from bridge_node.links.nmea0183 import checksum, nmea_decimal
+from bridge_node.links.nmea0183.sentences import checksum, nmea_decimal
 from bridge_node.replay.track import TrackLog
 from sim_core.frames.units import KNOT
 

@@ -13,11 +13,11 @@ from pathlib import Path
 import numpy as np
 import pynmea2
 
-from bridge_node.control.command_log import COMMANDS_FILE
+from bridge_node.exercise.command_log import COMMANDS_FILE
 from bridge_node.control.commands import CommandError, command_from_record
 from bridge_node.links.record_reader import complete_lines, read_nmea_log
 from bridge_node.common.errors import UserError
-from bridge_node.node.tick_record import TICKS_FILE, read_ticks
+from bridge_node.exercise.tick_record import TICKS_FILE, read_ticks
 from bridge_node.station.events import describe
 from bridge_node.station.wire import pack
 from sim_core.frames.geodesy import geodetic_to_local

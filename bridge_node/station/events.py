@@ -8,7 +8,7 @@ import math
 import time
 from collections import deque
 
-from bridge_node.exercise.save_point import SaveRequest
+from bridge_node.control.save_point import SaveRequest
 from bridge_node.links.faults import LinkFault
 from sim_core.frames.units import KNOT
 from sim_core.instructor import (

@@ -7,14 +7,14 @@ import math
 
 import numpy as np
 
-from bridge_node.node.config import NodeConfig
 from bridge_node.station.wire import pack
 from sim_core.frames.geodesy import radii
 from sim_core.world import WorldModel
 
 
-def geometry_message(model: WorldModel, cfg: NodeConfig) -> bytes:
-    """The ``geometry`` message: JSON for the field, ship and templates; arrays of every
+def geometry_message(model: WorldModel, ship_name: str, rate_hz: float) -> bytes:
+    """The ``geometry`` message: JSON for the field, ship (``ship_name``), templates and the
+    station's update rate (``rate_hz``, Hz); arrays of every
     global cell's outline points (x, y about its centroid, m), outline starts (G + 1) and
     centroid in its template's tile frame (x, y, m)."""
     ice, scene, ship = model.ice, model.scene, model.ship.particulars
@@ -27,11 +27,11 @@ def geometry_message(model: WorldModel, cfg: NodeConfig) -> bytes:
         "field": {"nx": int(scene.nx), "ny": int(scene.ny), "side": float(scene.side)},
         "origin": {"latitude_deg": math.degrees(lat0), "longitude_deg": math.degrees(lon0),
                    "m_per_deg_lat": m * math.pi / 180.0, "m_per_deg_lon": n * math.cos(lat0) * math.pi / 180.0},
-        "ship": {"name": cfg.ship.name, "length": float(ship.length), "beam": float(ship.beam),
+        "ship": {"name": ship_name, "length": float(ship.length), "beam": float(ship.beam),
                  "hull": np.round(model.contour, 3).tolist()},
         "searchlights": len(model.searchlights),
         "templates": templates,
-        "rate_hz": cfg.instructor.rate_hz,
+        "rate_hz": rate_hz,
     }
     arrays = {"outline": ice.outline[:, :2], "outline_start": ice.outline_start.astype(np.int64),
               "centroid": ice.centroid[:, :2]}

@@ -1,24 +1,10 @@
 """Where the state stream is served (``[stream]`` in the config)."""
 from __future__ import annotations
 
-from urllib.parse import urlsplit
-
 from pydantic import Field, model_validator
 
-from bridge_node.common.network import loopback_unless
+from bridge_node.common.network import endpoint_host, loopback_unless
 from sim_core.params import Params
-
-
-def endpoint_host(endpoint: str, key: str) -> str:
-    """The host of a ``tcp://HOST:PORT`` endpoint; ValueError naming the key otherwise."""
-    parts = urlsplit(endpoint)
-    try:
-        port = parts.port
-    except ValueError:
-        port = None
-    if parts.scheme != "tcp" or not parts.hostname or port is None:
-        raise ValueError(f"{key} = {endpoint!r}: expected tcp://HOST:PORT")
-    return parts.hostname
 
 
 class StreamSettings(Params):

@@ -19,17 +19,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bridge_node.links.traffic_picture import TRAFFIC_DTYPE
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.environment import Environment
 from sim_core.scene.switches import FROZEN_FLOE_EVENT, PlacedTiles
 from sim_core.world import WorldEvents
-
-# The other vessels (AIS, DIS, scripted), one row each: MMSI; x east and y north in world m
-# (the frame of ``ship.east``/``ship.north``); true heading in rad, clockwise from north (as
-# ``ship.heading``); speed over ground m/s; length and beam m (0: unknown).
-TRAFFIC_DTYPE = np.dtype([("id", np.int64), ("x", np.float64), ("y", np.float64), ("heading", np.float64),
-                          ("speed", np.float64), ("length", np.float64), ("beam", np.float64)])
 
 
 @dataclass(frozen=True)

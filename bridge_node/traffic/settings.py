@@ -7,7 +7,7 @@ from typing import Annotated
 
 from pydantic import Field, model_validator
 
-from bridge_node.links.ais import SIX_BIT_TEXT
+from bridge_node.links.nmea0183.ais import SIX_BIT_TEXT
 from sim_core.params import Params, repeated
 
 Metres = Annotated[float, Field(ge=-1.0e5, le=1.0e6)]

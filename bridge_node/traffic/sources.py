@@ -10,24 +10,20 @@ import contextlib
 import math
 from collections import Counter
 from collections.abc import Iterable, Sequence
-from pathlib import Path
 
 import numpy as np
 
+from bridge_node.links.dis.kind import DIS, DisRecord, read_dis_log
+from bridge_node.links.dis.link import HeardEntities, PduError
+from bridge_node.links.dis.settings import DisLinkSettings
 from bridge_node.links.messages import Vessel
-from bridge_node.links.dis_link import HeardEntities, PduError
-from bridge_node.links.settings import DisLinkSettings
-from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, NodeConfig, resolve_path
-from bridge_node.common.errors import UserError
-from bridge_node.replay.dis_log import DIS_FILE, DisRecord, read_dis_log
+from bridge_node.links.settings import LinkSettingsBase
+from bridge_node.links.traffic_picture import TrafficPicture
 from bridge_node.replay.engine import Source
-from bridge_node.replay.inputs import read_text
-from bridge_node.replay.sentences import SentenceLog
 from bridge_node.replay.sentences import Vessel as LoggedVessel
 from bridge_node.replay.session import SessionSource
 from bridge_node.replay.settings import ReplaySettings
 from bridge_node.replay.track import TrackPath, TrackSource, clean_for
-from bridge_node.traffic.picture import TrafficPicture, VesselSource
 from bridge_node.traffic.settings import ScriptedVessel
 from sim_core.frames.geodesy import local_to_geodetic
 from sim_core.frames.units import KNOT
@@ -144,45 +140,16 @@ class DisLogTraffic(_Clock):
         return [v for heard in self.heard.values() for v in heard.vessels(now)]
 
 
-def read_ais_log(path: Path, where: str, origin: tuple[float, float], replay: ReplaySettings) -> AisLogTraffic:
-    """An AIS log as traffic; ConfigError naming ``where`` (file, key and value) if it
-    cannot be read or has no other vessel's position reports."""
-    if not path.is_file():
-        raise ConfigError(f"{where}: no such file ({path})")
-    try:
-        text = read_text(path)
-    except UserError as exc:
-        raise ConfigError(f"{where}: {exc}") from None
-    log = SentenceLog()
-    log.read(str(path), text.splitlines())
-    traffic = AisLogTraffic([v for v in log.vessels.values() if v.reports and not v.own], origin, replay)
-    if not traffic.paths:
-        raise ConfigError(f"{where}: no position reports of other vessels (AIS types 1, 2, 3, 18, 19 as !AIVDM) "
-                          "in it")
-    return traffic
-
-
-def traffic_picture(cfg: NodeConfig, config_path: str | Path | None) -> TrafficPicture:
-    """The picture with the config's sources: its AIS logs (in their order), then its
-    scripted vessels. ConfigError for a log that cannot be used."""
-    origin = math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg)
-    where = f"{config_path or DEFAULT_CONFIG}: traffic.ais_logs"
-    sources: list[VesselSource] = [read_ais_log(resolve_path(config_path, name), f"{where}.{i} = {name!r}", origin,
-                                                cfg.replay) for i, name in enumerate(cfg.traffic.ais_logs)]
-    if cfg.traffic.vessels:
-        sources.append(ScriptedTraffic(cfg.traffic.vessels, origin))
-    return TrafficPicture(sources)
-
-
-def replay_traffic(source: Source, first: int, origin: tuple[float, float], cfg: NodeConfig) -> TrafficPicture:
+def replay_traffic(source: Source, first: int, origin: tuple[float, float], replay: ReplaySettings,
+                   links: Sequence[LinkSettingsBase]) -> TrafficPicture:
     """The picture of ``icebridge replay``, on the logged clock from step ``first`` (the
     first the links publish): a track log's other AIS vessels; a session record's DIS
-    vessels (its ``dis.log``, through the config's DIS links)."""
+    vessels (its ``dis.log``, through the config's DIS ``links``)."""
     if isinstance(source, TrackSource) and source.path.track.log.others:  # its clock: the end of each step
-        return TrafficPicture([AisLogTraffic(source.path.track.log.others, origin, cfg.replay,
+        return TrafficPicture([AisLogTraffic(source.path.track.log.others, origin, replay,
                                              source.logged_time(first) + source.dt)])
-    links = {s.name: s for s in cfg.links if s.type == "dis"}
-    if isinstance(source, SessionSource) and links and (source.session.folder / DIS_FILE).is_file():
-        records, _ = read_dis_log(source.session.folder / DIS_FILE)  # a torn or bad line loses only its PDU
-        return TrafficPicture([DisLogTraffic(records, links, source.logged_time(first))])
+    dis = {s.name: s for s in links if s.type == DIS.name}
+    if isinstance(source, SessionSource) and dis and (source.session.folder / DIS.record.file).is_file():
+        records, _ = read_dis_log(source.session.folder / DIS.record.file)  # a torn or bad line loses only its PDU
+        return TrafficPicture([DisLogTraffic(records, dis, source.logged_time(first))])
     return TrafficPicture()

@@ -33,10 +33,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bridge_node.links.ais import six_bit_text
-from bridge_node.links.base import Link, register_link
+from bridge_node.links.nmea0183.ais import six_bit_text
+from bridge_node.links.base import Link
 from bridge_node.links.messages import ControlInput, Vessel
-from bridge_node.links.settings import DisLinkSettings
+from bridge_node.links.dis.settings import DisLinkSettings
 from sim_core.ship.outputs import ShipOutputs
 
 PROTOCOL_VERSION, ENTITY_STATE, ENTITY_INFORMATION_FAMILY = 7, 1, 1
@@ -200,7 +200,6 @@ class HeardEntities:
         return [e.at(now) for e in self._entities.values()]
 
 
-@register_link("dis")
 class DisLink(Link):
     """Own ship out as Entity State PDUs (where it is, whatever its sensors read), other
     simulators' entities in as vessels."""

@@ -1,4 +1,4 @@
-"""Rewind and fork: the world brought to a save point (``bridge_node.exercise.save_point``)
+"""Rewind and fork: the world brought to a save point (``bridge_node.control.save_point``)
 by re-simulating its session record, after the records it was itself forked from. The
 record's links are fed its inputs tick by tick and its commands are applied at their steps
 through the one tick (``ExerciseTick``), with no outputs, as fast as the machine goes."""
@@ -9,12 +9,12 @@ from pathlib import Path
 
 from rich.console import Console
 
-from bridge_node.exercise.save_point import FORK_FILE, SavePoint, read_save, same_state, state_of
+from bridge_node.control.save_point import FORK_FILE, SavePoint, read_save, same_state, state_of
 from bridge_node.exercise.tick import ExerciseTick
 from bridge_node.node.config import NodeConfig, load_config
 from bridge_node.common.errors import UserError
 from bridge_node.replay.engine import StepOrders
-from bridge_node.replay.session import NODE_CONFIG, RECORD_FILES, SessionSource, read_session
+from bridge_node.replay.session import NODE_CONFIG, SessionSource, read_session, record_files
 from sim_core.world import WorldData, WorldModel
 
 MAX_FORK_DEPTH = 32  # forks of forks followed back at most (a loop of fork files ends here)
@@ -34,12 +34,12 @@ def resimulate(model: WorldModel, data: WorldData, cfg: NodeConfig, point: SaveP
     recorded = folder / NODE_CONFIG
     record_cfg = load_config(recorded) if recorded.is_file() else cfg
     try:
-        session = read_session(folder, {n for n in RECORD_FILES.values() if (folder / n).is_file()},
+        session = read_session(folder, {n for n in record_files().values() if (folder / n).is_file()},
                                1.0 / record_cfg.realtime.rate_hz)
     except ValueError as exc:
         raise UserError(f"{folder}: {exc}") from None
     outcome = None
-    with SessionSource(record_cfg, session) as source:
+    with SessionSource(record_cfg.links, record_cfg.arbitration, session) as source:
         orders = StepOrders(source)
         tick = ExerciseTick(model, data, orders, (), orders)
         while data.seq < point.seq and orders.k < source.steps:

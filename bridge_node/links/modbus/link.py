@@ -25,10 +25,10 @@ from dataclasses import dataclass
 from pymodbus.client import ModbusSerialClient, ModbusTcpClient
 from pymodbus.exceptions import ModbusException
 
-from bridge_node.links.base import Link, register_link
+from bridge_node.links.base import Link
 from bridge_node.links.device_io import Backoff
 from bridge_node.links.messages import ETL_POSITIONS, RUDDER_ORDER_LIMIT_DEG, ControlInput, searchlight_order
-from bridge_node.links.settings import ModbusLinkSettings, RegisterSpec, WriteSpec
+from bridge_node.links.modbus.settings import ModbusLinkSettings, RegisterSpec, WriteSpec
 from sim_core.frames.units import KNOT
 from sim_core.ship.orders import OrderKind
 from sim_core.ship.outputs import ShipOutputs
@@ -220,7 +220,6 @@ class _Worker:
         return events
 
 
-@register_link("modbus")
 class ModbusLink(Link):
     """Polls the configured registers in a worker thread (the link's device)."""
 

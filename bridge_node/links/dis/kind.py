@@ -1,15 +1,18 @@
-"""The DIS traffic of a session record (``dis.log``: ``<unix time> <link> <rx|tx> <hex>``,
-one PDU a line), read back so that a replay can hear again what the node heard. A torn
-last line and lines that do not parse are counted, never fatal."""
+"""The DIS link kind. Its traffic in the session record (``dis.log``: ``<unix time> <link>
+<rx|tx> <hex>``, one PDU a line) is read back so that a replay can hear again what the node
+heard (``traffic.sources``); it is not fed back to a link, as the entities heard are not
+orders. A torn last line and lines that do not parse are counted, never fatal."""
 from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
+from bridge_node.links.dis.link import DisLink
+from bridge_node.links.dis.settings import DisLinkSettings
+from bridge_node.links.kind import LinkKind, RecordFormat, TextLineWriter, register_kind
+from bridge_node.links.messages import Traffic
 from bridge_node.links.record_reader import complete_lines, record_time
-
-DIS_FILE = "dis.log"
 
 
 @dataclass(frozen=True)
@@ -36,3 +39,13 @@ def read_dis_log(path: Path) -> tuple[list[DisRecord], Counter]:
         except ValueError:
             counts["malformed"] += 1
     return out, counts
+
+
+def _record_line(t: Traffic) -> str:
+    return f"{t.unix_time:.3f} {t.link} {t.direction} {t.data.hex()}"
+
+
+DIS = register_kind(LinkKind(
+    "dis", DisLinkSettings, DisLink,
+    RecordFormat("dis.log", lambda path: TextLineWriter(path, _record_line), read_dis_log, lambda r: r.direction,
+                 lambda r: r.unix_time, input_direction=None)))

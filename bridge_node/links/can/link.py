@@ -16,16 +16,16 @@ from pathlib import Path
 import can
 import cantools
 
-from bridge_node.links.base import Link, register_link
+from bridge_node.links.base import Link
 from bridge_node.links.device_io import QueuedWriter, RateSchedule
 from bridge_node.links.messages import ETL_POSITIONS, ControlInput, searchlight_order
-from bridge_node.links.n2k_frames import fast_packet_frames, identifier, parse_identifier
-from bridge_node.links.n2k_network import FAST_PACKET_PGNS, GLOBAL_ADDRESS, NETWORK_PGNS, Frame, NetworkManager
-from bridge_node.links.settings import CanLinkSettings
+from bridge_node.links.can.n2k_frames import fast_packet_frames, identifier, parse_identifier
+from bridge_node.links.can.n2k_network import FAST_PACKET_PGNS, GLOBAL_ADDRESS, NETWORK_PGNS, Frame, NetworkManager
+from bridge_node.links.can.settings import CanLinkSettings
 from sim_core.ship.orders import OrderKind
 from sim_core.ship.outputs import ShipOutputs
 
-CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"  # the project's config folder
+CONFIG_DIR = Path(__file__).resolve().parents[3] / "config"  # the project's config folder
 N2K_DBC = CONFIG_DIR / "nmea2000.dbc"
 ID_MASK = 0x03FFFF00  # match any priority and source
 MAX_FRAMES_PER_POLL = 1000
@@ -120,7 +120,6 @@ class _Bus:
             self._writer.close()
 
 
-@register_link("can")
 class CanLink(Link):
     """Any python-can interface; the console's frames from the DBC of the settings."""
 

@@ -13,8 +13,13 @@ from typing import Protocol
 import numpy as np
 
 from bridge_node.links.messages import Vessel
-from bridge_node.stream.world_view import TRAFFIC_DTYPE
 from sim_core.frames.geodesy import geodetic_to_local
+
+# The other vessels (AIS, DIS, scripted), one row each: MMSI; x east and y north in world m
+# (the frame of ``ship.east``/``ship.north``); true heading in rad, clockwise from north (as
+# ``ship.heading``); speed over ground m/s; length and beam m (0: unknown).
+TRAFFIC_DTYPE = np.dtype([("id", np.int64), ("x", np.float64), ("y", np.float64), ("heading", np.float64),
+                          ("speed", np.float64), ("length", np.float64), ("beam", np.float64)])
 
 
 class VesselSource(Protocol):

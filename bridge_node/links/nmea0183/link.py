@@ -16,13 +16,13 @@ from collections.abc import Iterator
 
 import serial
 
-from bridge_node.links.ais import AisReporter
-from bridge_node.links.base import Link, register_link
+from bridge_node.common.network import is_loopback_host
+from bridge_node.links.base import Link
 from bridge_node.links.device_io import QueuedWriter, RateSchedule
 from bridge_node.links.messages import Alarm, ControlInput, Vessel
-from bridge_node.links.nmea0183 import SentenceError, parse_order, render_alarm, render_outputs
-from bridge_node.links.settings import NmeaLinkSettings
-from bridge_node.common.network import is_loopback_host
+from bridge_node.links.nmea0183.ais import AisReporter
+from bridge_node.links.nmea0183.sentences import SentenceError, parse_order, render_alarm, render_outputs
+from bridge_node.links.nmea0183.settings import NmeaLinkSettings
 from sim_core.ship.outputs import ShipOutputs
 
 MAX_PENDING = 1024  # characters of a line without its end: beyond this it is noise
@@ -74,7 +74,6 @@ class _SerialPort:
         self.writer.close()
 
 
-@register_link("nmea0183")
 class NmeaLink(Link):
     """Serial NMEA 0183 (pyserial; any ``serial_for_url`` port) plus a UDP output mirror."""
 

@@ -1,7 +1,7 @@
 """Save points: rewind and fork. ``icebridge ctl save NAME`` marks the exercise's state at
 a step in its session record (``saves/NAME.json``), and ``icebridge run --fork SAVE``
 starts a new exercise from it: the record is re-simulated to that step
-(``bridge_node.replay.fork``) and the new run goes on live from there, with its own record
+(``bridge_node.node.fork``) and the new run goes on live from there, with its own record
 that names the point it forked from (``fork.json``), so that it too replays exactly.
 
 Why by re-simulation and not by a snapshot of the world's memory: the contact solver keeps
