@@ -10,9 +10,10 @@ import sys
 import time
 import urllib.request
 
+import psutil
 import pynmea2
-from pyais import decode
 import pytest
+from pyais import decode
 import serial
 from conftest import REPO, exercise_toml, run_cli
 from links_helpers import pty_pair
@@ -163,10 +164,13 @@ def test_run_starts_the_instructor_station_and_names_its_address(tmp_path):
             except OSError:
                 return False
         _wait_for(page, timeout=120.0, poll=0.5)
+        station = [p for p in psutil.Process(node.pid).children() if "instructor" in p.cmdline()]
+        niceness = [p.nice() - psutil.Process(node.pid).nice() for p in station]
     finally:
         node.terminate()
         out, err = node.communicate(timeout=60)
     assert node.returncode == 0, err
+    assert niceness == [10]  # the station yields the CPU to the physics loop
     summary = json.loads(out)
     assert summary["instructor"]["address"] == f"http://127.0.0.1:{port}/"
     assert summary["instructor"]["exit"] == 0, (tmp_path / "out" / "instructor.log").read_text()

@@ -18,6 +18,7 @@ import argparse
 import json
 import logging
 import math
+import os
 import signal
 import socket
 import threading
@@ -83,6 +84,7 @@ def _check(args: argparse.Namespace) -> None:
 def run(args: argparse.Namespace) -> int:
     _check(args)
     cfg = load_config(args.config)
+    os.nice(cfg.instructor.niceness)  # beside the node, the physics loop comes first for the CPU
     token = cfg.control.access_token()
     if cfg.instructor.allow_network and token is None:
         raise UserError("instructor.allow_network = true needs an access token: set control.token or the "

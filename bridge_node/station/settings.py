@@ -20,6 +20,8 @@ class InstructorSettings(Params):
     allow_network: bool = False
     rate_hz: float = Field(10.0, ge=1.0, le=30.0, description="map updates a second sent to each browser")
     start: bool = Field(False, description="icebridge run starts the station beside the node")
+    niceness: int = Field(10, ge=0, le=19, description="scheduling niceness of the station's process: the "
+                          "physics loop comes first for the CPU")
 
     @model_validator(mode="after")
     def _where(self) -> InstructorSettings:
