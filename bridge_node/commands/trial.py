@@ -1,6 +1,8 @@
-"""``icebridge trial turning|zigzag|crash-stop``: standard manoeuvring trials of a ship.
+"""``icebridge trial turning|zigzag|crash-stop|hv``: standard manoeuvring trials of a ship,
+and its h-v curve in level ice.
 
-Prints the results with the IMO MSC.137(76) limits they are judged against, writes a track
+Prints the results with the IMO MSC.137(76) limits they are judged against (the h-v curve:
+the attainable speed at full power against thickness, and where the ship sticks), writes a
 plot PNG, and with ``--json`` prints one JSON object instead of the table.
 """
 from __future__ import annotations
@@ -10,13 +12,16 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
+
 from rich.console import Console
 from rich.table import Table
 
 from bridge_node.node.config import load_config, load_ship
 from bridge_node.common.errors import UserError
-from bridge_node.reports.trials import plot_track
-from sim_core.ship.model import compile_ship
+from bridge_node.reports.trials import plot_hv, plot_track
+from sim_core.ship.model import ShipModel, compile_ship
+from sim_core.studies.hv_curve import MAX_THICKNESS, hv_curve, sticking_thickness
 from sim_core.studies.trials import (
     KNOT,
     TrialResult,
@@ -28,10 +33,12 @@ from sim_core.studies.trials import (
 
 MAX_ICE_H = 3.0  # m: Lindqvist's method is used up to here
 MIN_SPEED_KN = 1.0  # kn: slower, a trial's manoeuvre takes days and its numbers lose meaning
+HV_STEP = 0.1  # m: the h-v table's thickness step
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("kind", choices=("turning", "zigzag", "crash-stop"), help="which trial")
+    p.add_argument("kind", choices=("turning", "zigzag", "crash-stop", "hv"),
+                   help="which trial (hv: attainable speed in level ice against thickness, at full power)")
     p.add_argument("--ship", help="ship name (config/ships/NAME.toml; default: the config's ship)")
     p.add_argument("--rudder", type=float, help="rudder angle, deg (turning: 35, + starboard; zigzag: 10)")
     p.add_argument("--speed", type=float, help="approach speed, kn (default: the ship's service speed)")
@@ -71,6 +78,8 @@ def run(args: argparse.Namespace) -> int:
     cfg = load_config(args.config)
     particulars = load_ship(args.ship or cfg.ship.name, args.config, "--ship" if args.ship else "ship.name")
     model = compile_ship(particulars, cfg.ice_material)
+    if args.kind == "hv":
+        return _hv_trial(model, args)
     speed_kn = particulars.service_speed_kn if args.speed is None else args.speed
     _check("--speed", speed_kn, MIN_SPEED_KN, 30.0)
     _check("--ice", args.ice, 0.0, MAX_ICE_H)
@@ -114,3 +123,37 @@ def run(args: argparse.Namespace) -> int:
     console.print(f"track plot: {plot}")
     return 0
 
+
+
+def _hv_trial(model: ShipModel, args: argparse.Namespace) -> int:
+    """The h-v curve from open water to beyond the sticking thickness, every HV_STEP m."""
+    given = [name for name, value in (("--rudder", args.rudder), ("--speed", args.speed)) if value is not None]
+    if given or args.ice:
+        raise UserError(f"{', '.join(given + (['--ice'] if args.ice else []))}: not used by the hv trial, which runs "
+                        "at full power through every thickness")
+    ship = model.particulars.name
+    sticks_at = sticking_thickness(model)
+    top = min(MAX_THICKNESS, 1.2 * sticks_at)
+    thickness = np.round(np.arange(0.0, top + HV_STEP, HV_STEP), 3)
+    speed = hv_curve(model, np.minimum(thickness, MAX_THICKNESS))
+    plot = Path(args.out) / f"trial_hv_{ship}.png"
+    plot_hv(thickness, speed, sticks_at, ship, plot)
+    rpm = model.rps_ahead_max * 60.0
+    summary = {"kind": "hv", "ship": ship, "full_ahead_rpm": round(rpm, 1),
+               "sticking_thickness_m": sticks_at if math.isfinite(sticks_at) else None,
+               "curve": [{"thickness_m": float(h), "speed_kn": round(float(v) / KNOT, 3)}
+                         for h, v in zip(thickness, speed)], "plot": str(plot)}
+    if args.json:
+        print(json.dumps(summary))
+        return 0
+    table = Table(title=f"h-v curve: {ship}, full ahead ({rpm:.0f} rpm), level ice")
+    table.add_column("thickness, m", justify="right")
+    table.add_column("speed, kn", justify="right")
+    for row in summary["curve"]:
+        table.add_row(f"{row['thickness_m']:.2f}", f"{row['speed_kn']:.2f}")
+    console = Console()
+    console.print(table)
+    console.print(f"sticks in level ice of {sticks_at:.2f} m" if math.isfinite(sticks_at)
+                  else f"makes way through {MAX_THICKNESS:g} m, the method's limit")
+    console.print(f"plot: {plot}")
+    return 0
