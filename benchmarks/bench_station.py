@@ -160,7 +160,7 @@ def part_main_job(seconds: float, render: str, repeats: int) -> None:
                       f"{s['tick_ms_median']} ms, p99 {s['tick_ms_p99']} ms, max {s['tick_ms_max']} ms, overruns "
                       f"{s['overruns']}/{s['ticks']}{shown} ({CORES} cores)", flush=True)
     alone, shown = statistics.median(p99[False]), statistics.median(p99[True])
-    print(f"  tick p99, median of the runs: without {alone} ms, with the station {shown} ms; ratio "
+    print(f"  tick p99, median of the runs: without {alone:.2f} ms, with the station {shown:.2f} ms; ratio "
           f"{shown / alone:.3f} (target <= 1.10; {CORES} cores)", flush=True)
 
 
