@@ -1,6 +1,7 @@
-"""The h-v curve (issue 27, item 3): the speed the default ship attains at full power in level
-ice falls with the thickness, and the ship simulated at full ahead behaves as the curve
-says: it holds the curve's speed in thinner ice and sticks in thicker."""
+"""The ship's limits in level ice (issue 27, items 1 and 3): its ice class, from the ship file
+(the default ship is PC5), and the h-v curve: the speed the default ship attains at full
+power in level ice falls with the thickness, and the ship simulated at full ahead behaves as
+the curve says: it holds the curve's speed in thinner ice and sticks in thicker."""
 import json
 import math
 
@@ -8,7 +9,7 @@ import numpy as np
 import pytest
 from conftest import run_cli
 
-from bridge_node.node.config import load_config, load_ship
+from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, load_config, load_ship
 from sim_core.frames.units import KNOT
 from sim_core.ship.model import compile_ship, new_ship_data, order_telegraph, step
 from sim_core.ship.resistance import LEVEL_ICE
@@ -66,3 +67,14 @@ def test_trial_hv_prints_the_curve_and_plots_it(ship, tmp_path):
     table = run_cli("trial", "hv", "--out", str(tmp_path))
     assert table.returncode == 0 and "sticks" in table.stdout
 
+
+
+def test_the_ship_file_gives_the_ice_class(ship, tmp_path):
+    assert ship.particulars.ice.ice_class == "PC5"
+    (tmp_path / "ships").mkdir()
+    text = (DEFAULT_CONFIG.parent / "ships" / "polar_cargo.toml").read_text()
+    (tmp_path / "ships" / "odd.toml").write_text(text.replace('ice_class = "PC5"', 'ice_class = "PC9"'))
+    with pytest.raises(ConfigError) as err:
+        load_ship("odd", tmp_path / "node.toml")
+    message = str(err.value)
+    assert "odd.toml" in message and "ice.ice_class = 'PC9'" in message and "PC5" in message

@@ -139,14 +139,15 @@ def _hv_trial(model: ShipModel, args: argparse.Namespace) -> int:
     plot = Path(args.out) / f"trial_hv_{ship}.png"
     plot_hv(thickness, speed, sticks_at, ship, plot)
     rpm = model.rps_ahead_max * 60.0
-    summary = {"kind": "hv", "ship": ship, "full_ahead_rpm": round(rpm, 1),
+    ice_class = model.particulars.ice.ice_class
+    summary = {"kind": "hv", "ship": ship, "ice_class": ice_class, "full_ahead_rpm": round(rpm, 1),
                "sticking_thickness_m": sticks_at if math.isfinite(sticks_at) else None,
                "curve": [{"thickness_m": float(h), "speed_kn": round(float(v) / KNOT, 3)}
                          for h, v in zip(thickness, speed)], "plot": str(plot)}
     if args.json:
         print(json.dumps(summary))
         return 0
-    table = Table(title=f"h-v curve: {ship}, full ahead ({rpm:.0f} rpm), level ice")
+    table = Table(title=f"h-v curve: {ship} (ice class {ice_class}), full ahead ({rpm:.0f} rpm), level ice")
     table.add_column("thickness, m", justify="right")
     table.add_column("speed, kn", justify="right")
     for row in summary["curve"]:

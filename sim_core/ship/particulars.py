@@ -9,6 +9,8 @@ everything to SI once.
 """
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import Field, model_validator
 
 from sim_core.params import Params
@@ -104,8 +106,15 @@ class Engine(Params):
         return self
 
 
+# The ice classes POLARIS rates ships by (IMO MSC.1/Circ.1519, appendix, table 1.1's rows):
+# the IACS Polar Classes, the Finnish-Swedish classes, and no ice class
+ICE_CLASSES = ("PC1", "PC2", "PC3", "PC4", "PC5", "PC6", "PC7", "IA Super", "IA", "IB", "IC", "none")
+
+
 class IceHull(Params):
-    """Hull form data for Lindqvist's level-ice resistance."""
+    """The ship's ice class, and hull form data for Lindqvist's level-ice resistance."""
+
+    ice_class: Literal[ICE_CLASSES] = Field("none", description="the ice class of the ship's Polar Ship Certificate")
 
     stem_angle_deg: float = Field(gt=10.0, lt=90.0, description="phi, stem angle to the waterline")
     waterline_angle_deg: float = Field(gt=5.0, lt=90.0, description="alpha, waterline entrance half-angle")
