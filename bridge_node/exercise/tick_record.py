@@ -135,7 +135,7 @@ def read_ticks(path: Path) -> tuple[float, list[Tick], Counter]:
     if not lines:
         raise ValueError("not a tick log (it is empty)")
     period, kinds = _header(lines[0])
-    if any(line.startswith("# icebridge ticks") for line in lines[1:]):
+    if any(HEADER.match(line) for line in lines[1:]):
         raise ValueError("it holds more than one run (two runs started in the same second?)")
     ticks = []
     for line in lines[1:]:

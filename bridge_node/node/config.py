@@ -22,7 +22,7 @@ from bridge_node.common.input_files import TOML_LIMIT, read_input_text
 from bridge_node.common.paths import NUL_IN_PATH, expand_user, writable_dir
 from bridge_node.common.toml_errors import shown, toml_error
 from bridge_node.render.settings import RenderSettings
-from bridge_node.render.warp import WarpError, read_pfm
+from bridge_node.render.warp import read_pfm
 from bridge_node.replay.settings import ReplaySettings
 from bridge_node.station.settings import InstructorSettings
 from bridge_node.stream.settings import StreamSettings
@@ -159,29 +159,19 @@ def _describe(err: dict) -> str:
 
 def load_config(path: str | Path | None = None) -> NodeConfig:
     """Read and validate a TOML config (default: config/default.toml). Raises ConfigError.
-    A CAN link's relative DBC path is taken from the config file's folder when the file is
-    there, else from the project's ``config/`` folder; the file is checked here. So is the
-    run console's script (``console.script``)."""
+    The files the config names (a link's, such as a CAN link's DBC; the run console's
+    script; a channel's warp grid) are taken from the config file's folder when they are
+    there, else from the project's ``config/`` folder, and checked here."""
     path = Path(path) if path is not None else DEFAULT_CONFIG
     cfg = _load_validated(path, NodeConfig)
     links = [link.with_files(_file_finder(path, f"links.{i}.")) for i, link in enumerate(cfg.links)]
     console = cfg.console and cfg.console.model_copy(
         update={"script": str(_config_file(path, "console.script", cfg.console.script))})
-    channels = [c.model_copy(update={"warp": str(_warp_file(path, f"render.channels.{i}.warp", c.warp))})
+    channels = [c.model_copy(update={"warp": str(_file_finder(path, f"render.channels.{i}.")("warp", c.warp,
+                                                                                          read_pfm))})
                 if c.warp is not None else c for i, c in enumerate(cfg.render.channels)]
     render = cfg.render.model_copy(update={"channels": channels})
     return cfg.model_copy(update={"links": links, "console": console, "render": render})
-
-
-def _warp_file(config: Path, key: str, value: str) -> Path:
-    """A channel's warp grid, resolved as ``_config_file`` does and read once to check it
-    (a clear error when the config loads, not when the channel opens)."""
-    path = _config_file(config, key, value)
-    try:
-        read_pfm(path, f"{config}: {key} = {value!r}")
-    except WarpError as exc:
-        raise ConfigError(str(exc)) from None
-    return path
 
 
 def _config_file(config: Path, key: str, value: str) -> Path:
@@ -204,7 +194,9 @@ def _config_file(config: Path, key: str, value: str) -> Path:
 def _file_finder(config: Path, prefix: str) -> Callable[..., Path]:
     """``find(key, value, check=None)`` for a table's ``with_files``: the file ``prefix + key``
     names, resolved as ``_config_file`` does, and checked by ``check(path, where)`` where one
-    is given. ConfigError naming the file, key and value for any error."""
+    is given (a check reads the file and raises UserError or ValueError naming ``where``: a
+    clear error when the config loads, not when the file is used). ConfigError naming the
+    file, key and value for any error."""
 
     def find(key: str, value: str, check: Callable[[Path, str], None] | None = None) -> Path:
         path = _config_file(config, prefix + key, value)
@@ -212,7 +204,7 @@ def _file_finder(config: Path, prefix: str) -> Callable[..., Path]:
             where = f"{config}: {prefix}{key} = {value!r}"
             try:
                 check(path, where)
-            except UserError as exc:
+            except (UserError, ValueError) as exc:
                 raise ConfigError(str(exc)) from None
         return path
     return find

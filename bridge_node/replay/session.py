@@ -62,8 +62,9 @@ class RecordedSession:
 def _received(folder: Path, names: set[str], bad: Counter) -> tuple[dict[str, list], dict[str, list[float]]]:
     """The recorded inputs of each link kind in file order (files not chosen: none), and the
     unix times of every line, inputs and outputs, per kind."""
-    inputs, times = {p: [] for p in record_files()}, {p: [] for p in record_files()}
-    for name, file in record_files().items():
+    files = record_files()
+    inputs, times = {p: [] for p in files}, {p: [] for p in files}
+    for name, file in files.items():
         record = LINK_KINDS[name].record
         if file in names and (folder / file).is_file():
             records, counts = record.read(folder / file)

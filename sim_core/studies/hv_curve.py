@@ -17,18 +17,20 @@ import math
 import numpy as np
 
 from sim_core.ship.model import ShipModel, level_ice_terms, mmg_forces
-from sim_core.ship.resistance import LEVEL_ICE, ice_resistance
+from sim_core.ship.resistance import LEVEL_ICE, LindqvistTerms, ice_resistance
 
 MAX_THICKNESS = 3.0  # m: Lindqvist's method is used up to here
 _BISECTIONS = 60
 
 
-def surge_balance(model: ShipModel, speed: float, thickness: float, rps: float) -> float:
+def surge_balance(model: ShipModel, speed: float, thickness: float, rps: float,
+                  terms: LindqvistTerms | None = None) -> float:
     """Net surge force (N) on the ship straight ahead at ``speed`` (m/s, >= 0) with the shaft
-    at ``rps`` (rev/s) in level ice ``thickness`` (m): the MMG forces less the ice resistance."""
+    at ``rps`` (rev/s) in level ice ``thickness`` (m): the MMG forces less the ice resistance.
+    ``terms``: Lindqvist's static terms at that thickness, where the caller has them."""
     ice = 0.0
     if thickness > 0.0:
-        ice = ice_resistance(level_ice_terms(model, thickness), speed, thickness, model.L,
+        ice = ice_resistance(terms or level_ice_terms(model, thickness), speed, thickness, model.L,
                              model.material.gravity, LEVEL_ICE)
     return mmg_forces(model, speed, 0.0, 0.0, 0.0, rps)[0] - ice
 
@@ -36,16 +38,20 @@ def surge_balance(model: ShipModel, speed: float, thickness: float, rps: float) 
 def attainable_speed(model: ShipModel, thickness: float) -> float:
     """Speed (m/s) the ship holds at full power in level ice of ``thickness`` (m); 0 where
     it sticks."""
-    n = model.rps_ahead_max
-    if surge_balance(model, 0.0, thickness, n) <= 0.0:
+    n, terms = model.rps_ahead_max, level_ice_terms(model, thickness)
+
+    def balance(speed: float) -> float:
+        return surge_balance(model, speed, thickness, n, terms)
+
+    if balance(0.0) <= 0.0:
         return 0.0
     hi = 1.0
-    while surge_balance(model, hi, thickness, n) > 0.0:
+    while balance(hi) > 0.0:
         hi *= 2.0
     lo = 0.0
     for _ in range(_BISECTIONS):
         mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if surge_balance(model, mid, thickness, n) > 0.0 else (lo, mid)
+        lo, hi = (mid, hi) if balance(mid) > 0.0 else (lo, mid)
     return 0.5 * (lo + hi)
 
 
