@@ -17,6 +17,7 @@ from bridge_node.commands import (
     ctl,
     experiment_breaking,
     experiment_transit,
+    field,
     hil,
     instructor,
     links_monitor,
@@ -41,6 +42,7 @@ COMMANDS: dict[str, tuple] = {
         "breaking": (experiment_breaking, "channel and conduction-band widths per thickness, colliders, speed"),
         "transit": (experiment_transit, "a straight transit: live and frozen fragments, step time (Fig. 18, 19)"),
     }),
+    "field": (field, "lay out the ice regions of a SIGRID-3 chart or a config and report them against it"),
     "render-snapshot": (render_snapshot, "render the projector channels of the exercise to PNGs"),
     "render-node": (render_node, "render projector channels from a running node's state stream"),
     "links": ("commission the console links", {

@@ -23,6 +23,7 @@ from bridge_node.common.paths import NUL_IN_PATH, expand_user, writable_dir
 from bridge_node.common.toml_errors import shown, toml_error
 from bridge_node.render.settings import RenderSettings
 from bridge_node.render.warp import read_pfm
+from bridge_node.charts.sigrid3 import read_chart
 from bridge_node.replay.settings import ReplaySettings
 from bridge_node.station.settings import InstructorSettings
 from bridge_node.stream.settings import StreamSettings
@@ -171,7 +172,18 @@ def load_config(path: str | Path | None = None) -> NodeConfig:
                                                                                           read_pfm))})
                 if c.warp is not None else c for i, c in enumerate(cfg.render.channels)]
     render = cfg.render.model_copy(update={"channels": channels})
-    return cfg.model_copy(update={"links": links, "console": console, "render": render})
+    ice_field = cfg.ice_field.chart and cfg.ice_field.model_copy(
+        update={"chart": str(_file_finder(path, "ice_field.")("chart", cfg.ice_field.chart, _readable_chart))})
+    return cfg.model_copy(update={"links": links, "console": console, "render": render,
+                                  "ice_field": ice_field or cfg.ice_field})
+
+
+def _readable_chart(path: Path, where: str) -> None:
+    """A chart the config names, read once so that its faults show when the config loads."""
+    try:
+        read_chart(path)
+    except UserError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
 
 
 def _config_file(config: Path, key: str, value: str) -> Path:

@@ -9,10 +9,12 @@ from pydantic import Field, model_validator
 
 from sim_core.fracture.fragment_count import MAX_THICKNESS
 from sim_core.params import Params
+from sim_core.regimes.settings import RegionSettings
 
 
 class IceFieldSettings(Params):
-    """Field extent and thickness profile. Gradients run from the south edge (y = 0,
+    """Field extent, thickness profile, and the ice regions over it (a chart's and the
+    config's: ``icebridge field`` lays them out). Gradients run from the south edge (y = 0,
     ``thickness``) to the north edge (y = H, ``thickness_end``); a grid gives one value per
     tile, row 0 at the south edge."""
 
@@ -23,6 +25,8 @@ class IceFieldSettings(Params):
     thickness_end: float | None = Field(None, gt=0.0, le=MAX_THICKNESS, description="gradient end, m")
     thickness_grid: str | None = Field(None, description="CSV of per-tile thickness, m")
     class_step: float = Field(0.1, ge=0.01, le=0.5, description="thickness class width, m")
+    chart: str | None = Field(None, description="SIGRID-3 ice chart (.shp) whose regions lie over the field")
+    regions: list[RegionSettings] = Field(default_factory=list, description="regions drawn over the chart")
 
     @model_validator(mode="after")
     def _profile_inputs(self) -> "IceFieldSettings":

@@ -1,0 +1,124 @@
+"""Ice regimes as the WMO egg code gives them, and the regions of a field that carry them.
+
+A regime is a total concentration and up to three ice types, each a partial concentration
+(tenths), a stage of development and a floe size (WMO codes, ``wmo_codes``). A region is a
+polygon in the exercise's local frame (x east, y north, m) with its regime. Later regions
+lie over earlier ones, so a region drawn by the instructor covers the chart under it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import shapely
+
+from sim_core.regimes import wmo_codes
+from sim_core.regimes.wmo_codes import CodeRange
+
+SUM_SLACK = 0.5  # tenths: 9+/10 (9.5) may hold partials of 6/10 and 4/10
+
+
+@dataclass(frozen=True)
+class IceType:
+    """One ice type of a regime: its partial concentration (tenths) and WMO codes."""
+
+    concentration: float
+    stage: int
+    floe_size: int
+
+    @property
+    def stage_range(self) -> CodeRange:
+        return wmo_codes.stage(self.stage)
+
+    @property
+    def size_range(self) -> CodeRange:
+        return wmo_codes.floe_size(self.floe_size)
+
+    def label(self) -> str:
+        """``6/10 thick_first_year small_floe``."""
+        return f"{self.concentration:g}/10 {self.stage_range.name} {self.size_range.name}"
+
+
+@dataclass(frozen=True)
+class IceRegime:
+    """Total concentration (tenths) and the ice types, thickest first, whose partial
+    concentrations add up to the total."""
+
+    total: float
+    types: tuple[IceType, ...]
+
+    @property
+    def level(self) -> bool:
+        """Level ice: fast ice, or 10/10 giant floes: no floe edges in an exercise area."""
+        return len(self.types) == 1 and (self.types[0].floe_size == wmo_codes.FAST_ICE or (
+            self.types[0].floe_size == wmo_codes.GIANT_FLOE and self.total >= 10.0))
+
+    def label(self) -> str:
+        if not self.types:
+            return "ice free"
+        return f"{self.total:g}/10: " + ", ".join(t.label() for t in self.types)
+
+
+def make_regime(total: float, types: list[tuple[float | None, int, int]]) -> IceRegime:
+    """A checked regime from a total (tenths) and (partial concentration or None, stage
+    code, floe-size code) per type, thickest first. A lone type's missing concentration is
+    the total; where the partials add up to less than the total, the thickest type takes
+    the rest (as ice services leave traces out of the partials). ValueError naming the
+    wrong value."""
+    if not 0.0 <= total <= 10.0:
+        raise ValueError(f"total concentration {total:g}/10 is outside 0-10/10")
+    if total == 0.0:
+        return IceRegime(0.0, ())
+    if not types:
+        raise ValueError(f"total concentration {total:g}/10 but no ice type (stage and floe size)")
+    if len(types) > 3:
+        raise ValueError(f"{len(types)} ice types; the egg code has at most three")
+    given = [c for c, _, _ in types]
+    if None in given and len(types) > 1:
+        raise ValueError("a partial concentration is missing; only a lone ice type may leave it out")
+    partials = [total] if given == [None] else [float(c) for c in given]
+    for c, (_, s, f) in zip(partials, types):
+        if not 0.0 < c <= 10.0:
+            raise ValueError(f"partial concentration {c:g}/10 is outside (0, 10]/10")
+        wmo_codes.stage(s)
+        wmo_codes.floe_size(f)
+    if sum(partials) > total + SUM_SLACK or sum(partials) > 10.0:
+        raise ValueError(f"partial concentrations add up to {sum(partials):g}/10, more than the total "
+                         f"{total:g}/10")
+    partials[0] += max(0.0, total - sum(partials))
+    regime = IceRegime(total, tuple(IceType(c, s, f) for c, (_, s, f) in zip(partials, types)))
+    if any(t.floe_size == wmo_codes.FAST_ICE for t in regime.types) and not regime.level:
+        raise ValueError("fast ice is level ice: it is the only ice type of its region")
+    return regime
+
+
+RegionKind = Literal["ice", "water", "land", "no_data"]
+
+
+@dataclass(frozen=True)
+class IceRegion:
+    """A region of the field: its name (where it came from), polygon (x east, y north, m),
+    kind (a chart's POLY_TYPE) and regime (ice free for water, land and no data)."""
+
+    name: str
+    polygon: shapely.Geometry
+    kind: RegionKind
+    regime: IceRegime
+
+
+def effective_polygons(regions: list[IceRegion], area: shapely.Geometry) -> list[shapely.Geometry]:
+    """Each region's part of the area that no later region covers: the regions as they lie."""
+    out, above = [], shapely.Polygon()
+    for region in reversed(regions):
+        out.append(shapely.difference(shapely.intersection(region.polygon, area), above))
+        above = shapely.union(above, region.polygon)
+    return out[::-1]
+
+
+def region_at(polygons: list[shapely.Geometry], x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Index of the (effective) polygon holding each point (n,), -1 where none does."""
+    index = np.full(np.shape(x), -1, dtype=np.int64)
+    for i, polygon in enumerate(polygons):
+        index[shapely.contains_xy(polygon, x, y)] = i
+    return index
