@@ -76,3 +76,24 @@ def exercise_toml(folder: Path, channels: str = "", **sections: str) -> Path:
     path = folder / "exercise.toml"
     path.write_text(text)
     return path
+
+
+@pytest.fixture(scope="module")
+def ctx():
+    """A headless OpenGL context (EGL; Mesa's llvmpipe here) for the render tests."""
+    from bridge_node.render.channels import create_context
+    return create_context()
+
+
+@pytest.fixture(scope="module")
+def exercise(tmp_path_factory):
+    """The render tests' world: a 400 m x 600 m field of 0.5 m ice, B = 50 m; the ship has
+    steamed 70 s into it. (Modules with a world of their own define their own.)"""
+    from bridge_node.node.world_setup import build_world, start_world
+    from sim_core.world import step
+    cfg = exercise_config(tmp_path_factory.getbasetemp() / "tiles", 400.0, 600.0, 50.0, start_north=-60.0)
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    for _ in range(700):
+        step(model, data, 0.1)
+    return model, data

@@ -6,12 +6,11 @@ from datetime import datetime
 
 import numpy as np
 import pytest
-from conftest import exercise_config, run_cli
+from conftest import run_cli
 
 from bridge_node.node.config import ConfigError, load_config
-from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.camera import channel_camera
-from bridge_node.render.channels import ChannelSet, blend_ramp, create_context
+from bridge_node.render.channels import ChannelSet, blend_ramp
 from bridge_node.render.meshes import CELL_VERTEX, cell_vertices, template_meshes
 from bridge_node.render.floe_buffers import FloeBuffer, FloeCopies, horizon_split
 from bridge_node.render.renderer import SceneRenderer
@@ -19,7 +18,7 @@ from bridge_node.render.settings import ChannelSettings, RenderSettings
 from bridge_node.render.warp import WarpError, write_pfm
 from bridge_node.stream.world_view import WorldView
 from sim_core.ice.floes import FloeStatus
-from sim_core.world import snapshot, step
+from sim_core.world import snapshot
 
 W, H = 192, 108
 
@@ -28,28 +27,12 @@ def channel(name="c", **kw) -> ChannelSettings:
     return ChannelSettings(name=name, width=W, height=H, **kw)
 
 
-@pytest.fixture(scope="module")
-def exercise(tmp_path_factory):
-    """A 400 m x 600 m field of 0.5 m ice, B = 50 m; the ship has steamed 70 s into it."""
-    cfg = exercise_config(tmp_path_factory.getbasetemp() / "tiles", 400.0, 600.0, 50.0, start_north=-60.0)
-    model = build_world(cfg, None)
-    data = start_world(model, cfg)
-    for _ in range(700):
-        step(model, data, 0.1)
-    return model, data
-
-
 def view_of(model, data, **ship) -> WorldView:
     """A fresh view of the world's published state, optionally with the ship moved."""
     view = WorldView()
     view.apply(snapshot(model, data))
     view.ship = dataclasses.replace(view.ship, **ship)
     return view
-
-
-@pytest.fixture(scope="module")
-def ctx():
-    return create_context()
 
 
 def render(ctx, model, data, channels, visibility=8000.0, blended=True, view=None, **look):

@@ -6,7 +6,7 @@ from datetime import datetime
 
 import numpy as np
 import pytest
-from test_render import H, W, channel, ctx, exercise, render, view_of  # noqa: F401 (fixtures)
+from test_render import H, W, channel, render, view_of
 
 from bridge_node.node.config import load_ship
 from bridge_node.render.camera import channel_camera

@@ -10,6 +10,7 @@ from conftest import exercise_config
 
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, create_context
+from bridge_node.render.classes import CLASS_INDEX, class_of_pixels
 from bridge_node.render.renderer import SceneRenderer
 from bridge_node.render.settings import ChannelSettings, RenderSettings
 from bridge_node.stream.world_view import WorldView
@@ -41,9 +42,10 @@ def ctx():
     return create_context()
 
 
-def render(ctx, exercise, heave: float | None, roll: float = 0.0, **look) -> np.ndarray:
-    """The low channel's image (rows, columns, RGB) with the floe at SPOT, its centroid
-    `heave` m above the water (None: no floe there) and rolled `roll` rad."""
+def render(ctx, exercise, heave: float | None, roll: float = 0.0, classes: bool = False, **look) -> np.ndarray:
+    """The low channel's image (rows, columns, RGB; with ``classes``, its class mask) with the
+    floe at SPOT, its centroid `heave` m above the water (None: no floe there) and rolled
+    `roll` rad."""
     model, data, row = exercise
     view = WorldView()
     view.apply(snapshot(model, data))
@@ -52,7 +54,7 @@ def render(ctx, exercise, heave: float | None, roll: float = 0.0, **look) -> np.
         view.pose[row, :] = SPOT[0], SPOT[1], heave, 0.3, roll, 0.0
     cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=[LOW], **(REACH | look))), [LOW])
     cs.render(view)
-    return cs.images()[0].astype(float)
+    return (cs.class_images(view) if classes else cs.images())[0].astype(float)
 
 
 def floating(exercise) -> float:
@@ -89,3 +91,17 @@ def test_a_floe_turned_under_shows_through_the_water(ctx, exercise):
     assert d[1] > d[0] + 20 and d[2] > d[0] + 20, d  # blue-green: the red absorbed first
     r, g, b = img[patch].mean(axis=0)
     assert g > r and b > r, (r, g, b)
+
+
+def test_the_class_mask_tells_a_floe_turned_under_from_a_floating_one(ctx, exercise):
+    model, data, row = exercise
+    h = float(model.ice.thickness[data.ice.state.gcell[row]])
+
+    def mask(heave, roll=0.0):
+        return class_of_pixels(render(ctx, exercise, heave, roll, classes=True).astype(np.uint8))
+    none = mask(None)
+    for heave, roll, cls in [(floating(exercise) - h, 0.25, "submerged_floe"), (floating(exercise), 0.0, "broken_floe")]:
+        seen = mask(heave, roll)
+        floe = seen != none  # the floe's pixels
+        assert floe.sum() >= 40, (cls, floe.sum())
+        assert np.all(seen[floe] == CLASS_INDEX[cls]), (cls, np.bincount(seen[floe]))

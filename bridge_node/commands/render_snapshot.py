@@ -1,6 +1,7 @@
 """``icebridge render-snapshot``: the configured channels at one moment of the default
 exercise, as PNGs (to set up a bridge's projectors). The exercise is first run, as fast as
-it goes, for ``--time`` simulated seconds so there is a broken channel to see."""
+it goes, for ``--time`` simulated seconds so there is a broken channel to see. With
+``--classes``, each channel's class mask too."""
 from __future__ import annotations
 
 import argparse
@@ -23,6 +24,9 @@ DT = 1 / 30
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--time", type=float, default=120.0, help="simulated seconds before the snapshot (default 120)")
     p.add_argument("--out", default="out", help="folder for the PNGs (default: out)")
+    p.add_argument("--classes", action="store_true",
+                   help="also write each channel's class mask (sky, water, level ice, crack, broken and submerged "
+                        "floe, own ship, other vessel) as NAME_classes.png, with classes_legend.png")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -50,4 +54,7 @@ def run(args: argparse.Namespace) -> int:
         console.print(f"{c.name}: yaw {c.yaw_deg:+.0f} deg, pitch {c.pitch_deg:+.0f} deg, hfov {c.hfov_deg:.0f} deg, "
                       f"{c.width}x{c.height} -> {path}")
     console.print(f"{len(channels.targets)} channels in {ms:.0f} ms (first frame, uploads included)")
+    if args.classes:
+        masks = channels.save_class_pngs(view, Path(args.out), "snapshot_")
+        console.print(f"class masks: {', '.join(str(p) for p in masks)}")
     return 0

@@ -8,6 +8,7 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
+from bridge_node.render.classes import save_legend
 from bridge_node.render.renderer import SceneRenderer
 from bridge_node.render.settings import ChannelSettings
 from bridge_node.render.video import save_png
@@ -83,6 +84,7 @@ class ChannelTarget:
         self.fbo = ctx.framebuffer([self.colour]) if self.warp else self.resolved
         self.blend = ctx.texture((channel.width, 1), 1, column_factors(channel).tobytes(), dtype="f4")
         self.blend.filter = moderngl.NEAREST, moderngl.NEAREST
+        self.class_fbo: moderngl.Framebuffer | None = None  # made when a class mask is first asked for
 
     def render(self, renderer: SceneRenderer, view: WorldView) -> None:
         self.draw_fbo.use()
@@ -96,8 +98,23 @@ class ChannelTarget:
 
     def image(self) -> np.ndarray:
         """The last frame as (height, width, 3) uint8, top row first."""
-        raw = self.fbo.read(components=3, alignment=1)
-        return np.frombuffer(raw, dtype=np.uint8).reshape(self.channel.height, self.channel.width, 3)[::-1]
+        return _read(self.fbo, self.channel)
+
+    def class_image(self, renderer: SceneRenderer, view: WorldView) -> np.ndarray:
+        """The channel's class mask (``classes``) of the view, drawn flat (before any warp)
+        from the same camera: (height, width, 3) uint8, top row first."""
+        if self.class_fbo is None:  # one sample per pixel: each pixel one class colour
+            size = (self.channel.width, self.channel.height)
+            self.class_fbo = renderer.ctx.framebuffer([renderer.ctx.renderbuffer(size, 3)],
+                                                      renderer.ctx.depth_renderbuffer(size))
+        self.class_fbo.use()
+        renderer.draw(view, self.channel, self.blend, classes=True)
+        return _read(self.class_fbo, self.channel)
+
+
+def _read(fbo: moderngl.Framebuffer, channel: ChannelSettings) -> np.ndarray:
+    raw = fbo.read(components=3, alignment=1)
+    return np.frombuffer(raw, dtype=np.uint8).reshape(channel.height, channel.width, 3)[::-1]
 
 
 class ChannelSet:
@@ -123,6 +140,18 @@ class ChannelSet:
         """Write the last frame of every PNG-output channel to ``folder/<stem><name>.png``."""
         return [save_png(t.image(), folder / f"{stem}{t.channel.name}.png") for t in self.targets
                 if t.channel.output == "png"]
+
+    def class_images(self, view: WorldView) -> list[np.ndarray]:
+        """The class mask of every channel of the view's state, in channel order."""
+        self.renderer.update(view)
+        return [t.class_image(self.renderer, view) for t in self.targets]
+
+    def save_class_pngs(self, view: WorldView, folder: Path, stem: str = "") -> list[Path]:
+        """Write the class mask of every PNG-output channel beside its frame, as
+        ``folder/<stem><name>_classes.png``, and the legend as ``folder/classes_legend.png``."""
+        paths = [save_png(image, folder / f"{stem}{t.channel.name}_classes.png")
+                 for t, image in zip(self.targets, self.class_images(view)) if t.channel.output == "png"]
+        return paths + [save_legend(folder / "classes_legend.png")]
 
     def images(self) -> list[np.ndarray]:
         """The last frame of every channel, in channel order."""

@@ -23,6 +23,7 @@ out vec3 world;                  // the point itself (also when its reflection i
 out vec3 normal;
 out vec2 local;                  // relief coordinates that move with the floe, m
 flat out int top;
+flat out float centre_z;         // the floe's centre of mass above the water, m
 void main() {
     int row = first + in_cell;   // a live tile's floe; a frozen tile's: -1 - its pose entry's number
     if (frozen) {
@@ -39,6 +40,7 @@ void main() {
                   xq.z + wq.y, yq.z - wq.x, 1.0 - xq.x - yq.y);
     world = r * in_pos + t;
     normal = r * in_normal;
+    centre_z = t.z;
     int snow_patch = (patch_base + in_cell) % (61 * 59);  // each floe its own patch of snow
     local = in_pos.xy + 31.7 * vec2(snow_patch % 61, snow_patch / 61);
     top = in_normal.z > 0.5 ? 1 : 0;
@@ -61,9 +63,14 @@ in vec3 world;
 in vec3 normal;
 in vec2 local;
 flat in int top;
+flat in float centre_z;
 out vec4 colour;
 float waterline(float z) { return mix(0.45, 1.0, smoothstep(0.0, 0.06, z)); }  // wet and dark at the water
 void main() {
+    if (classes) {  // a floe whose top (its centre plus half its thickness) is under the water: turned under
+        colour = CLASS_COLOUR[centre_z + 0.5 * thickness < 0.0 ? CLASS_SUBMERGED_FLOE : CLASS_BROKEN_FLOE];
+        return;
+    }
     vec3 n = normalize(normal);
     vec3 c;
     if (top == 1) {  // the snow only on tops (side faces and their reflections need none)
@@ -107,11 +114,13 @@ void main() {
 }
 """
 SHIP_FS = "#version 330\n" + COMMON + """
+uniform int ship_class;          // the class pass: own ship or other vessel
 in vec3 world;
 in vec3 normal;
 in vec3 albedo;
 out vec4 colour;
 void main() {
+    if (classes) { colour = CLASS_COLOUR[ship_class]; return; }
     vec3 n = normalize(normal);
     n = dot(n, eye - world) < 0.0 ? -n : n;  // two-sided: a bulwark's inside is lit as its inside
     colour = opaque(fogged(lit(albedo, n, world), world));

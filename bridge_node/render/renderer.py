@@ -35,6 +35,7 @@ import numpy as np
 
 from bridge_node.render import object_shaders, shaders
 from bridge_node.render.camera import Camera, channel_camera, set_matrix, ship_matrix, visible_boxes
+from bridge_node.render.classes import CLASS_INDEX, CLASSES
 from bridge_node.render.floe_buffers import FloeBuffer, horizon_split
 from bridge_node.render.meshes import cell_rasters, rim_rasters, template_meshes
 from bridge_node.render.scene_uploads import POSE_NAMES, POSE_UNITS, SceneUploads
@@ -136,9 +137,12 @@ class SceneRenderer(SceneUploads):
 
     # -- per frame uploads ----------------------------------------------------------------
 
-    def draw(self, view: WorldView, channel: ChannelSettings, blend: moderngl.Texture) -> Camera:
+    def draw(self, view: WorldView, channel: ChannelSettings, blend: moderngl.Texture,
+             classes: bool = False) -> Camera:
         """Draw the scene for one channel into the bound framebuffer, its columns scaled by
-        the blend texture (width x 1 float: the channel's edge-blend factors)."""
+        the blend texture (width x 1 float: the channel's edge-blend factors); with
+        ``classes``, its class mask instead (flat class colours: no reflections, lights or
+        blending)."""
         ctx, s = self.ctx, self.settings
         north, east, psi = view.ship.north, view.ship.east, view.ship.heading
         p = self.model.ship.particulars
@@ -150,8 +154,9 @@ class SceneRenderer(SceneUploads):
                   "direct": sky.direct, "ambient": sky.ambient, "zenith_colour": sky.zenith,
                   "horizon_colour": sky.horizon,
                   "noise": NOISE_UNIT, "water_colour": WATER,
-                  "relief_reach": s.relief_reach_m, "time": view.time, **self._searchlights(view.ship)}
-        ctx.clear(*sky.horizon, depth=1.0)
+                  "relief_reach": s.relief_reach_m, "time": view.time, "classes": classes,
+                  **self._searchlights(view.ship)}
+        ctx.clear(*(np.divide(CLASSES[CLASS_INDEX["sky"]][1], 255.0) if classes else sky.horizon), depth=1.0)
         self.tile_info.use(0)
         self.cell_raster.use(3)
         self.noise.use(NOISE_UNIT)
@@ -164,7 +169,8 @@ class SceneRenderer(SceneUploads):
         ctx.enable(moderngl.DEPTH_TEST)
         ships = self._ship_matrices(view, cam)
         self._set(self.ship, view_proj=vp, **common)
-        for m in ships:
+        for k, m in enumerate(ships):  # the own ship first
+            self._set(self.ship, ship_class=CLASS_INDEX["own_ship" if k == 0 else "other_vessel"])
             set_matrix(self.ship["ship_to_world"], m)
             self.ship_vao.render()
         tiles = self._floe_tiles(view, cam) if self.tile_floes else None
@@ -188,6 +194,8 @@ class SceneRenderer(SceneUploads):
         if len(above):
             self._set(self.sky_prog, **common)
             self.sky_vao.render(vertices=len(above), first=len(ground))
+        if classes:
+            return cam
         if tiles:
             self._draw_reflections(view, tiles)
         self._draw_nav_lights(ships, cam, channel.height, view.environment.visibility)

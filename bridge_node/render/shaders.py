@@ -13,6 +13,7 @@ searchlights, and fogged by the visibility.
 """
 import math
 
+from bridge_node.render import classes
 from bridge_node.render.textures import NOISE_RANGE
 
 
@@ -58,7 +59,7 @@ uniform vec3 ambient;            // the sky's light
 uniform vec3 zenith_colour;
 uniform vec3 horizon_colour;     // also the fog's colour
 uniform sampler2D noise;         // height, d/du, d/dv: tileable noise over five octaves
-""" + _octaves() + """
+""" + _octaves() + classes.GLSL + """
 vec3 fogged(vec3 colour, vec3 world) {
     // meteorological visibility: contrast falls to 5 % (exp(-3)) at that distance
     float f = exp(-3.0 * distance(world, eye) / visibility);
@@ -171,7 +172,7 @@ void main() { ray = in_ray; gl_Position = vec4(in_ndc, 0.9999, 1.0); }
 SKY_FS = "#version 330\n" + COMMON + """
 in vec3 ray;
 out vec4 colour;
-void main() { colour = opaque(sky(normalize(ray))); }
+void main() { colour = classes ? CLASS_COLOUR[CLASS_SKY] : opaque(sky(normalize(ray))); }
 """
 # One pass below the horizon (and over its anti-aliased band) draws sea and level ice, and
 # the sky in the band's pixels above the horizon. Each pixel's view ray is intersected
@@ -229,7 +230,7 @@ void main() {
     // through the middle of that share
     float fw = max(fwidth(r.z), 1e-6);
     float below = clamp(0.5 - r.z / fw, 0.0, 1.0);
-    if (below <= 0.0) { colour = opaque(sky(r)); return; }
+    if (below <= 0.0) { colour = classes ? CLASS_COLOUR[CLASS_SKY] : opaque(sky(r)); return; }
     vec3 above = below < 1.0 ? sky(r) : vec3(0.0);  // the sky only in the horizon's pixels
     vec3 g = normalize(vec3(r.xy, min(r.z, 0.5 * (r.z - 0.5 * fw))));
     float t = (slab_z - eye.z) / g.z;
@@ -240,6 +241,10 @@ void main() {
     // clamped: off the field the fetch is unused, and one outside the texture is undefined
     ivec4 info = texelFetch(tile_info, clamp(tile, ivec2(0), textureSize(tile_info, 0) - 1), 0);
     bool ice = on_field && level_ice(p, tile, info, rim);
+    if (classes) {  // the class pass: the pixel's class, no shading
+        colour = CLASS_COLOUR[below < 0.5 ? CLASS_SKY : (ice ? CLASS_LEVEL_ICE : CLASS_OPEN_WATER)];
+        return;
+    }
     vec3 at = eye - g * eye.z / g.z;  // on the water
     // one fetch of the finest octave, under the snow on ice, under the moving waves on the sea
     // (on llvmpipe, both branches cost every pixel); its mip level from the snow's coordinates
