@@ -35,7 +35,7 @@ from sim_core.instructor import Command, OtherVessel, Reposition, apply_command,
 from sim_core.ice.step import warm_up as warm_up_ice
 from sim_core.ice.tiles import IceData, PreparedTile, advance, new_ice_data
 from sim_core.scene.quadtree import tile_under, tiles_near
-from sim_core.scene.scene import SceneData, SceneModel, TileState, new_scene_data, update_scene
+from sim_core.scene.scene import SceneData, SceneModel, TileState, new_scene_data, update_scene, with_ice
 from sim_core.scene.switches import (
     NO_FROZEN_FLOES,
     NO_ROWS,
@@ -189,7 +189,8 @@ def warm_up(model: WorldModel, data: WorldData) -> None:
     so that the first step only switches them in."""
     warm_up_ice(model.ice, data.ice)
     contour, _ = hull_world(model, data.ship)
-    start = tiles_near(contour, model.scene.radius, model.scene.nx, model.scene.ny, model.scene.side)
+    start = with_ice(model.scene, tiles_near(contour, model.scene.radius, model.scene.nx, model.scene.ny,
+                                             model.scene.side))
     for tile in start.tolist():
         data.ahead[tile] = prepare_switch(model, data, tile)
     prepare_ahead(model, data, contour, budget_s=math.inf)
@@ -224,6 +225,8 @@ def _ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple
     if tile < 0:
         return 0.0, OPEN_WATER
     h = scene.thickness_at(bow)
+    if h <= 0.0:  # an open-water tile (a lead, an ice-free region)
+        return 0.0, OPEN_WATER
     breaking = data.time - data.last_hull_break < BREAKING_MEMORY
     if breaking or data.scene.tile_state[tile] not in (TileState.BREAKABLE, TileState.FROZEN):
         return h, LEVEL_ICE

@@ -62,7 +62,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         cache = Path(args.cache_dir) if args.cache_dir else writable_dir(
             resolve_path(args.config, cfg.paths.cache_dir), "paths.cache_dir")
-        jobs = [(h, v) for h in field_tile_classes(cfg, args.config)[1].tolist() for v in range(settings.variants)]
+        jobs = [(h, v) for h in field_tile_classes(cfg, args.config)[1].tolist() if h > 0.0  # none for open water
+                for v in range(settings.variants)]
         rows = []
         with Progress(console=console, transient=True) as progress:
             task = progress.add_task("pre-fracturing tiles", total=len(jobs))

@@ -139,8 +139,9 @@ def run(args: argparse.Namespace) -> int:
     traffic = traffic_picture(cfg, args.config)
     console = Console(stderr=args.json)
     if cfg.ice_field.chart or cfg.ice_field.regions:
-        console.print("[yellow]ice_field: the chart and regions are laid out by `icebridge field`; floe fields do "
-                      "not enter the ice world yet, so this run simulates the level ice of [ice_field][/yellow]")
+        console.print("[yellow]ice_field: the chart's and regions' level ice and open water are in the ice world; "
+                      "their floe fields are not yet (`icebridge field` lays them out), and the tiles under them keep "
+                      "the level ice of [ice_field][/yellow]")
     out = Path(args.out)
     record = None if args.no_record else new_session_dir(cfg, args.config)
     point = read_save(Path(args.fork).expanduser()) if args.fork else None

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 from rich.progress import Progress
 
+from bridge_node.charts.field_regions import configured_regions
 from bridge_node.library.templates import library_template
 from bridge_node.node.config import NodeConfig, load_ship, resolve_path
 from bridge_node.common.errors import UserError
@@ -19,14 +20,24 @@ from bridge_node.common.paths import writable_dir
 from sim_core.environment import Environment
 from sim_core.frames.units import KNOT
 from sim_core.ice.model import compile_ice_model
-from sim_core.scene.field import tile_classes
+from sim_core.fracture.fragment_count import MAX_THICKNESS
+from sim_core.regimes.regime import region_tile_thickness
+from sim_core.scene.field import tile_classes, tile_counts
 from sim_core.scene.scene import compile_scene, open_water
 from sim_core.ship.model import compile_ship
 from sim_core.world import WorldData, WorldModel, compile_world, new_world_data, step
 
 
 def field_tile_classes(cfg: NodeConfig, config_path: str | None) -> tuple[np.ndarray, np.ndarray]:
-    """Thickness class of every tile of the configured field, and the class thicknesses (m)."""
+    """Thickness class of every tile of the configured field, and the class thicknesses (m;
+    0 for open water). Where the config's chart or regions lay level ice or open water over
+    a tile's centre, they set its thickness; elsewhere the field's thickness profile does."""
+    regions = None
+    if cfg.ice_field.chart or cfg.ice_field.regions:
+        nx, ny = tile_counts(cfg.ice_field, cfg.fracture.tile_side)
+        chart = Path(cfg.ice_field.chart) if cfg.ice_field.chart else None
+        regions = region_tile_thickness(configured_regions(cfg, chart), nx, ny, cfg.fracture.tile_side,
+                                        MAX_THICKNESS)
     grid = None
     if cfg.ice_field.thickness_profile == "grid":
         grid_path = resolve_path(config_path, cfg.ice_field.thickness_grid)
@@ -35,7 +46,7 @@ def field_tile_classes(cfg: NodeConfig, config_path: str | None) -> tuple[np.nda
         except (OSError, ValueError) as exc:
             raise UserError(f"{config_path}: ice_field.thickness_grid = {str(grid_path)!r}: {exc}") from None
     try:
-        return tile_classes(cfg.ice_field, cfg.fracture.tile_side, grid)
+        return tile_classes(cfg.ice_field, cfg.fracture.tile_side, grid, regions)
     except ValueError as exc:
         raise UserError(f"{config_path}: ice_field: {exc}") from None
 
@@ -49,7 +60,7 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
     tile_class, class_h = field_tile_classes(cfg, config_path)
     cache = writable_dir(resolve_path(config_path, cfg.paths.cache_dir), f"{config_path or 'default config'}: "
                          "paths.cache_dir")
-    jobs = [(h, v) for h in class_h for v in range(cfg.fracture.variants)]
+    jobs = [(h, v) for h in class_h[class_h > 0.0] for v in range(cfg.fracture.variants)]  # none for open water
     task = progress.add_task("loading tile templates", total=len(jobs)) if progress else None
     templates = []
     for h, v in jobs:
@@ -57,7 +68,9 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
         if progress:
             progress.advance(task)
     ice = compile_ice_model(templates, cfg.ice_material, cfg.ice_dynamics)
-    per_class = [np.arange(k * cfg.fracture.variants, (k + 1) * cfg.fracture.variants) for k in range(len(class_h))]
+    first = np.cumsum(class_h > 0.0) - 1  # the first template of each class with ice
+    per_class = [np.arange(first[k] * cfg.fracture.variants, (first[k] + 1) * cfg.fracture.variants) if h > 0.0
+                 else np.zeros(0, dtype=np.int64) for k, h in enumerate(class_h)]
     try:
         scene = compile_scene(cfg.scene, tile_class, class_h, per_class, cfg.fracture.tile_side,
                               ship.particulars.length)

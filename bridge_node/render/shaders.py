@@ -176,7 +176,8 @@ void main() { colour = classes ? CLASS_COLOUR[CLASS_SKY] : opaque(sky(normalize(
 """
 # One pass below the horizon (and over its anti-aliased band) draws sea and level ice, and
 # the sky in the band's pixels above the horizon. Each pixel's view ray is intersected
-# with the water plane and with the ice top: on an unbreakable tile that is ice; on a
+# with the water plane and with the ice top: on an unbreakable tile that is ice (sea where
+# the tile's thickness is 0: open water a chart or region lays); on a
 # breakable or frozen tile the template's cell raster names the cell under the point, and
 # the cell's status (from the status texture) says intact ice or water between broken floes.
 # Level ice thus costs no triangles, and far ice does not z-fight with the water.
@@ -202,7 +203,7 @@ uint cell_status(int first, int cell) {
 // water), falling to 0 at rim_px pixels of the raster from it.
 bool level_ice(vec2 p, ivec2 tile, ivec4 info, out float rim) {
     rim = 0.0;
-    if (info.w == 0) return true;                                       // the unbreakable slab
+    if (info.w == 0) return intBitsToFloat(info.z) > 0.0;              // the unbreakable slab (none: open water)
     vec2 local = p - vec2(tile) * tile_side - 0.5 * tile_side;          // about the tile centre
     int k = info.y >> 16;                                               // undo the quarter turns
     float c = k == 0 ? 1.0 : (k == 2 ? -1.0 : 0.0), s = k == 1 ? 1.0 : (k == 3 ? -1.0 : 0.0);

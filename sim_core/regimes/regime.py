@@ -122,3 +122,19 @@ def region_at(polygons: list[shapely.Geometry], x: np.ndarray, y: np.ndarray) ->
     for i, polygon in enumerate(polygons):
         index[shapely.contains_xy(polygon, x, y)] = i
     return index
+
+
+def region_tile_thickness(regions: list[IceRegion], nx: int, ny: int, side: float,
+                          max_thickness: float) -> np.ndarray:
+    """Thickness (ny, nx) m of each tile of a field of nx x ny tiles of ``side`` m, from the
+    region (as they lie, later over earlier) holding its centre: a level-ice region's stage
+    (the middle of its range, at most ``max_thickness``), 0 for an ice-free region (open
+    water); NaN where no region lies, or one the ice world does not lay out as level ice
+    (floe fields, land, no data), so that the field's own thickness profile holds there."""
+    field = shapely.box(0.0, 0.0, nx * side, ny * side)
+    x, y = np.meshgrid((np.arange(nx) + 0.5) * side, (np.arange(ny) + 0.5) * side)
+    index = region_at(effective_polygons(regions, field), x, y)
+    per_region = np.array([min(r.regime.types[0].stage_range.nominal, max_thickness) if r.regime.level
+                           else 0.0 if r.kind in ("ice", "water") and not r.regime.types else np.nan
+                           for r in regions] + [np.nan])
+    return per_region[index]  # index -1 (no region) takes the last entry, NaN

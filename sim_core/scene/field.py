@@ -66,14 +66,20 @@ def thickness_class(h: np.ndarray | float, step: float) -> np.ndarray:
     return np.clip(np.round(np.asarray(h) / step) * step, step, MAX_THICKNESS).round(6)
 
 
-def tile_classes(field: IceFieldSettings, tile_side: float,
-                 grid: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def tile_classes(field: IceFieldSettings, tile_side: float, grid: np.ndarray | None = None,
+                 regions: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Thickness class of every tile: (class index (ny, nx) uint8, row 0 at the south edge;
     class thicknesses (k,) m). Uniform and gradient fields are built a row at a time, so a
-    640 km field costs one byte per tile."""
+    640 km field costs one byte per tile. ``regions`` (ny, nx) m, where given, overrides the
+    profile where it is not NaN: a level-ice region's thickness, or 0 for open water (a
+    class of its own, thickness 0, that no template is built for)."""
     nx, ny = tile_counts(field, tile_side)
-    if field.thickness_profile == "grid":
+    if field.thickness_profile == "grid" or regions is not None:
         classes = thickness_class(tile_thickness(field, tile_side, grid), field.class_step)
+        if regions is not None:
+            given = ~np.isnan(regions)
+            classes = np.where(given & (regions > 0.0), thickness_class(np.nan_to_num(regions), field.class_step),
+                               np.where(given, 0.0, classes))
     else:
         column = tile_thickness(field.model_copy(update={"width": tile_side}), tile_side)[:, 0]
         classes = thickness_class(column, field.class_step)[:, None]

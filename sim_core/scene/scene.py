@@ -122,20 +122,26 @@ def detected_tiles(model: SceneModel, contour: np.ndarray, origin: np.ndarray) -
     return tiles_near(contour, model.radius, model.nx, model.ny, model.side)
 
 
+def with_ice(model: SceneModel, tiles: np.ndarray) -> np.ndarray:
+    """The tiles (flat indices) that hold ice: open-water tiles (thickness 0) are never placed."""
+    return tiles[model.class_thickness[model.tile_class[tiles]] > 0.0]
+
+
 def tiles_to_prepare(model: SceneModel, data: SceneData, contour: np.ndarray) -> np.ndarray:
-    """Unbreakable or frozen tiles within R_T + ``prepare_ahead`` of the contour points (n, 2) m:
-    those a switch may soon need."""
+    """Unbreakable or frozen tiles with ice within R_T + ``prepare_ahead`` of the contour
+    points (n, 2) m: those a switch may soon need."""
     if model.settings.prepare_ahead <= 0.0:
         return np.zeros(0, dtype=np.int64)
-    near = tiles_near(contour, model.radius + model.settings.prepare_ahead, model.nx, model.ny, model.side)
+    near = with_ice(model, tiles_near(contour, model.radius + model.settings.prepare_ahead, model.nx, model.ny,
+                                      model.side))
     return near[data.tile_state[near] != TileState.BREAKABLE]
 
 
 def update_scene(model: SceneModel, data: SceneData, contour: np.ndarray, origin: np.ndarray) -> SceneUpdate:
-    """Decide and record this step's swaps: detected unbreakable tiles are placed, detected
-    frozen tiles thawed, and (with reverse replacement) breakable tiles whose centre lies
+    """Decide and record this step's swaps: detected unbreakable tiles with ice are placed,
+    detected frozen tiles thawed, and (with reverse replacement) breakable tiles whose centre lies
     farther than the reverse distance from the hull's reference point are frozen."""
-    wanted = detected_tiles(model, contour, origin)
+    wanted = with_ice(model, detected_tiles(model, contour, origin))
     state = data.tile_state[wanted]
     place, thaw = wanted[state == TileState.UNBREAKABLE], wanted[state == TileState.FROZEN]
     live = data.live
