@@ -40,12 +40,16 @@ TOKEN = "instructor-test-token-0123456789"
 SHIP_RGB = (232, 51, 31)  # MAP_COLORS.ship in map.js
 FLOE_RGB = (247, 251, 254)  # MAP_COLORS.floe
 LEVEL_ICE_RGB = (210, 221, 230)  # MAP_COLORS.ice
+WATER_RGB = (23, 54, 79)  # MAP_COLORS.water
 
 
 def write_config(folder: Path, stream: tuple[int, int], control: int, port: int, extra: str = "") -> Path:
-    """An 800 m field of 0.3 m ice, the ship's bow in it, loopback ports of its own, and NMEA
-    0183 instrument sentences on UDP (the session record's tx sentences a debrief plays)."""
+    """An 800 m field of 0.3 m ice with an ice-free corner (a lake), the ship's bow in it,
+    loopback ports of its own, and NMEA 0183 instrument sentences on UDP (the session
+    record's tx sentences a debrief plays)."""
     text = ('[ship]\nname = "polar_cargo"\n[ice_field]\nwidth = 800.0\nheight = 800.0\nthickness = 0.3\n'
+            '[[ice_field.regions]]\nname = "lake"\nconcentration = 0\n'  # open water in the north-west corner
+            'polygon_m = [[0.0, 600.0], [200.0, 600.0], [200.0, 800.0], [0.0, 800.0]]\n'
             '[exercise]\nstart_north = -20.0\nstart_east = 450.0\n'
             f'[paths]\ncache_dir = "{folder / "tiles"}"\nsession_dir = "{folder / "sessions"}"\n'
             f'[stream]\npublish = "tcp://127.0.0.1:{stream[0]}"\nsnapshot = "tcp://127.0.0.1:{stream[1]}"\n'
@@ -138,6 +142,18 @@ def test_map_shows_ship_and_floes(exercise, browser):
         assert channel < 0.5 < level, f"level ice: {channel:.0%} of the channel astern, {level:.0%} beside it"
     finally:
         request(_endpoint(config), {"command": {"command": "resume"}}, None)
+
+
+def test_the_map_shows_open_water_where_a_region_lays_it(exercise, browser):
+    view(browser, 200.0, 600.0, 1.0)
+    image = screenshot(browser)
+
+    def around(east: float, north: float) -> np.ndarray:
+        x, y = (round(v) for v in canvas_pixel(browser, east, north))
+        return image[y - 10:y + 11, x - 10:x + 11]
+    assert near(around(100.0, 700.0), WATER_RGB, 6).mean() > 0.9  # the lake
+    assert near(around(300.0, 700.0), LEVEL_ICE_RGB, 6).mean() > 0.9  # the field's ice beside it
+    assert near(around(100.0, 500.0), LEVEL_ICE_RGB, 6).mean() > 0.9
 
 
 def test_freeze_and_resume_from_the_page(exercise, browser):

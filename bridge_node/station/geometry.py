@@ -1,6 +1,6 @@
 """What the page needs once to draw the exercise: the field's extent and tile grid, every
-template cell's plan outline and home centroid, the own ship's waterline outline, and the
-local-plane scale of the latitude/longitude grid. Sent to each browser when it connects."""
+template cell's plan outline and home centroid, the open-water tiles, the own ship's
+waterline outline, and the local-plane scale of the latitude/longitude grid. Sent to each browser when it connects."""
 from __future__ import annotations
 
 import math
@@ -9,6 +9,7 @@ import numpy as np
 
 from bridge_node.station.wire import pack
 from sim_core.frames.geodesy import radii
+from sim_core.scene.scene import SceneModel
 from sim_core.world import WorldModel
 
 
@@ -16,7 +17,7 @@ def geometry_message(model: WorldModel, ship_name: str, rate_hz: float) -> bytes
     """The ``geometry`` message: JSON for the field, ship (``ship_name``), templates and the
     station's update rate (``rate_hz``, Hz); arrays of every
     global cell's outline points (x, y about its centroid, m), outline starts (G + 1) and
-    centroid in its template's tile frame (x, y, m)."""
+    centroid in its template's tile frame (x, y, m), and the open-water tiles (``water_runs``)."""
     ice, scene, ship = model.ice, model.scene, model.ship.particulars
     lat0, lon0 = model.origin
     m, n = radii(lat0)
@@ -34,5 +35,16 @@ def geometry_message(model: WorldModel, ship_name: str, rate_hz: float) -> bytes
         "rate_hz": rate_hz,
     }
     arrays = {"outline": ice.outline[:, :2], "outline_start": ice.outline_start.astype(np.int64),
-              "centroid": ice.centroid[:, :2]}
+              "centroid": ice.centroid[:, :2], "water_runs": water_runs(scene)}
     return pack(header, arrays)
+
+
+def water_runs(scene: SceneModel) -> np.ndarray:
+    """The field's open-water tiles (thickness 0: an ice-free region) as runs along the tile
+    rows, flattened (row, first column, tiles) triples: a lake of thousands of tiles is a few
+    numbers."""
+    water = (scene.class_thickness[scene.tile_class] <= 0.0).reshape(scene.ny, scene.nx)
+    edges = np.diff(np.pad(water.astype(np.int8), ((0, 0), (1, 1))), axis=1)
+    rows, starts = np.nonzero(edges == 1)
+    _, stops = np.nonzero(edges == -1)
+    return np.column_stack([rows, starts, stops - starts]).astype(np.int64).ravel()

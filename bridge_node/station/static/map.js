@@ -1,4 +1,4 @@
-// The instructor station's map: the ice field, its tiles and broken channel, the live
+// The instructor station's map: the ice field (its open water too), its tiles and broken channel, the live
 // floes (one path for all of them, built from typed arrays), the own ship with its track,
 // other vessels, searchlight beams, a latitude/longitude grid and a scale bar. World
 // coordinates: x east, y north, metres from the field's south-west corner; north up.
@@ -46,7 +46,8 @@ class MapView {
 
   // -- data ------------------------------------------------------------------------------
   setGeometry(header, arrays) {
-    this.geo = { ...header, outline: arrays.outline, start: arrays.outline_start, centroid: arrays.centroid };
+    this.geo = { ...header, outline: arrays.outline, start: arrays.outline_start, centroid: arrays.centroid,
+                 waterRuns: arrays.water_runs };
     const f = header.field;
     this.width = f.nx * f.side; this.height = f.ny * f.side;
     this.tiles.clear(); this.floes.clear();
@@ -215,6 +216,9 @@ class MapView {
 
   _drawIce(ctx, s) {
     ctx.fillStyle = MAP_COLORS.ice; ctx.fillRect(0, 0, this.width, this.height);
+    const runs = this.geo.waterRuns, side = this.geo.field.side;  // open-water tiles: (row, column, count)
+    ctx.fillStyle = MAP_COLORS.water;
+    for (let i = 0; i + 2 < runs.length; i += 3) ctx.fillRect(runs[i + 1] * side, runs[i] * side, runs[i + 2] * side, side);
     ctx.lineWidth = 1 / s;
     const frozen = new Path2D(), tileLines = new Path2D();
     for (const t of this.tiles.values()) {
