@@ -41,6 +41,7 @@ SHIP_RGB = (232, 51, 31)  # MAP_COLORS.ship in map.js
 FLOE_RGB = (247, 251, 254)  # MAP_COLORS.floe
 LEVEL_ICE_RGB = (210, 221, 230)  # MAP_COLORS.ice
 WATER_RGB = (23, 54, 79)  # MAP_COLORS.water
+REGION_RGB = (255, 122, 217)  # MAP_COLORS.region
 
 
 def write_config(folder: Path, stream: tuple[int, int], control: int, port: int, extra: str = "") -> Path:
@@ -144,16 +145,19 @@ def test_map_shows_ship_and_floes(exercise, browser):
         request(_endpoint(config), {"command": {"command": "resume"}}, None)
 
 
-def test_the_map_shows_open_water_where_a_region_lays_it(exercise, browser):
+def test_the_map_shows_the_regions_and_their_open_water(exercise, browser):
     view(browser, 200.0, 600.0, 1.0)
     image = screenshot(browser)
 
     def around(east: float, north: float) -> np.ndarray:
         x, y = (round(v) for v in canvas_pixel(browser, east, north))
         return image[y - 10:y + 11, x - 10:x + 11]
-    assert near(around(100.0, 700.0), WATER_RGB, 6).mean() > 0.9  # the lake
+    assert near(around(100.0, 660.0), WATER_RGB, 6).mean() > 0.9  # the lake
     assert near(around(300.0, 700.0), LEVEL_ICE_RGB, 6).mean() > 0.9  # the field's ice beside it
     assert near(around(100.0, 500.0), LEVEL_ICE_RGB, 6).mean() > 0.9
+    edge = [near(around(200.0, north), REGION_RGB, 40).any() for north in (620.0, 650.0, 680.0, 710.0, 740.0)]
+    assert np.mean(edge) >= 0.6, edge  # its outline, dashed, on its east edge
+    assert not near(around(300.0, 700.0), REGION_RGB, 40).any()
 
 
 def test_freeze_and_resume_from_the_page(exercise, browser):

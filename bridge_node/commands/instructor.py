@@ -34,6 +34,7 @@ from bridge_node.common.output_files import write_output
 from bridge_node.station.debrief import debrief_message, load_debrief, plot_png
 from bridge_node.station.feed import ControlWatch, Feed
 from bridge_node.station.geometry import geometry_message
+from bridge_node.charts.field_regions import configured_regions
 from bridge_node.station.server import Broadcast, ControlTarget, Station
 
 
@@ -99,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
     watch = ControlWatch(target.endpoint, token)
     feed = Feed(model, publish, snapshot, cfg.instructor.rate_hz, watch, broadcast.publish, broadcast.wait_for_node,
                 args.wait)
-    station = Station(geometry_message(model, cfg.ship.name, cfg.instructor.rate_hz), broadcast, target, token, not cfg.instructor.allow_network,
+    station = Station(_geometry(model, cfg), broadcast, target, token, not cfg.instructor.allow_network,
                       {"mode": "live", "ship": cfg.ship.name, "stream": publish, "control": target.endpoint})
     watch.start()
     feed.start()
@@ -111,6 +112,12 @@ def run(args: argparse.Namespace) -> int:
     print(json.dumps({"url": url, "frames": feed.frames, "resyncs": feed.resyncs, "lost": feed.lost,
                       "frame_build_ms_max": round(max(feed.build_ms, default=0.0), 2)}))
     return 0
+
+
+def _geometry(model, cfg) -> bytes:
+    """The station's geometry message of the configured exercise, with its ice regions."""
+    chart = Path(cfg.ice_field.chart) if cfg.ice_field.chart else None
+    return geometry_message(model, cfg.ship.name, cfg.instructor.rate_hz, configured_regions(cfg, chart))
 
 
 def _debrief(args: argparse.Namespace, cfg, token: str | None) -> int:
@@ -125,7 +132,7 @@ def _debrief(args: argparse.Namespace, cfg, token: str | None) -> int:
     sock = listen(cfg.instructor.host, args.port if args.port is not None else cfg.instructor.port)
     broadcast = Broadcast()
     broadcast.waiting = None  # nothing live to wait for
-    station = Station(geometry_message(model, cfg.ship.name, cfg.instructor.rate_hz), broadcast, None, token, not cfg.instructor.allow_network,
+    station = Station(_geometry(model, cfg), broadcast, None, token, not cfg.instructor.allow_network,
                       {"mode": "debrief", "ship": cfg.ship.name, "record": str(debrief.folder)},
                       (debrief_message(debrief), plots))
     print(json.dumps({"url": _serve(station, sock, args, f"debrief of {debrief.folder}")}))

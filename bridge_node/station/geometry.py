@@ -6,18 +6,23 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import shapely
 
 from bridge_node.station.wire import pack
+from sim_core.csr import offsets
 from sim_core.frames.geodesy import radii
+from sim_core.regimes.regime import IceRegion, effective_polygons
 from sim_core.scene.scene import SceneModel
 from sim_core.world import WorldModel
 
 
-def geometry_message(model: WorldModel, ship_name: str, rate_hz: float) -> bytes:
+def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions: list[IceRegion] = ()) -> bytes:
     """The ``geometry`` message: JSON for the field, ship (``ship_name``), templates and the
     station's update rate (``rate_hz``, Hz); arrays of every
     global cell's outline points (x, y about its centroid, m), outline starts (G + 1) and
-    centroid in its template's tile frame (x, y, m), and the open-water tiles (``water_runs``)."""
+    centroid in its template's tile frame (x, y, m), the open-water tiles (``water_runs``), and
+    the ice regions as they lie on the field (``regions`` in the header: name, egg code, kind,
+    label point; their outline rings' points ``region_xy``, ring starts and owners)."""
     ice, scene, ship = model.ice, model.scene, model.ship.particulars
     lat0, lon0 = model.origin
     m, n = radii(lat0)
@@ -34,8 +39,10 @@ def geometry_message(model: WorldModel, ship_name: str, rate_hz: float) -> bytes
         "templates": templates,
         "rate_hz": rate_hz,
     }
+    header["regions"], rings = region_outlines(list(regions), shapely.box(0.0, 0.0, scene.nx * scene.side,
+                                                                          scene.ny * scene.side))
     arrays = {"outline": ice.outline[:, :2], "outline_start": ice.outline_start.astype(np.int64),
-              "centroid": ice.centroid[:, :2], "water_runs": water_runs(scene)}
+              "centroid": ice.centroid[:, :2], "water_runs": water_runs(scene)} | rings
     return pack(header, arrays)
 
 
@@ -48,3 +55,23 @@ def water_runs(scene: SceneModel) -> np.ndarray:
     rows, starts = np.nonzero(edges == 1)
     _, stops = np.nonzero(edges == -1)
     return np.column_stack([rows, starts, stops - starts]).astype(np.int64).ravel()
+
+
+
+def region_outlines(regions: list[IceRegion], field: shapely.Geometry) -> tuple[list[dict], dict[str, np.ndarray]]:
+    """The regions' part of the field as the page draws them: per region its name, egg code,
+    kind and a point inside it for the label (m); and the outline rings (exterior and holes)
+    of every part: points (x, y, m, flattened), ring starts (rings + 1) and the region each
+    ring belongs to."""
+    meta, points, owner = [], [], []
+    for k, polygon in enumerate(effective_polygons(regions, field)):
+        region = regions[k]
+        at = shapely.point_on_surface(polygon) if not polygon.is_empty else None
+        meta.append({"name": region.name, "regime": region.regime.label(), "kind": region.kind,
+                     "label": None if at is None else [round(at.x, 1), round(at.y, 1)]})
+        for ring in shapely.get_rings(shapely.get_parts(polygon)):
+            points.append(shapely.get_coordinates(ring))
+            owner.append(k)
+    counts = np.array([len(p) for p in points], dtype=np.int64)
+    return meta, {"region_xy": np.concatenate(points).ravel() if points else np.zeros(0),
+                  "region_start": offsets(counts), "region_owner": np.array(owner, dtype=np.int64)}

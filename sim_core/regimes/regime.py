@@ -57,6 +57,8 @@ class IceRegime:
     def label(self) -> str:
         if not self.types:
             return "ice free"
+        if len(self.types) == 1 and self.types[0].concentration == self.total:
+            return self.types[0].label()
         return f"{self.total:g}/10: " + ", ".join(t.label() for t in self.types)
 
 

@@ -8,7 +8,7 @@ const MAP_COLORS = {
   water: "#17364f", ice: "#d2dde6", tileLine: "rgba(70, 110, 140, 0.35)", frozenTile: "rgba(96, 130, 160, 0.10)",
   floe: "#f7fbfe", floeEdge: "#6d8aa1", frozenFloe: "#c3d1dc", track: "#ffb13b", ship: "#e8331f",
   shipEdge: "#ffffff", traffic: "#2fd27a", light: "rgba(255, 236, 140, 0.28)", grid: "rgba(255, 255, 255, 0.28)",
-  gridText: "rgba(255, 255, 255, 0.85)", ghost: "rgba(255, 176, 59, 0.9)",
+  gridText: "rgba(255, 255, 255, 0.85)", ghost: "rgba(255, 176, 59, 0.9)", region: "#ff7ad9",
 };
 
 class MapView {
@@ -47,7 +47,7 @@ class MapView {
   // -- data ------------------------------------------------------------------------------
   setGeometry(header, arrays) {
     this.geo = { ...header, outline: arrays.outline, start: arrays.outline_start, centroid: arrays.centroid,
-                 waterRuns: arrays.water_runs };
+                 waterRuns: arrays.water_runs, regionPath: regionOutlines(arrays) };
     const f = header.field;
     this.width = f.nx * f.side; this.height = f.ny * f.side;
     this.tiles.clear(); this.floes.clear();
@@ -202,6 +202,7 @@ class MapView {
     const world = () => ctx.setTransform(dpr * s, 0, 0, -dpr * s, dpr * (w / 2 - this.cx * s), dpr * (h / 2 + this.cy * s));
     world();
     this._drawIce(ctx, s);
+    this._drawRegions(ctx, s);
     this._drawTrack(ctx, s);
     if (this.frame) {
       this._drawTraffic(ctx, s);
@@ -209,6 +210,7 @@ class MapView {
     }
     if (this.ghost) this._drawGhost(ctx, s);
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    this._drawRegionLabels(ctx, w, h);
     this._drawGrid(ctx, w, h);
     this._drawScale(ctx, h);
     this._measure(t0);
@@ -235,6 +237,30 @@ class MapView {
     for (const t of this.tiles.values()) if (t.floes) { ctx.fill(t.floes); if (s > 1) ctx.stroke(t.floes); }
     ctx.fillStyle = MAP_COLORS.floe;
     for (const f of this.floes.values()) { ctx.fill(f.path); if (s > 1) ctx.stroke(f.path); }
+  }
+
+  // the ice regions (a chart's and the config's) outlined, dashed, as they lie on the field
+  _drawRegions(ctx, s) {
+    if (!this.geo.regionPath) return;
+    ctx.save();
+    ctx.strokeStyle = MAP_COLORS.region; ctx.lineWidth = 2 / s; ctx.setLineDash([10 / s, 6 / s]);
+    ctx.stroke(this.geo.regionPath);
+    ctx.restore();
+  }
+
+  // each region's name and egg code at a point inside it (screen space, so the text stays upright)
+  _drawRegionLabels(ctx, w, h) {
+    ctx.font = "12px system-ui, sans-serif";
+    for (const r of this.geo.regions || []) {
+      if (!r.label) continue;
+      const px = w / 2 + (r.label[0] - this.cx) * this.scale, py = h / 2 - (r.label[1] - this.cy) * this.scale;
+      if (px < -200 || py < -40 || px > w + 200 || py > h + 40) continue;
+      const lines = [r.name, r.regime], width = Math.max(...lines.map((t) => ctx.measureText(t).width));
+      ctx.fillStyle = "rgba(13, 24, 33, 0.7)"; ctx.fillRect(px - width / 2 - 4, py - 16, width + 8, 34);
+      ctx.fillStyle = MAP_COLORS.region; ctx.textAlign = "center";
+      lines.forEach((t, i) => ctx.fillText(t, px, py - 2 + 14 * i));
+      ctx.textAlign = "start";
+    }
   }
 
   _drawTrack(ctx, s) {
@@ -375,4 +401,18 @@ function formatAngle(deg, pos, neg, width) {
 function formatLatLon(geo, x, y) {
   const o = geo.origin;
   return `${formatAngle(o.latitude_deg + y / o.m_per_deg_lat, "N", "S", 2)} ${formatAngle(o.longitude_deg + x / o.m_per_deg_lon, "E", "W", 3)}`;
+}
+
+// the regions' outline rings (world m) as one path, or null when the exercise has none
+function regionOutlines(arrays) {
+  const xy = arrays.region_xy, start = arrays.region_start;
+  if (!xy || !xy.length) return null;
+  const path = new Path2D();
+  for (let r = 0; r + 1 < start.length; r++) {
+    for (let i = start[r]; i < start[r + 1]; i++) {
+      if (i === start[r]) path.moveTo(xy[2 * i], xy[2 * i + 1]); else path.lineTo(xy[2 * i], xy[2 * i + 1]);
+    }
+    path.closePath();
+  }
+  return path;
 }
