@@ -12,7 +12,9 @@ from bridge_node.node.config import load_ship
 from bridge_node.render.camera import channel_camera
 from bridge_node.render.settings import eye_point
 from bridge_node.render.ship_mesh import (
+    CRANE,
     EYE_ABOVE_FLOOR_M,
+    MAST,
     ShipModelError,
     default_ship,
     glb_bytes,
@@ -44,6 +46,29 @@ def test_generated_hull_stands_on_the_contour_and_bridge_under_the_eye(particula
     assert eye_point("bridge", [bx, bz], particulars.beam) == (bx, 0.0, bz)
     port, stbd = (eye_point(w, [bx, bz], particulars.beam) for w in ("port_wing", "starboard_wing"))
     assert port[1] < -particulars.beam / 2 < particulars.beam / 2 < stbd[1]  # looking down the ship's sides
+
+
+def test_the_deck_gear_leaves_the_sea_in_view_ahead(particulars):
+    """SOLAS V/22.1.1: from the conning position the sea is not hidden more than two ship
+    lengths or 500 m (the less) ahead of the bow, 10 deg either side; V/22.1.2: no blind
+    sector of cargo gear forward of the beam wider than 10 deg."""
+    contour = waterline_contour(particulars.length, particulars.beam)
+    mesh = default_ship(particulars, contour, FREEBOARD)
+    bx, bz = particulars.look.bridge_eye
+    colour = np.repeat(mesh.visual.face_colors[:, :3].astype(float) / 255.0, 3, axis=0)
+    points = mesh.vertices[mesh.faces].reshape(-1, 3)
+    gear = np.isclose(colour, MAST, atol=0.01).all(axis=1) | np.isclose(colour, CRANE, atol=0.01).all(axis=1)
+    ahead = (points[:, 0] > bx + 2.5) & (np.abs(points[:, 1]) <= (points[:, 0] - bx) * math.tan(math.radians(10.0)))
+    hull = points[ahead & ~gear]
+    assert len(hull) and hull[:, 2].max() < bz
+    reach = bx + (hull[:, 0] - bx) * bz / (bz - hull[:, 2])  # where the sight line over each point meets the sea
+    blind = reach.max() - contour[:, 0].max()
+    assert 0.0 < blind <= min(2.0 * particulars.length, 500.0), blind
+    forecastle = points[:, 0] > 0.38 * particulars.length
+    mast = points[np.isclose(colour, MAST, atol=0.01).all(axis=1) & forecastle]  # the foremast and its signal yard
+    bearing = np.degrees(np.arctan2(mast[:, 1], mast[:, 0] - bx))
+    assert bearing.max() - bearing.min() <= 10.0
+    assert gear.any() and (colour[:, 0] > 0.7).any()  # the gear is there
 
 
 def test_a_ship_files_glb_replaces_the_generated_hull(tmp_path, particulars):

@@ -20,6 +20,8 @@ from sim_core.ship.particulars import ShipParticulars
 
 HULL, BOOT, DECK, HOUSE, MAST = (0.50, 0.10, 0.08), (0.12, 0.12, 0.13), (0.33, 0.37, 0.34), (0.86, 0.86, 0.82), \
     (0.85, 0.62, 0.10)
+HATCH, GEAR, FUNNEL, CRANE = (0.42, 0.20, 0.15), (0.16, 0.17, 0.18), (0.75, 0.14, 0.10), (0.80, 0.80, 0.76)
+HATCH_GAP_M, HATCH_H_M = 3.0, 1.6  # m: between hatch covers; their height above the deck
 MAX_GLB_BYTES = 256 * MIB  # a ship model far larger than any a bridge view needs
 BOTTOM_M = -2.0  # m: the hull is drawn this deep (floes sliding under it show in the water)
 EYE_ABOVE_FLOOR_M = 1.7  # m: the bridge eye above the bridge deck
@@ -58,7 +60,7 @@ def default_ship(particulars: ShipParticulars, contour: np.ndarray, freeboard: f
     """A hull lofted from the waterline contour (m, ship frame) to a sheered deck, the stem
     raked at the particulars' stem angle (the rake at most 5 % of the length), a bulwark
     round the deck, a boot topping below the waterline, a deckhouse whose top is the bridge deck under the bridge
-    eye, bridge wings 1 m beyond the beam, and a foremast."""
+    eye, bridge wings 1 m beyond the beam, a funnel, and the deck gear of ``deck_gear``."""
     L, B = particulars.length, particulars.beam
     rise = np.clip((contour[:, 0] - 0.2 * L) / (0.3 * L), 0.0, 1.0) ** 2  # 0 amidships, 1 at the stem
     rake = min(freeboard / math.tan(math.radians(particulars.ice.stem_angle_deg)), 0.05 * L)
@@ -77,14 +79,42 @@ def default_ship(particulars: ShipParticulars, contour: np.ndarray, freeboard: f
     top = _oriented(top, middle - [0.0, 0.0, 1.0])
     bx, bz = particulars.look.bridge_eye
     floor = bz - EYE_ABOVE_FLOOR_M
-    fore = 0.5 * L - 0.12 * L
     rail = deck + [0.0, 0.0, BULWARK_M]
     parts = [_faces(band(water, deck), HULL), _faces(band(bottom, water), BOOT), _faces(top, DECK),
              _faces(band(deck, rail), HULL),
              _box((bx - 16.0, -0.4 * B, freeboard - 0.5), (bx + 2.0, 0.4 * B, floor), HOUSE),
              _box((bx - 1.5, -0.5 * B - 1.0, floor - 0.4), (bx + 1.5, 0.5 * B + 1.0, floor), DECK),
-             _box((fore - 0.4, -0.4, freeboard), (fore + 0.4, 0.4, freeboard + 14.0), MAST)]
-    return trimesh.util.concatenate(parts)
+             _box((bx - 13.0, -2.5, floor), (bx - 8.0, 2.5, floor + 6.0), FUNNEL)]
+    return trimesh.util.concatenate(parts + deck_gear(L, B, freeboard, bx - 16.0, bx + 2.0))
+
+
+def deck_gear(length: float, beam: float, freeboard: float, house_aft: float, house_fore: float
+              ) -> list[trimesh.Trimesh]:
+    """What stands on a general cargo ship's weather deck (ship frame, m): a breakwater at the
+    forecastle's after end, windlasses and a foremast with its signal yard on the forecastle,
+    and hatch covers with a stowed deck crane between each pair along the holds forward and
+    aft of the deckhouse (between ``house_aft`` and ``house_fore``), port and starboard by turns. All of it lies below the
+    sight line from the bridge to the sea two ship lengths ahead (SOLAS V/22.1.1) but the
+    foremast and the cranes' posts, each a blind sector of a degree or two (V/22.1.2)."""
+    fore = 0.5 * length - 0.12 * length  # the forecastle's after end
+    deck = freeboard + 0.1
+    parts = [_box((fore - 1.0, -0.4 * beam, deck), (fore, 0.4 * beam, deck + 2.0), HULL),  # breakwater
+             _box((fore + 6.0, -0.5, deck), (fore + 6.6, 0.5, deck + 14.0), MAST),
+             _box((fore + 6.0, -3.0, deck + 11.0), (fore + 6.6, 3.0, deck + 11.4), MAST)]  # signal yard
+    for side in (-1.0, 1.0):
+        parts.append(_box((fore + 2.0, side * 3.5 - 1.2, deck), (fore + 4.0, side * 3.5 + 1.2, deck + 1.4), GEAR))
+    holds = [(house_fore + 4.0, fore - 3.0), (-0.5 * length + 14.0, house_aft - 4.0)]
+    for start, end in holds:
+        count = max(1, round((end - start) / 20.0))
+        size = (end - start - (count - 1) * HATCH_GAP_M) / count
+        for k in range(count):
+            x0 = start + k * (size + HATCH_GAP_M)
+            parts.append(_box((x0, -0.36 * beam, deck), (x0 + size, 0.36 * beam, deck + HATCH_H_M), HATCH))
+            if k:  # a crane post in the gap, port and starboard by turns, its jib stowed fore and aft
+                post, y = x0 - 0.5 * HATCH_GAP_M, (-1.0) ** k * 0.3 * beam
+                parts += [_box((post - 1.0, y - 1.0, deck), (post + 1.0, y + 1.0, deck + 7.0), CRANE),
+                          _box((post, y - 0.4, deck + 6.0), (post + 0.9 * size, y + 0.4, deck + 6.8), CRANE)]
+    return parts
 
 
 def load_ship(particulars: ShipParticulars, contour: np.ndarray, freeboard: float) -> trimesh.Trimesh:
