@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from conftest import exercise_config
 
+from bridge_node.charts.field_regions import regions_not_in_the_world
 from bridge_node.node.world_setup import build_world, start_position, start_world
 from bridge_node.render.channels import ChannelSet
 from bridge_node.render.classes import CLASS_INDEX, class_of_pixels
@@ -73,6 +74,11 @@ def test_in_the_lead_the_ship_meets_no_ice(lead, fast_ice):
     ice_model, ice_data, _, ice_conditions = fast_ice
     assert LEVEL_ICE in ice_conditions and np.any(ice_data.scene.tile_state == TileState.BREAKABLE)
     assert data.ship.eta[0] > ice_data.ship.eta[0] + 20.0  # in 0.9 m fast ice it made less way
+
+
+def test_the_regions_the_world_does_not_lay_yet_are_named(lead):
+    _, _, cfg, _ = lead
+    assert regions_not_in_the_world(cfg) == ["pack"]
 
 
 def test_the_channels_draw_the_lead_as_sea(lead, ctx):

@@ -19,6 +19,16 @@ def configured_regions(cfg, chart: Path | None) -> list[IceRegion]:
     return regions + [r.region(lat0, lon0) for r in cfg.ice_field.regions]
 
 
+def regions_not_in_the_world(cfg) -> list[str]:
+    """The names of a node config's regions that the ice world does not lay out yet: floe
+    fields (neither level ice nor ice free), land and no data."""
+    if not (cfg.ice_field.chart or cfg.ice_field.regions):
+        return []
+    chart = Path(cfg.ice_field.chart) if cfg.ice_field.chart else None
+    return [r.name for r in configured_regions(cfg, chart)
+            if r.kind in ("land", "no_data") or (r.regime.types and not r.regime.level)]
+
+
 def chart_field(path: Path) -> tuple[list[IceRegion], shapely.Geometry, tuple[float, float]]:
     """A chart alone as a field: its regions in the local frame of the south-west corner of
     its bounds, the field (those bounds, m) and the origin (latitude, longitude, degrees)."""

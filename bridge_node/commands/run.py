@@ -20,7 +20,9 @@ from pathlib import Path
 
 from rich.console import Console
 from rich.live import Live
+from rich.markup import escape
 
+from bridge_node.charts.field_regions import regions_not_in_the_world
 from bridge_node.control.endpoint import ControlEndpoint
 from bridge_node.control.queue import CommandQueue
 from bridge_node.control.status import exercise_status
@@ -138,10 +140,11 @@ def run(args: argparse.Namespace) -> int:
     _check(args, rate)
     traffic = traffic_picture(cfg, args.config)
     console = Console(stderr=args.json)
-    if cfg.ice_field.chart or cfg.ice_field.regions:
-        console.print("[yellow]ice_field: the chart's and regions' level ice and open water are in the ice world; "
-                      "their floe fields are not yet (`icebridge field` lays them out), and the tiles under them keep "
-                      "the level ice of [ice_field][/yellow]")
+    unlaid = regions_not_in_the_world(cfg)
+    if unlaid:
+        console.print(escape(f"ice_field: {', '.join(unlaid)}: floe fields, land or no data, which the ice world does "
+                             "not lay out yet (`icebridge field` lays floe fields out): the tiles under them keep the "
+                             "level ice of [ice_field]"), style="yellow")
     out = Path(args.out)
     record = None if args.no_record else new_session_dir(cfg, args.config)
     point = read_save(Path(args.fork).expanduser()) if args.fork else None
