@@ -148,7 +148,6 @@ class SceneRenderer(SceneUploads):
         p = self.model.ship.particulars
         cam = channel_camera(channel, eye_point(channel.eye, p.look.bridge_eye, p.beam), north, east, psi, s.far_m)
         vp = cam.view_proj
-        half = math.radians(channel.hfov_deg) / 2
         sky = self.sky
         common = {"eye": tuple(cam.eye), "visibility": view.environment.visibility, "sun": sky.sun,
                   "direct": sky.direct, "ambient": sky.ambient, "zenith_colour": sky.zenith,
@@ -182,18 +181,7 @@ class SceneRenderer(SceneUploads):
             self._draw_floes(view, tiles)
             ctx.disable(moderngl.CULL_FACE)
             ctx.disable_direct(GL_CLIP_DISTANCE0)
-        ground, above = horizon_split(cam, math.tan(half), math.tan(channel.vfov() / 2), channel.width,
-                                      channel.height)
-        self.env_buf.write(np.vstack([ground, above]).astype("f4").tobytes())
-        scene = self.model.scene
-        if len(ground):
-            self._set(self.env, slab_z=self.slab_z, far=s.far_m, tile_info=0,
-                      cell_raster=3, raster_size=self.raster_size, rim_px=self.rim_px, status=STATUS_UNIT,
-                      field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
-            self.env_vao.render(vertices=len(ground))
-        if len(above):
-            self._set(self.sky_prog, **common)
-            self.sky_vao.render(vertices=len(above), first=len(ground))
+        self._draw_environment(cam, channel, common)
         if classes:
             return cam
         if tiles:
@@ -201,6 +189,23 @@ class SceneRenderer(SceneUploads):
         self._draw_nav_lights(ships, cam, channel.height, view.environment.visibility)
         self._blend_bands(channel, blend)
         return cam
+
+    def _draw_environment(self, cam: Camera, channel: ChannelSettings, common: dict) -> None:
+        """The environment pass below the horizon (sea and level ice, per pixel) and the sky
+        pass above it."""
+        half = math.radians(channel.hfov_deg) / 2
+        ground, above = horizon_split(cam, math.tan(half), math.tan(channel.vfov() / 2), channel.width,
+                                      channel.height)
+        self.env_buf.write(np.vstack([ground, above]).astype("f4").tobytes())
+        scene = self.model.scene
+        if len(ground):
+            self._set(self.env, slab_z=self.slab_z, far=self.settings.far_m, tile_info=0,
+                      cell_raster=3, raster_size=self.raster_size, rim_px=self.rim_px, status=STATUS_UNIT,
+                      field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
+            self.env_vao.render(vertices=len(ground))
+        if len(above):
+            self._set(self.sky_prog, **common)
+            self.sky_vao.render(vertices=len(above), first=len(ground))
 
     def _searchlights(self, ship: ShipOutputs) -> dict:
         """The searchlights' uniforms for the published ship: world positions, beam axes, the
