@@ -9,9 +9,10 @@ from sim_core.regimes import wmo_codes
 from sim_core.regimes.floe_layout import compile_regimes, joined, lay_out
 from sim_core.regimes.measure import caliper_diameter, ice_area
 from sim_core.regimes.regime import IceRegion, effective_polygons, make_regime, region_at
+from sim_core.regimes.survey import survey_region
 
 
-@pytest.mark.parametrize("code, tenths", [(0, 0.0), (1, 0.0), (10, 1.0), (60, 6.0), (46, 5.0), (79, 8.0),
+@pytest.mark.parametrize("code, tenths", [(0, 0.0), (1, 0.0), (10, 1.0), (60, 6.0), (46, 5.0), (79, 8.0), (81, 9.0),
                                           (91, 9.5), (92, 10.0), (98, 0.0)])
 def test_concentration_codes(code, tenths):
     assert wmo_codes.concentration_tenths(code) == tenths
@@ -62,13 +63,26 @@ def _laid(model, side):
 
 
 def test_the_layout_does_not_depend_on_the_windows(pack):
-    big, small = _laid(pack, 400.0), _laid(pack, 100.0)
-    assert len(big) == len(small) > 100
-
     def key(layout):
         c = shapely.get_coordinates(shapely.centroid(layout.polygon))
         return np.round(c[np.lexsort(c.T)], 6)
-    np.testing.assert_array_equal(key(big), key(small))
+    big = _laid(pack, 400.0)
+    assert len(big) > 100
+    for side in (100.0, 230.0):  # 230 m windows: some miss the L-shaped region, but not its floes
+        np.testing.assert_array_equal(key(big), key(_laid(pack, side)))
+
+
+@pytest.mark.parametrize("total, types, short", [
+    (8, [(5, 91, 5), (3, 87, 4)], False),  # medium floes, small floes in their leads
+    (9, [(6, 93, 4), (3, 85, 2)], False),  # small floes, brash in their leads
+    (10, [(2, 93, 4), (3, 91, 3), (5, 85, 3)], True),  # ice cakes of two kinds cannot fill what small floes leave
+])
+def test_later_types_fill_the_leads_or_the_survey_says_why_not(total, types, short):
+    region = IceRegion("r", shapely.box(0, 0, 1500, 1500), "ice", make_regime(total, types))
+    model = compile_regimes([region], shapely.box(0, 0, 1500, 1500), seed=0)
+    survey = survey_region(model, 0)
+    assert all(t.within_range >= 0.95 for t in survey.types)
+    assert (abs(survey.concentration - total) > 0.5) == short and bool(survey.note) == short, survey.concentration
 
 
 def test_floes_reach_the_concentration_inside_their_region_without_overlap(pack):

@@ -4,12 +4,14 @@ a tenth, floe sizes within the WMO ranges); a bad chart is a clear error naming 
 the feature and the field, never a traceback."""
 import json
 
+import pyproj
 import pytest
 from conftest import run_cli
 from PIL import Image
-from sigrid3_charts import ISSUE_CHART, box_ring, write_chart
+import shapefile
+from sigrid3_charts import ISSUE_CHART, WGS84_PRJ, box_ring, write_chart
 
-from bridge_node.charts.sigrid3 import FIELDS
+from bridge_node.charts.sigrid3 import FIELDS, read_chart
 
 
 @pytest.fixture(scope="module")
@@ -63,6 +65,12 @@ def _bad(tmp_path, features, **kw):
 
 
 PACK = {"POLY_TYPE": "I", "CT": "70", "SA": "87", "FA": "04"}
+NORTH_POLAR = pyproj.CRS.from_epsg(3413).to_wkt("WKT1_ESRI")  # NSIDC sea ice polar stereographic north
+
+
+def _polar_box(x: float, y: float, half: float) -> list[list[float]]:
+    """A closed clockwise square ring of half-side ``half`` m about (x, y) m, EPSG:3413."""
+    return [[x - half, y - half], [x - half, y + half], [x + half, y + half], [x + half, y - half], [x - half, y - half]]
 RING = box_ring(20.0, 74.0, 20.01, 74.005)
 BOW_TIE = [[20.0, 74.0], [20.01, 74.005], [20.01, 74.0], [20.0, 74.005], [20.0, 74.0]]
 
@@ -83,6 +91,15 @@ BOW_TIE = [[20.0, 74.0], [20.01, 74.005], [20.01, 74.0], [20.0, 74.005], [20.0, 
     ("empty file", lambda p: (p / "empty.shp").write_bytes(b"") or p / "empty.shp", ["empty file"]),
     ("a directory", lambda p: (p / "charts.shp").mkdir() or p / "charts.shp", ["is a directory"]),
     ("bad projection", lambda p: _bad(p, [(RING, PACK)], prj="PROJCS[nonsense"), ["bad.prj", "not a projection"]),
+    ("a partial without its stage", lambda p: _bad(p, [(RING, {**PACK, "CT": "90", "CA": "60", "CB": "30",
+                                                                "FB": "02"})]),
+     ["feature 1", "SB is empty; CB and FB need the stage of their ice"]),
+    ("ice without a stage", lambda p: _bad(p, [(RING, {"POLY_TYPE": "I", "CT": "60", "FA": "04"})]),
+     ["feature 1", "SA is empty"]),
+    ("round the pole", lambda p: _bad(p, [(_polar_box(0.0, 0.0, 400e3), PACK)], prj=NORTH_POLAR),
+     ["feature 1", "not a valid polygon in the exercise's local frame", "round a pole"]),
+    ("near the pole", lambda p: _bad(p, [(_polar_box(0.0, 100e3, 50e3), PACK)], prj=NORTH_POLAR),
+     ["feature 1", "reaches latitude 89.", "holds to 89 deg"]),
 ])
 def test_a_bad_chart_is_a_clear_error(tmp_path, case, make, expected):
     path = make(tmp_path)
@@ -92,3 +109,28 @@ def test_a_bad_chart_is_a_clear_error(tmp_path, case, make, expected):
     assert str(path.with_suffix("")) in done.stderr, done.stderr  # the .shp, or its .prj
     for text in expected:
         assert text in done.stderr, (case, done.stderr)
+
+
+def test_a_chart_in_a_polar_projection_across_180_deg(tmp_path):
+    """A 2 km square of pack centred on 70 N 180 E, charted in polar stereographic
+    coordinates, is 4 km2 in the local frame, not a band round the earth."""
+    x, y = pyproj.Transformer.from_crs("EPSG:4326", "EPSG:3413", always_xy=True).transform(180.0, 70.0)
+    chart = write_chart(tmp_path / "dateline", [(_polar_box(x, y, 1000.0), PACK)], prj=NORTH_POLAR)
+    done = run_cli("field", str(chart), "--json", "--out", str(tmp_path))
+    assert done.returncode == 0, done.stderr
+    region, = json.loads(done.stdout)["regions"]
+    assert region["area_km2"] == pytest.approx(4.0, rel=0.02)
+
+
+def test_numeric_attribute_fields_are_read_as_codes(tmp_path):
+    """Some services store the codes as numeric (N) fields, with decimals."""
+    base = tmp_path / "numeric"
+    with shapefile.Writer(str(base), shapeType=shapefile.POLYGON) as w:
+        w.field("POLY_TYPE", "C", size=1)
+        for name in FIELDS[1:]:
+            w.field(name, "N", size=5, decimal=1)
+        w.poly([RING])
+        w.record("I", 60.0, -9.0, 87.0, 4.0, -9.0, -9.0, -9.0, -9.0, -9.0, -9.0)
+    base.with_suffix(".prj").write_text(WGS84_PRJ)
+    features = read_chart(base.with_suffix(".shp"))
+    assert features[0].regime.label() == "6/10 thin_first_year small_floe"

@@ -78,7 +78,7 @@ def test_in_the_lead_the_ship_meets_no_ice(lead, fast_ice):
 
 def test_the_regions_the_world_does_not_lay_yet_are_named(lead):
     _, _, cfg, _ = lead
-    assert regions_not_in_the_world(cfg) == ["pack"]
+    assert regions_not_in_the_world(cfg.ice_field, cfg.exercise.origin_deg()) == ["pack"]
 
 
 def test_the_channels_draw_the_lead_as_sea(lead, ctx):

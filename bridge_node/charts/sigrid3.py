@@ -30,6 +30,7 @@ from sim_core.regimes.regime import IceRegime, IceRegion, RegionKind, make_regim
 FIELDS = ("POLY_TYPE", "CT", "CA", "SA", "FA", "CB", "SB", "FB", "CC", "SC", "FC")
 KINDS: dict[str, RegionKind] = {"I": "ice", "S": "ice", "W": "water", "L": "land", "N": "no_data"}
 POLYGON_TYPES = (shapefile.POLYGON, shapefile.POLYGONZ, shapefile.POLYGONM)
+MAX_LATITUDE = 89.0  # deg: the local tangent plane's reach (as [exercise] origin_latitude_deg)
 # pyshp logs its doubts about a ring's orientation to stderr; the polygon checks below say
 # what is wrong with a feature, once, as an error
 logging.getLogger("shapefile").setLevel(logging.ERROR)
@@ -41,12 +42,14 @@ class ChartError(UserError):
 
 @dataclass(frozen=True)
 class ChartFeature:
-    """One polygon of a chart: its name, kind, regime and geometry (lon, lat, degrees)."""
+    """One polygon of a chart: its name, kind, regime, geometry (lon, lat, degrees) and where
+    it is (file and feature)."""
 
     name: str
     kind: RegionKind
     regime: IceRegime
     geometry: shapely.Geometry
+    where: str  # the file and feature, for messages
 
 
 def read_chart(path: str | Path) -> list[ChartFeature]:
@@ -86,9 +89,15 @@ def chart_regions(features: list[ChartFeature], lat0_deg: float, lon0_deg: float
     lat0, lon0 = math.radians(lat0_deg), math.radians(lon0_deg)
 
     def local(lonlat: np.ndarray) -> np.ndarray:
-        north, east = geodetic_to_local(np.radians(lonlat[:, 1]), np.radians(lonlat[:, 0]), lat0, lon0)
+        lon = lon0_deg + (lonlat[:, 0] - lon0_deg + 180.0) % 360.0 - 180.0  # the near side of 180 deg
+        north, east = geodetic_to_local(np.radians(lonlat[:, 1]), np.radians(lon), lat0, lon0)
         return np.column_stack([east, north])
-    return [IceRegion(f.name, shapely.transform(f.geometry, local), f.kind, f.regime) for f in features]
+    regions = [IceRegion(f.name, shapely.transform(f.geometry, local), f.kind, f.regime) for f in features]
+    for feature, region in zip(features, regions):
+        if not shapely.is_valid(region.polygon) or region.polygon.is_empty:
+            raise ChartError(f"{feature.where}: not a valid polygon in the exercise's local frame "
+                             f"({shapely.is_valid_reason(region.polygon)}): does it wind round a pole?")
+    return regions
 
 
 def _projection(path: Path) -> pyproj.Transformer:
@@ -117,8 +126,11 @@ def _feature(path: Path, n: int, shape: shapefile.Shape, record: dict, to_wgs84:
     x, y = to_wgs84.transform(*shapely.get_coordinates(geometry).T)
     if not (np.all(np.isfinite(x)) and np.all(np.abs(y) <= 90.0)):
         raise ChartError(f"{where}: coordinates that do not lie on the earth in the chart's projection")
+    if np.abs(y).max() > MAX_LATITUDE:
+        raise ChartError(f"{where}: reaches latitude {y[np.abs(y).argmax()]:.2f} deg; the exercise's local frame "
+                         f"holds to {MAX_LATITUDE:g} deg")
     lonlat = shapely.set_coordinates(geometry, np.column_stack([x, y]))
-    return ChartFeature(f"{path.name} feature {n}", kind, regime, lonlat)
+    return ChartFeature(f"{path.name} feature {n}", kind, regime, lonlat, where)
 
 
 def _regime(where: str, record: dict) -> IceRegime:
@@ -129,6 +141,9 @@ def _regime(where: str, record: dict) -> IceRegime:
     for letter in "ABC":
         stage, size = _code(where, record, "S" + letter), _code(where, record, "F" + letter)
         if stage is None:
+            given = [f for f in ("C" + letter, "F" + letter) if _code(where, record, f) is not None]
+            if given:
+                raise ChartError(f"{where}: S{letter} is empty; {' and '.join(given)} need the stage of their ice")
             continue
         if size is None:
             raise ChartError(f"{where}: F{letter} is empty; S{letter} = {stage:02d} needs a floe size")
@@ -137,8 +152,11 @@ def _regime(where: str, record: dict) -> IceRegime:
                                                              wmo_codes.concentration_tenths),
                       _checked(where, "S" + letter, stage, lambda c: wmo_codes.stage(c).code),
                       _checked(where, "F" + letter, size, lambda c: wmo_codes.floe_size(c).code)))
+    tenths = _checked(where, "CT", total, wmo_codes.concentration_tenths)
+    if tenths > 0.0 and not types:
+        raise ChartError(f"{where}: SA is empty; an ice polygon with CT = {total:02d} needs the stage of its ice")
     try:
-        return make_regime(_checked(where, "CT", total, wmo_codes.concentration_tenths), types)
+        return make_regime(tenths, types)
     except ValueError as exc:
         raise ChartError(f"{where}: CT, CA, CB, CC: {exc}") from None
 
@@ -153,6 +171,8 @@ def _checked(where: str, field: str, code: int, convert):
 def _code(where: str, record: dict, field: str) -> int | None:
     """A SIGRID-3 code as an integer; None for an empty field or -9 (not given)."""
     value = record[field]
+    if isinstance(value, float) and value.is_integer():  # a numeric (N) field with decimals: 60.0
+        value = int(value)
     text = value.decode("ascii", "replace") if isinstance(value, bytes) else str(value if value is not None else "")
     text = text.strip()
     if text in ("", "-9"):

@@ -34,9 +34,9 @@ def run(args: argparse.Namespace) -> int:
         raise UserError("--config: give the config as the argument (icebridge field CONFIG.toml)")
     if source.suffix.lower() == ".toml":
         cfg = load_config(source)
-        chart = Path(cfg.ice_field.chart) if cfg.ice_field.chart else None
         field = shapely.box(0.0, 0.0, cfg.ice_field.width, cfg.ice_field.height)
-        model = regime_model(configured_regions(cfg, chart), field, cfg.fracture.seed, str(source))
+        model = regime_model(configured_regions(cfg.ice_field, cfg.exercise.origin_deg()), field, cfg.fracture.seed,
+                             str(source))
     else:
         regions, field, _ = chart_field(source)
         model = regime_model(regions, field, DEFAULT_SEED, str(source))

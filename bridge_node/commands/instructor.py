@@ -27,6 +27,7 @@ from urllib.parse import urlsplit, urlunsplit
 
 import uvicorn
 
+from bridge_node.charts.field_regions import configured_regions
 from bridge_node.node.config import load_config
 from bridge_node.common.errors import UserError
 from bridge_node.node.world_setup import build_world
@@ -34,7 +35,6 @@ from bridge_node.common.output_files import write_output
 from bridge_node.station.debrief import debrief_message, load_debrief, plot_png
 from bridge_node.station.feed import ControlWatch, Feed
 from bridge_node.station.geometry import geometry_message
-from bridge_node.charts.field_regions import configured_regions
 from bridge_node.station.server import Broadcast, ControlTarget, Station
 
 
@@ -116,8 +116,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _geometry(model, cfg) -> bytes:
     """The station's geometry message of the configured exercise, with its ice regions."""
-    chart = Path(cfg.ice_field.chart) if cfg.ice_field.chart else None
-    return geometry_message(model, cfg.ship.name, cfg.instructor.rate_hz, configured_regions(cfg, chart))
+    return geometry_message(model, cfg.ship.name, cfg.instructor.rate_hz,
+                            configured_regions(cfg.ice_field, cfg.exercise.origin_deg()))
 
 
 def _debrief(args: argparse.Namespace, cfg, token: str | None) -> int:

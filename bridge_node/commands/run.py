@@ -140,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
     _check(args, rate)
     traffic = traffic_picture(cfg, args.config)
     console = Console(stderr=args.json)
-    unlaid = regions_not_in_the_world(cfg)
+    unlaid = regions_not_in_the_world(cfg.ice_field, cfg.exercise.origin_deg())
     if unlaid:
         console.print(escape(f"ice_field: {', '.join(unlaid)}: floe fields, land or no data, which the ice world does "
                              "not lay out yet (`icebridge field` lays floe fields out): the tiles under them keep the "

@@ -14,6 +14,7 @@ from typing import Literal
 
 from pydantic import Field, ValidationError, field_validator, model_validator
 
+from bridge_node.charts.sigrid3 import read_chart
 from bridge_node.control.settings import ControlSettings
 from bridge_node.links.registry import LinkSettings
 from bridge_node.links.settings import ArbitrationSettings
@@ -23,7 +24,6 @@ from bridge_node.common.paths import NUL_IN_PATH, expand_user, writable_dir
 from bridge_node.common.toml_errors import shown, toml_error
 from bridge_node.render.settings import RenderSettings
 from bridge_node.render.warp import read_pfm
-from bridge_node.charts.sigrid3 import read_chart
 from bridge_node.replay.settings import ReplaySettings
 from bridge_node.station.settings import InstructorSettings
 from bridge_node.stream.settings import StreamSettings
@@ -79,6 +79,10 @@ class ExerciseSettings(Params):
     wind_from_deg: float = Field(0.0, ge=0.0, lt=360.0, description="where the wind blows from, deg true")
     current_speed_kn: float = Field(0.0, ge=0.0, le=10.0, description="surface current at the start, kn")
     current_to_deg: float = Field(0.0, ge=0.0, lt=360.0, description="where the current sets to, deg true")
+
+    def origin_deg(self) -> tuple[float, float]:
+        """The local frame's origin: (latitude, longitude), degrees."""
+        return self.origin_latitude_deg, self.origin_longitude_deg
 
 
 class RealtimeSettings(Params):
@@ -172,10 +176,11 @@ def load_config(path: str | Path | None = None) -> NodeConfig:
                                                                                           read_pfm))})
                 if c.warp is not None else c for i, c in enumerate(cfg.render.channels)]
     render = cfg.render.model_copy(update={"channels": channels})
-    ice_field = cfg.ice_field.chart and cfg.ice_field.model_copy(
-        update={"chart": str(_file_finder(path, "ice_field.")("chart", cfg.ice_field.chart, _readable_chart))})
-    return cfg.model_copy(update={"links": links, "console": console, "render": render,
-                                  "ice_field": ice_field or cfg.ice_field})
+    ice_field = cfg.ice_field
+    if ice_field.chart is not None:
+        chart = _file_finder(path, "ice_field.")("chart", ice_field.chart, _readable_chart)
+        ice_field = ice_field.model_copy(update={"chart": str(chart)})
+    return cfg.model_copy(update={"links": links, "console": console, "render": render, "ice_field": ice_field})
 
 
 def _readable_chart(path: Path, where: str) -> None:

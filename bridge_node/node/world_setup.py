@@ -35,9 +35,8 @@ def field_tile_classes(cfg: NodeConfig, config_path: str | None) -> tuple[np.nda
     regions = None
     if cfg.ice_field.chart or cfg.ice_field.regions:
         nx, ny = tile_counts(cfg.ice_field, cfg.fracture.tile_side)
-        chart = Path(cfg.ice_field.chart) if cfg.ice_field.chart else None
-        regions = region_tile_thickness(configured_regions(cfg, chart), nx, ny, cfg.fracture.tile_side,
-                                        MAX_THICKNESS)
+        regions = region_tile_thickness(configured_regions(cfg.ice_field, cfg.exercise.origin_deg()), nx, ny,
+                                        cfg.fracture.tile_side, MAX_THICKNESS)
     grid = None
     if cfg.ice_field.thickness_profile == "grid":
         grid_path = resolve_path(config_path, cfg.ice_field.thickness_grid)

@@ -15,6 +15,7 @@ from bridge_node.reports.figures import plt, save_figure
 from sim_core.regimes.floe_layout import RegimeModel
 from sim_core.regimes.survey import RegionSurvey
 
+
 def survey_json(model: RegimeModel, surveys: list[RegionSurvey], picture: Path) -> dict:
     """The report as one JSON-ready object."""
     return {"picture": str(picture), "regions": [_region_json(model, s) for s in surveys]}
@@ -25,7 +26,7 @@ def _region_json(model: RegimeModel, s: RegionSurvey) -> dict:
     return {
         "name": region.name, "kind": region.kind, "regime": region.regime.label(), "level_ice": region.regime.level,
         "area_km2": round(s.area / 1e6, 4), "surveyed_km2": round(s.surveyed.area / 1e6, 4), "whole": s.whole,
-        "concentration_chart": region.regime.total, "concentration_laid": round(s.concentration, 3),
+        "concentration_chart": region.regime.total, "concentration_laid": round(s.concentration, 3), "note": s.note,
         "types": [{
             "concentration": t.ice.concentration, "stage": t.ice.stage_range.name, "stage_code": t.ice.stage,
             "thickness_range_m": [t.ice.stage_range.low, t.ice.stage_range.high], "thickness_laid_m": t.thickness,
@@ -50,13 +51,15 @@ def survey_table(model: RegimeModel, surveys: list[RegionSurvey]) -> Table:
     for s in surveys:
         region = model.regions[s.region]
         head = [region.name, f"{s.area / 1e6:.3f}", "whole" if s.whole else f"{s.surveyed.area / 1e6:.3f} km²",
-                f"{region.regime.total:g}/10", f"{s.concentration:.2f}/10"]
+                f"{region.regime.total:g}/10", f"{s.concentration:.2f}/10" + (" *" if s.note else "")]
         if not s.types:
             table.add_row(*head, "level ice" if region.regime.level else region.kind.replace("_", " "), "", "", "")
         for k, t in enumerate(s.types):
             size = "/".join("-" if not math.isfinite(v) else f"{v:.3g}" for v in t.size_percentiles)
             share = "-" if not math.isfinite(t.within_range) else f"{100 * t.within_range:.0f} %"
             table.add_row(*(head if k == 0 else [""] * len(head)), t.ice.label(), str(t.floes), size, share)
+    notes = [f"* {model.regions[s.region].name}: {s.note}" for s in surveys if s.note]
+    table.caption = "\n".join(notes) or None
     return table
 
 
@@ -107,7 +110,7 @@ def _close_view(ax, model: RegimeModel, surveys: list[RegionSurvey]) -> None:
     if not laid:
         ax.set_title("no floes laid")
         return
-    spacing, s = min(laid, key=lambda item: item[0])
+    s = min(laid, key=lambda item: item[0])[1]
     at = shapely.point_on_surface(s.surveyed)
     half = 1.5 * max(layer.spacing for layer in model.layers[s.region])
     ax.set_xlim(at.x - half, at.x + half)

@@ -8,8 +8,10 @@ jittered grid whose spacing sets the floe size; each cell is shrunk about its ce
 ``s``, which leaves the area fraction ``s**2`` as ice and the rest as leads between the
 floes. The first layer (the largest floes) tiles the region, so ``s**2`` is its partial
 concentration. A later layer keeps only the cells that lie wholly in the water the earlier
-layers leave, and its ``s`` is calibrated once, on a reference patch, to give its partial
-concentration there. A floe's size is its mean caliper diameter (Rothrock & Thorndike 1984,
+layers leave, and its ``s`` is calibrated once, on a reference patch (or, where its floes
+are far smaller than the leads, by estimate), to give its partial concentration there;
+where its floes are too large to fill the leads so, they are made smaller, within their
+WMO size range. A floe's size is its mean caliper diameter (Rothrock & Thorndike 1984,
 "Measuring the sea ice floe size distribution", JGR 89(C4) 6477), which for a convex
 polygon is its perimeter over pi (Cauchy); a Voronoi cell of unit density has a mean
 perimeter of 4, so the spacing for a target size D at shrink s is pi D / (4 s).
@@ -32,6 +34,7 @@ from sim_core.regimes.regime import IceRegion, effective_polygons
 
 JITTER = 0.8  # grid points move up to +-0.4 spacing: cell sizes spread over about 2x
 MAX_SHRINK = 0.985  # the narrowest lead, as a share of the cell: floes never start in contact
+SIZE_SPREAD = 1.5  # the smallest of a layer's floes are about its median size over this
 CALIBRATION_CELLS = 200  # a later layer's reference patch is at most this many of its cells across
 Window = tuple[float, float, float, float]  # x0, y0, x1, y1, m
 
@@ -98,37 +101,64 @@ def _region_layers(r: int, region: IceRegion, seed: int) -> tuple[Layer, ...]:
         salt = (seed * 1_000_003 + r * 101 + k) & 0xFFFFFFFF
         layer = Layer(r, k, spacing, s_nominal, salt, ice.stage_range.nominal)
         if layers:
-            layer = _calibrated(layer, layers, ice.concentration / 10.0)
+            layer = _calibrated(layer, layers, ice.concentration / 10.0, water, ice.size_range.low)
         layers.append(layer)
         water = max(water - ice.concentration / 10.0, 1e-3)
     return tuple(layers)
 
 
-def _calibrated(layer: Layer, earlier: list[Layer], fraction: float) -> Layer:
-    """The layer with the shrink that gives it the area fraction on a reference patch
-    (unbounded by any region), among the earlier layers' floes."""
-    side = min(max(4.0 * earlier[0].spacing, 30.0 * layer.spacing), CALIBRATION_CELLS * layer.spacing)
-    patch = (0.0, 0.0, side, side)
-    cells = _free_cells(_cells(patch, layer), earlier, patch)
-    kept = float(shapely.area(cells).sum())
-    shrink = min(math.sqrt(fraction * side * side / kept), MAX_SHRINK) if kept > 0 else MAX_SHRINK
-    return Layer(layer.region, layer.ice_type, layer.spacing, shrink, layer.salt, layer.thickness)
+def _calibrated(layer: Layer, earlier: list[Layer], fraction: float, water: float, low_size: float) -> Layer:
+    """The later layer with the shrink that gives it its area fraction among the earlier
+    layers' floes. Where its cells are too large to fill the leads to that fraction even at
+    the largest shrink, its spacing is made smaller, as long as its smallest floes stay in
+    the WMO size range (above ``low_size``, m); short of that the layer stays under its
+    fraction, and the survey shows it."""
+    spacing = layer.spacing
+    while True:
+        trial = Layer(layer.region, layer.ice_type, spacing, layer.shrink, layer.salt, layer.thickness)
+        available = _available_share(trial, earlier, water)
+        shrink = math.sqrt(fraction / available) if available > 0.0 else math.inf
+        size = min(shrink, MAX_SHRINK) * 4.0 * spacing / math.pi  # mean caliper diameter, m
+        if shrink <= MAX_SHRINK or 0.8 * size < SIZE_SPREAD * low_size:
+            return Layer(layer.region, layer.ice_type, spacing, min(shrink, MAX_SHRINK), layer.salt, layer.thickness)
+        spacing *= 0.8
 
 
-def lay_out(model: RegimeModel, window: Window, region: int | None = None) -> FloeLayout:
-    """The floes whose grid points lie in the window (m), of every region or of one."""
+def _available_share(layer: Layer, earlier: list[Layer], water: float) -> float:
+    """Share of the area in which the layer's cells lie wholly in the water the earlier
+    layers leave (``water``, their complement). Measured on a reference patch (unbounded by
+    any region) four of the largest earlier cells across, where that holds few enough of the
+    layer's cells; else, the floes being far smaller than the leads, estimated: the water
+    less a band half a cell wide along the earlier floes' edges (edge length per area
+    ``4 s / d`` for cells of spacing d shrunk by s)."""
+    if 4.0 * earlier[0].spacing <= CALIBRATION_CELLS * layer.spacing:
+        side = max(4.0 * earlier[0].spacing, 30.0 * layer.spacing)
+        patch = (0.0, 0.0, side, side)
+        return float(shapely.area(_free_cells(_cells(patch, layer), earlier, patch)).sum()) / side**2
+    edges = sum(4.0 * e.shrink / e.spacing for e in earlier)
+    return max(water - edges * 0.56 * layer.spacing, 0.0)
+
+
+def lay_out(model: RegimeModel, window: Window, region: int | None = None, layer: int | None = None) -> FloeLayout:
+    """The floes whose grid points lie in the window (m), of every region or of one, of
+    every layer or of one (by its place in the region's layers, largest floes first)."""
     parts = []
-    box = shapely.box(*window)
     for r, layers in enumerate(model.layers):
         polygon = model.polygons[r]
-        if not layers or region not in (None, r) or not shapely.intersects(polygon, box):
+        if not layers or region not in (None, r):
+            continue
+        reach = 2.0 * max(e.spacing for e in layers)  # a cell reaches this far from its grid point
+        x0, y0, x1, y1 = window
+        if not shapely.intersects(polygon, shapely.box(x0 - reach, y0 - reach, x1 + reach, y1 + reach)):
             continue
         shapely.prepare(polygon)
-        for k, layer in enumerate(layers):
-            cells = _free_cells(_cells(window, layer), layers[:k], window)
-            floes, clipped = _clip(_shrunk(cells, layer.shrink), polygon)
+        for k, laid in enumerate(layers):
+            if layer not in (None, k):
+                continue
+            cells = _free_cells(_cells(window, laid), layers[:k], window)
+            floes, clipped = _clip(_shrunk(cells, laid.shrink), polygon)
             n = len(floes)
-            parts.append((floes, np.full(n, r), np.full(n, layer.ice_type), np.full(n, layer.thickness), clipped))
+            parts.append((floes, np.full(n, r), np.full(n, laid.ice_type), np.full(n, laid.thickness), clipped))
     return joined([FloeLayout(shapely.orient_polygons(p[0]), *p[1:]) for p in parts])
 
 

@@ -45,6 +45,7 @@ class RegionSurvey:
     concentration: float
     types: tuple[TypeSurvey, ...]
     layout: FloeLayout
+    note: str = ""  # why the laid concentration may differ from the chart's
 
 
 def survey_region(model: RegimeModel, r: int, budget: int = FLOE_BUDGET) -> RegionSurvey:
@@ -64,7 +65,18 @@ def survey_region(model: RegimeModel, r: int, budget: int = FLOE_BUDGET) -> Regi
     layout = _laid_over(model, r, surveyed, layers)
     types = tuple(_type_survey(model, r, k, layout, surveyed) for k in range(len(model.regions[r].regime.types)))
     concentration = 10.0 * ice_area(layout, r, surveyed) / surveyed.area
-    return RegionSurvey(r, area, surveyed, whole, concentration, types, layout)
+    return RegionSurvey(r, area, surveyed, whole, concentration, types, layout,
+                        _note(area, layers, model.regions[r].regime.total - concentration))
+
+
+def _note(area: float, layers: tuple[Layer, ...], shortfall: float) -> str:
+    """Why a region's laid concentration may differ from its chart's, if it may."""
+    if area < 4.0 * max(layer.spacing for layer in layers) ** 2:
+        return "smaller than a few of its floes: its concentration cannot be laid"
+    if shortfall > 0.5:
+        return ("laid short: the smaller types' floes, kept within their WMO size and apart, do not fill the "
+                "leads the larger ones leave")
+    return ""
 
 
 def _floes_per_m2(layer: Layer, model: RegimeModel) -> float:
@@ -73,12 +85,16 @@ def _floes_per_m2(layer: Layer, model: RegimeModel) -> float:
 
 
 def _laid_over(model: RegimeModel, r: int, surveyed: shapely.Geometry, layers: tuple[Layer, ...]) -> FloeLayout:
-    margin = 1.5 * max(layer.spacing for layer in layers)
-    x0, y0, x1, y1 = np.asarray(shapely.bounds(surveyed)) + [-margin, -margin, margin, margin]
-    side = max(100.0, math.sqrt(POINTS_PER_WINDOW) * min(layer.spacing for layer in layers))
-    windows = [(x, y, min(x + side, x1), min(y + side, y1))
-               for x in np.arange(x0, x1, side) for y in np.arange(y0, y1, side)]
-    layout = joined([lay_out(model, w, region=r) for w in windows])
+    """The region's floes that touch the surveyed area, each layer laid in windows sized to
+    its floes over the area grown by a few of them."""
+    parts = []
+    for k, layer in enumerate(layers):
+        margin = 1.5 * layer.spacing
+        x0, y0, x1, y1 = np.asarray(shapely.bounds(surveyed)) + [-margin, -margin, margin, margin]
+        side = max(100.0, math.sqrt(POINTS_PER_WINDOW) * layer.spacing)
+        parts += [lay_out(model, (x, y, min(x + side, x1), min(y + side, y1)), region=r, layer=k)
+                  for x in np.arange(x0, x1, side) for y in np.arange(y0, y1, side)]
+    layout = joined(parts)
     keep = shapely.intersects(layout.polygon, surveyed)
     return FloeLayout(*(a[keep] for a in (layout.polygon, layout.region, layout.ice_type, layout.thickness,
                                            layout.clipped)))

@@ -4,7 +4,9 @@ Sources:
 - WMO Sea-Ice Nomenclature, WMO-No. 259 (2014 edition), sections 1 (stages of development,
   with their thickness ranges) and 2 (forms of ice, with the floe-size ranges);
 - SIGRID-3: A vector archive format for sea ice charts, JCOMM Technical Report No. 23
-  (2004, rev. 2014), tables of the CT/CA/CB/CC, SA/SB/SC and FA/FB/FC codes;
+  (2004, rev. 2014), tables of the CT/CA/CB/CC, SA/SB/SC and FA/FB/FC codes (Appendix A,
+  rev. 3.1: form of ice 01 pancake, 02 brash, 03 ice cake, 04 small floe ... 09 fast ice,
+  10 growlers; WMO's S-411 converter renumbers these into S-411's own ICEFLZ values, one up);
 - the conversion of concentration codes to tenths follows WMO's own S-411 converter
   (wmo-im/S-41X-PS, ``S-411/scripts/S411func.py``, ``Sig3_Conc``): a range becomes its mean,
   9+/10 (``91``) is 9.5.
@@ -78,7 +80,8 @@ CONCENTRATION_NONE = {0: "ice free", 1: "open water (under 1/10)", 2: "bergy wat
 
 def concentration_tenths(code: int) -> float:
     """Concentration in tenths of a SIGRID-3 concentration code: ``10``-``90`` one digit of
-    tenths, ``91`` 9+/10 (9.5), ``92`` 10/10, ``xy`` (x < y) the range x-y/10 as its mean;
+    tenths, ``91`` 9+/10 (9.5), ``92`` 10/10, ``xy`` (x < y) the range x-y/10 as its mean,
+    ``x1`` (x < 9) the range x/10 to 10/10 as its mean;
     ``00``, ``01``, ``02`` and ``98`` lay no ice (0). ValueError for any other code."""
     if code in CONCENTRATION_NONE:
         return 0.0
@@ -89,6 +92,8 @@ def concentration_tenths(code: int) -> float:
     tens, units = divmod(code, 10)
     if 1 <= tens <= 9 and units == 0:
         return float(tens)
+    if 1 <= tens <= 8 and units == 1:  # x1: x/10 to 10/10, as S-411's converter reads it
+        return 0.5 * (tens + 10)
     if 1 <= tens < units <= 9:
         return 0.5 * (tens + units)
     raise ValueError(f"{code:02d} is not a SIGRID-3 concentration code (10-92, a range such as 46, or 00/01/02/98)")
