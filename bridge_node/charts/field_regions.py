@@ -24,8 +24,7 @@ def configured_regions(ice_field: IceFieldSettings, origin_deg: tuple[float, flo
 def regions_not_in_the_world(ice_field: IceFieldSettings, origin_deg: tuple[float, float]) -> list[str]:
     """The names of the regions that the ice world does not lay out yet: floe fields
     (neither level ice nor ice free), land and no data."""
-    return [r.name for r in configured_regions(ice_field, origin_deg)
-            if r.kind in ("land", "no_data") or (r.regime.types and not r.regime.level)]
+    return [r.name for r in configured_regions(ice_field, origin_deg) if not r.in_the_world]
 
 
 def chart_field(path: Path) -> tuple[list[IceRegion], shapely.Geometry, tuple[float, float]]:

@@ -108,6 +108,12 @@ class IceRegion:
     kind: RegionKind
     regime: IceRegime
 
+    @property
+    def in_the_world(self) -> bool:
+        """Whether the ice world lays this region out: level ice, or ice-free water (not yet
+        floe fields, land or no data)."""
+        return self.regime.level or (self.kind in ("ice", "water") and not self.regime.types)
+
 
 def effective_polygons(regions: list[IceRegion], area: shapely.Geometry) -> list[shapely.Geometry]:
     """Each region's part of the area that no later region covers: the regions as they lie."""
@@ -136,7 +142,7 @@ def region_tile_thickness(regions: list[IceRegion], nx: int, ny: int, side: floa
     field = shapely.box(0.0, 0.0, nx * side, ny * side)
     x, y = np.meshgrid((np.arange(nx) + 0.5) * side, (np.arange(ny) + 0.5) * side)
     index = region_at(effective_polygons(regions, field), x, y)
-    per_region = np.array([min(r.regime.types[0].stage_range.nominal, max_thickness) if r.regime.level
-                           else 0.0 if r.kind in ("ice", "water") and not r.regime.types else np.nan
+    per_region = np.array([np.nan if not r.in_the_world else
+                           min(r.regime.types[0].stage_range.nominal, max_thickness) if r.regime.level else 0.0
                            for r in regions] + [np.nan])
     return per_region[index]  # index -1 (no region) takes the last entry, NaN
