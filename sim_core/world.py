@@ -28,8 +28,9 @@ import numpy as np
 from sim_core.environment import Environment
 from sim_core.frames.hull_contour import waterline_contour
 from sim_core.frames.ship_frame import ship_to_world, ship_vector_to_world, world_heading, world_vector_to_ship
-from sim_core.ice.floes import BreakCause, FloeStatus
+from sim_core.ice.floes import FROZEN_CRACK, BreakCause, FloeStatus
 from sim_core.ice.model import IceModel
+from sim_core.ice.bending import CRACK_EVENT, crack_events
 from sim_core.ice.step import HullMotion, ice_step
 from sim_core.instructor import Command, OtherVessel, Reposition, apply_command, move_vessels
 from sim_core.ice.step import warm_up as warm_up_ice
@@ -41,6 +42,7 @@ from sim_core.scene.switches import (
     NO_ROWS,
     PlacedTiles,
     apply_swaps,
+    frozen_cracks_of,
     frozen_floes_of,
     moved_rows,
     placed_tiles,
@@ -129,7 +131,11 @@ class WorldEvents:
     ``floe_rows`` are the rows whose pose or status may have changed: the free floes of the
     live tiles, and every row of a tile placed or thawed in this step; in a snapshot, every
     row of the live tiles, with ``frozen`` and ``frozen_floes`` naming every frozen tile and
-    its floes. Poses are (x, y, heave, yaw, roll, pitch) in world m and rad.
+    its floes. ``cracked`` names the intact cells cracked in the step (in a snapshot, every
+    cracked cell of the live tiles; and every cracked cell of a tile placed or thawed) with
+    their crack labels (``sim_core.ice.bending``); ``frozen_cracks`` the cracked intact cells
+    of the tiles frozen (in a snapshot, of every frozen tile). Poses
+    are (x, y, heave, yaw, roll, pitch) in world m and rad.
     """
 
     seq: int
@@ -148,6 +154,8 @@ class WorldEvents:
     ice_load: np.ndarray  # X, Y N (ship frame); N N m (+ to starboard)
     rejected: tuple[OrderRejection, ...]
     frozen_floes: np.ndarray = field(default_factory=lambda: NO_FROZEN_FLOES)
+    cracked: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=CRACK_EVENT))  # rows cracked, labels
+    frozen_cracks: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=FROZEN_CRACK))  # of tiles frozen
     snapshot: bool = False
     environment: Environment = field(default_factory=Environment)  # as of the step's end
     commands: tuple[Command, ...] = ()  # the instructor's commands applied at the step's start
@@ -315,7 +323,9 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
     rows = moved_rows(data, placed)
     return _publish(model, data, rows, placed=placed, thawed=thawed, frozen=frozen,
                     frozen_floes=frozen_floes_of(data.ice, frozen.tolist()), broken_by_hull=report.broken_by_hull,
-                    broken_by_contact=report.broken_by_contact, ice_load=load, rejected=tuple(rejected),
+                    broken_by_contact=report.broken_by_contact,
+                    cracked=crack_events(data.ice.state.crack, np.union1d(report.cracked, rows)),
+                    frozen_cracks=frozen_cracks_of(data.ice, frozen.tolist()), ice_load=load, rejected=tuple(rejected),
                     commands=applied)
 
 
@@ -333,4 +343,6 @@ def snapshot(model: WorldModel, data: WorldData) -> WorldEvents:
                     frozen_floes=frozen_floes_of(data.ice, frozen),
                     broken_by_hull=broken[st.cause[broken] == BreakCause.HULL],
                     broken_by_contact=broken[st.cause[broken] == BreakCause.CONTACT],
-                    ice_load=data.ship.external.copy(), rejected=(), snapshot=True)
+                    cracked=crack_events(st.crack, rows), frozen_cracks=frozen_cracks_of(data.ice, frozen),
+                    ice_load=data.ship.external.copy(), rejected=(),
+                    snapshot=True)

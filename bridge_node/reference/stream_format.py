@@ -9,6 +9,7 @@ import numpy as np
 
 from bridge_node.stream.codec import FRAME_NAMES, MAX_ROWS, TOPIC, encode
 from bridge_node.stream.world_view import TRAFFIC_DTYPE
+from sim_core.ice.bending import CRACK_EVENT
 from sim_core.scene.switches import FROZEN_FLOE_EVENT, PlacedTiles
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.world import WorldEvents
@@ -45,7 +46,8 @@ def stream_reference() -> str:
     lines += [f"| {2 + i} | `{name}`: raw array, dtype and shape in the header's `arrays` |"
               for i, name in enumerate(names)]
     lines += [f"| {2 + len(names)} | the traffic: records of {_dtype_text(TRAFFIC_DTYPE)} |", "",
-              f"`frozen_floes` records: {_dtype_text(FROZEN_FLOE_EVENT)}. Row, placement and tile numbers are "
+              f"`frozen_floes` records: {_dtype_text(FROZEN_FLOE_EVENT)}. `cracked` records (intact cells "
+              f"cracked, with their crack labels): {_dtype_text(CRACK_EVENT)}. Row, placement and tile numbers are "
               f"below {MAX_ROWS}; a message outside a view's bounds is refused and counted.", "",
               "| header key | JSON type | example (an empty step) |", "|---|---|---|"]
     lines += [f"| `{key}` | {type(value).__name__} | `{json.dumps(value)[:80]}` |" for key, value in header.items()]

@@ -10,7 +10,7 @@ uniform sampler2D pose_q;        // per floe row (and frozen floe): its attitude
 uniform sampler2D pose_t;        // z, w), and its place (x, y, heave, m); made on the CPU from the yaw, roll
                                  // and pitch, sparing each vertex six sines and cosines
 """ + ENTRIES + """
-uniform usampler2D status;       // per floe row its status, per cell of a frozen tile 1 + its floe: 0 intact
+uniform usampler2D status;       // per floe row its status (and crack label), per cell of a frozen tile 1 + its floe
 uniform int first;               // the tile's first row; frozen, its first status entry (negative)
 uniform int first_floe;          // frozen, the number of its first floe's pose entry
 uniform bool frozen;

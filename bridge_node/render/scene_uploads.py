@@ -12,7 +12,7 @@ import moderngl
 import numpy as np
 
 from bridge_node.render.floe_buffers import FloeBuffer, FloeCopies, pose_textures, write_entries
-from bridge_node.render.shaders import POSE_WIDTH
+from bridge_node.render.shaders import FROZEN_CRACKED, POSE_WIDTH
 from bridge_node.render.sky import sky_for
 from bridge_node.stream.world_view import Placement, WorldView
 from sim_core.frames.geodesy import local_to_geodetic
@@ -185,16 +185,20 @@ class SceneUploads:
         for tex, line in zip(self.pose, texels):
             tex.write(line.tobytes(), viewport=viewport)
         status = np.zeros(lines * POSE_WIDTH, dtype=np.uint16)
-        status[:n] = view.status[r0:r0 + n]
+        status[:n] = view.status[r0:r0 + n] | view.crack[r0:r0 + n].astype(np.uint16) << 8  # crack label above
         self.status.write(status.tobytes(), viewport=viewport)
 
     def _upload_frozen(self, view: WorldView, k: int) -> None:
         """Upload a frozen tile's entries: its floes' poses, and its cells' status (1 + the
-        place of the cell's floe among the tile's floes; 0 intact)."""
+        place of the cell's floe among the tile's floes; 0 intact; FROZEN_CRACKED | its crack
+        label for a cracked intact cell)."""
         floes, (first_floe, first_cell) = view.frozen_floes[k], self._frozen[k]
         n_cells = self.model.ice.templates[view.placements[k].template].n_cells
         status = np.zeros(n_cells, dtype=np.uint16)
         status[floes["cell"]] = 1 + np.arange(len(floes))
+        cracks = view.frozen_cracks.get(k)
+        if cracks is not None:
+            status[cracks["cell"]] = FROZEN_CRACKED | cracks["label"].astype(np.uint16)
         for tex, texels in zip(self.pose, pose_textures(floes["pose"].astype(float)).astype("f4")):
             write_entries(tex, self._pose_lines, first_floe, texels)
         write_entries(self.status, self._status_lines, first_cell, status)

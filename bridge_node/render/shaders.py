@@ -15,11 +15,14 @@ import math
 
 from bridge_node.render import classes
 from bridge_node.render.textures import NOISE_RANGE
+from sim_core.ice.bending import PIECE
 
 
 PERIODS = (23.0, 290.0, 2100.0)  # m: of the relief's three noise fetches
 POSE_WIDTH = 2048  # texels per line of the pose textures: a power of two, a constant in the shaders (on
                    # llvmpipe, division by a uniform is done lane by lane and cost the level ice a tenth)
+FROZEN_CRACKED = 0xF000  # a frozen tile's status entry of a cracked intact cell: this | its crack label (no
+# tile has this many cells, so no floe number reaches it)
 # Where an entry of the pose and status textures lies: live rows (i >= 0) fill lines from the
 # first up, frozen tiles' entries (coded i = -1 - k) from the last down, so that either part
 # grows without moving the other's numbers. A frozen tile's k-th cell is first - k.
@@ -190,7 +193,8 @@ uniform usampler2D cell_raster;  // templates stacked in y: 1 + cell index (0 in
                                  // other cell's within rim_px (0: none), distance to it (1/256 px)
 uniform float rim_px;
 uniform int raster_size;
-uniform usampler2D status;       // per floe row its status, per cell of a frozen tile 1 + its floe: 0 intact
+uniform usampler2D status;       // per floe row its status | its crack label << 8 (see scene_uploads), per
+                                 // cell of a frozen tile 1 + its floe: 0 intact
 """ + ENTRIES + """
 uniform vec2 field_size;         // m
 uniform float tile_side;
@@ -199,10 +203,25 @@ out vec4 colour;
 uint cell_status(int first, int cell) {
     return texelFetch(status, entry_texel(entry_of_cell(first, cell), textureSize(status, 0).y), 0).r;
 }
-// Whether level ice lies at p, and its rim: 1 at the edge of a broken neighbour (open
-// water), falling to 0 at rim_px pixels of the raster from it.
-bool level_ice(vec2 p, ivec2 tile, ivec4 info, out float rim) {
+const uint PIECE = """ + str(PIECE) + """u;  // crack label bit of a piece (sim_core.ice.bending)
+const uint FROZEN_CRACKED = """ + str(FROZEN_CRACKED) + """u;  // a frozen tile's cracked intact cell's flag
+// a cell's status entry: a live tile's row's status | crack label << 8; a frozen tile's
+// 1 + its floe, or FROZEN_CRACKED | its crack label (first < 0)
+bool broken(uint entry, int first) {
+    return first >= 0 ? (entry & 0xFFu) != 0u : entry != 0u && entry < FROZEN_CRACKED;
+}
+uint crack_label(uint entry, int first) {
+    return first >= 0 ? entry >> 8 : (entry >= FROZEN_CRACKED ? entry & 0xFFu : 0u);
+}
+// Whether level ice lies at p; its rim: 1 at the edge of a broken neighbour (open water),
+// falling to 0 at rim_px pixels of the raster from it; and whether a crack runs there: on
+// the raster pixels at an edge between cells of different crack labels with a piece on
+// either side or both cracked (sim_core.ice.bending.crack_lines), within half the
+// `footprint` (raster pixels a screen pixel covers, at least 1) of the edge, so that a crack
+// stays a line about a pixel wide in the distance.
+bool level_ice(vec2 p, ivec2 tile, ivec4 info, float footprint, out float rim, out bool crack) {
     rim = 0.0;
+    crack = false;
     if (info.w == 0) return intBitsToFloat(info.z) > 0.0;              // the unbreakable slab (none: open water)
     vec2 local = p - vec2(tile) * tile_side - 0.5 * tile_side;          // about the tile centre
     int k = info.y >> 16;                                               // undo the quarter turns
@@ -210,12 +229,22 @@ bool level_ice(vec2 p, ivec2 tile, ivec4 info, out float rim) {
     local = vec2(c * local.x + s * local.y, c * local.y - s * local.x);
     vec2 uv = clamp((local / tile_side + 0.5) * float(raster_size), vec2(0.0), vec2(float(raster_size) - 1.0));
     uvec3 cell = texelFetch(cell_raster, ivec2(uv) + ivec2(0, (info.y & 0xFFFF) * raster_size), 0).rgb;
-    if (cell.r == 0u || cell_status(info.x, int(cell.r) - 1) != 0u) return false;
-    if (cell.g != 0u && cell_status(info.x, int(cell.g) - 1) != 0u)
-        rim = 1.0 - float(cell.b) / (256.0 * rim_px);
+    if (cell.r == 0u) return false;
+    uint own = cell_status(info.x, int(cell.r) - 1);
+    if (broken(own, info.x)) return false;
+    if (cell.g != 0u) {
+        uint other = cell_status(info.x, int(cell.g) - 1);
+        if (broken(other, info.x)) {
+            rim = 1.0 - float(cell.b) / (256.0 * rim_px);
+        } else if (float(cell.b) < 128.0 * footprint) {  // within half a footprint of the edge
+            uint a = crack_label(own, info.x), b = crack_label(other, info.x);
+            crack = a != b && ((a != 0u && b != 0u) || ((a | b) & PIECE) != 0u);
+        }
+    }
     return true;
 }
 const vec3 WET = vec3(0.55, 0.62, 0.68);  // wet snow and slush against the dry
+const vec3 CRACK = vec3(0.28, 0.36, 0.42);  // a crack's wet slush against the dry snow
 const float WAVE_SLOPE = 0.04;
 const vec2 WAVE_DRIFT = vec2(0.6, 0.35);  // m/s: ripples travelling before a light air
 uniform float time;                       // s: the exercise's clock
@@ -239,11 +268,14 @@ void main() {
     ivec2 tile = ivec2(floor(p / tile_side));
     bool on_field = t < far && p.x >= 0.0 && p.y >= 0.0 && p.x < field_size.x && p.y < field_size.y;
     float rim;
+    bool crack;
     // clamped: off the field the fetch is unused, and one outside the texture is undefined
     ivec4 info = texelFetch(tile_info, clamp(tile, ivec2(0), textureSize(tile_info, 0) - 1), 0);
-    bool ice = on_field && level_ice(p, tile, info, rim);
+    float footprint = max(1.0, 0.5 * (fwidth(p.x) + fwidth(p.y)) * float(raster_size) / tile_side);
+    bool ice = on_field && level_ice(p, tile, info, footprint, rim, crack);
     if (classes) {  // the class pass: the pixel's class, no shading
-        colour = CLASS_COLOUR[below < 0.5 ? CLASS_SKY : (ice ? CLASS_LEVEL_ICE : CLASS_OPEN_WATER)];
+        int ground_class = ice ? (crack ? CLASS_CRACK : CLASS_LEVEL_ICE) : CLASS_OPEN_WATER;
+        colour = CLASS_COLOUR[below < 0.5 ? CLASS_SKY : ground_class];
         return;
     }
     vec3 at = eye - g * eye.z / g.z;  // on the water
@@ -256,6 +288,7 @@ void main() {
     if (ice) {
         vec3 surface = ice_surface(snow, intBitsToFloat(info.z), vec3(p, slab_z));
         ground = mix(surface, surface * WET, rim);   // wet, darker along open water
+        if (crack) ground = surface * CRACK;         // a crack: sea water welled up into the snow
     } else {  // the sea, out to the horizon
         ground = sea(g, at, finest.yz);
     }

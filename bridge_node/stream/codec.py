@@ -24,6 +24,8 @@ import numpy as np
 from bridge_node.control.commands import CommandError, command_from_record, command_record
 from bridge_node.stream.world_view import TRAFFIC_DTYPE
 from sim_core.environment import Environment
+from sim_core.ice.bending import CRACK_EVENT
+from sim_core.ice.floes import FROZEN_CRACK
 from sim_core.ship.model import OrderRejection
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.scene.switches import FROZEN_FLOE_EVENT, PlacedTiles
@@ -34,10 +36,11 @@ TOPIC = b"w"
 HEARTBEAT = b"h"  # [HEARTBEAT, b"<seq>"]: the last sequence number published
 _PLACED = [f.name for f in dataclasses.fields(PlacedTiles)]
 _ARRAYS = ("thawed", "frozen", "broken_by_hull", "broken_by_contact", "floe_rows", "floe_pose", "floe_status",
-           "ice_load", "frozen_floes")
+           "ice_load", "frozen_floes", "cracked", "frozen_cracks")
 FRAME_NAMES = (*_PLACED, *_ARRAYS)  # the array frames, in order, after the header
 _WIRE = {"floe_pose": np.float32, "floe_rows": np.int32, "broken_by_hull": np.int32,
-         "broken_by_contact": np.int32, "frozen_floes": FROZEN_FLOE_EVENT}
+         "broken_by_contact": np.int32, "frozen_floes": FROZEN_FLOE_EVENT,
+         "cracked": CRACK_EVENT, "frozen_cracks": FROZEN_CRACK}
 
 
 class CodecError(ValueError):
@@ -91,6 +94,8 @@ def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
         placed = PlacedTiles(*arrays[:len(_PLACED)])
         named = dict(zip(_ARRAYS, arrays[len(_PLACED):]))
         named["frozen_floes"] = named["frozen_floes"].view(FROZEN_FLOE_EVENT)  # records travel as raw bytes
+        named["cracked"] = named["cracked"].view(CRACK_EVENT)
+        named["frozen_cracks"] = named["frozen_cracks"].view(FROZEN_CRACK)
         events = WorldEvents(
             seq=int(header["seq"]), time=float(header["time"]), ship=ShipOutputs.from_dict(header["ship"]), placed=placed,
             floes_free=int(header["floes_free"]), floes_frozen=int(header["floes_frozen"]),
@@ -132,7 +137,8 @@ def _check_bounds(events: WorldEvents, input_time: object) -> None:
     p = events.placed
     counts = {len(getattr(p, name)) for name in _PLACED}
     rows = [events.floe_rows, events.broken_by_hull, events.broken_by_contact, p.row_start, p.row_start + p.row_count,
-            p.tile, p.placement, events.thawed, events.frozen, events.frozen_floes["placement"].astype(np.int64)]
+            p.tile, p.placement, events.thawed, events.frozen, events.frozen_floes["placement"].astype(np.int64),
+            events.cracked["row"].astype(np.int64), events.frozen_cracks["placement"].astype(np.int64)]
     m = len(events.floe_rows)
     problems = [
         len(counts) != 1 and "placed tiles of different lengths",

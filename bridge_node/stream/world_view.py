@@ -20,7 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from bridge_node.links.traffic_picture import TRAFFIC_DTYPE
-from sim_core.ice.floes import BreakCause, FloeStatus
+from sim_core.ice.bending import crack_events
+from sim_core.ice.floes import FROZEN_CRACK, BreakCause, FloeStatus
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.environment import Environment
 from sim_core.scene.switches import FROZEN_FLOE_EVENT, PlacedTiles
@@ -67,9 +68,11 @@ class WorldView:
         self.placements: dict[int, Placement] = {}
         self.frozen: set[int] = set()  # frozen placements
         self.frozen_floes: dict[int, np.ndarray] = {}
+        self.frozen_cracks: dict[int, np.ndarray] = {}  # frozen placement -> its cracked intact cells
         self.pose = np.zeros((0, 6))
         self.status = np.zeros(0, dtype=np.uint8)
         self.cause = np.zeros(0, dtype=np.uint8)
+        self.crack = np.zeros(0, dtype=np.uint8)  # each row's bending-crack label (sim_core.ice.bending)
         self.ice_load = np.zeros(3)
         self.environment = Environment()  # visibility, wind, current, freeze: as last published
         self.traffic = np.zeros(0, dtype=TRAFFIC_DTYPE)
@@ -89,10 +92,11 @@ class WorldView:
             self.pose = np.concatenate([self.pose, np.zeros((grow, 6))])
             self.status = np.concatenate([self.status, np.full(grow, FloeStatus.VACANT, dtype=np.uint8)])
             self.cause = np.concatenate([self.cause, np.zeros(grow, dtype=np.uint8)])
+            self.crack = np.concatenate([self.crack, np.zeros(grow, dtype=np.uint8)])
 
     def _give_up_rows(self, placement: Placement) -> None:
         rows = slice(placement.row_start, placement.row_start + placement.row_count)
-        self.status[rows], self.cause[rows] = FloeStatus.VACANT, BreakCause.NONE
+        self.status[rows], self.cause[rows], self.crack[rows] = FloeStatus.VACANT, BreakCause.NONE, 0
         if placement.row_count:
             self._span = [min(self._span[0], rows.start), max(self._span[1], rows.stop)]
 
@@ -105,8 +109,9 @@ class WorldView:
         frozen = set(events.frozen.tolist())
         held = self.frozen_floes
         if events.snapshot:  # every frozen tile with all its floes; rows it does not name belong to no tile
-            self.status[:], self.cause[:] = FloeStatus.VACANT, BreakCause.NONE
+            self.status[:], self.cause[:], self.crack[:] = FloeStatus.VACANT, BreakCause.NONE, 0
             self.frozen_floes = {k: np.zeros(0, dtype=FROZEN_FLOE_EVENT) for k in frozen}
+            self.frozen_cracks = {}
         for k in frozen - self.frozen:
             self._frozen_new.append(k)
             self.frozen_floes[k] = np.zeros(0, dtype=FROZEN_FLOE_EVENT)  # no floes, unless listed
@@ -114,11 +119,7 @@ class WorldView:
                 self._give_up_rows(self.placements[k])
                 self.placements[k] = dataclasses.replace(self.placements[k], row_start=0, row_count=0)
         self.frozen = frozen if events.snapshot else (self.frozen | frozen) - set(events.thawed.tolist())
-        f = events.frozen_floes
-        order = np.argsort(f["placement"], kind="stable")
-        keys, starts = np.unique(f["placement"][order], return_index=True)
-        for k, floes in zip(keys.tolist(), np.split(f[order], starts[1:])):
-            self.frozen_floes[k] = floes.copy()  # its own memory, not the message's
+        self._take_frozen_records(events)
         if events.snapshot:  # frozen before and after a gap, but thawed and frozen again within it
             self._frozen_new += [k for k in frozen & held.keys() if not np.array_equal(held[k], self.frozen_floes[k])]
         p = events.placed
@@ -132,6 +133,8 @@ class WorldView:
             self.placements[k] = placement
         if len(p.placement):
             self._ensure_rows(int((p.row_start + p.row_count).max()))
+            for a, n in zip(p.row_start.tolist(), p.row_count.tolist()):
+                self.crack[a:a + n] = 0  # rows given to a tile start uncracked
         for k in events.thawed.tolist():
             self._thaw(k)
         rows = events.floe_rows
@@ -148,12 +151,31 @@ class WorldView:
                 self._blend = (rows, before, self.pose[rows], before_ship or events.ship, events.ship)
             self.status[rows] = events.floe_status
             self._span = [min(self._span[0], int(rows.min())), max(self._span[1], int(rows.max()) + 1)]
+        self._apply_cracks(events.cracked)
         self.cause[events.broken_by_hull] = BreakCause.HULL
         self.cause[events.broken_by_contact] = BreakCause.CONTACT
         self._broken += [events.broken_by_hull, events.broken_by_contact]
 
+    def _take_frozen_records(self, events: WorldEvents) -> None:
+        """Keep the frozen tiles' floes and cracked cells the events carry, by placement."""
+        for records, kept in ((events.frozen_floes, self.frozen_floes), (events.frozen_cracks, self.frozen_cracks)):
+            order = np.argsort(records["placement"], kind="stable")
+            keys, starts = np.unique(records["placement"][order], return_index=True)
+            for k, part in zip(keys.tolist(), np.split(records[order], starts[1:])):
+                kept[k] = part.copy()  # its own memory, not the message's
+
+    def _apply_cracks(self, cracked: np.ndarray) -> None:
+        """Take the labels of the cells cracked (their rows' statuses are uploaded again)."""
+        if not len(cracked):
+            return
+        rows = cracked["row"].astype(np.int64)
+        self._ensure_rows(int(rows.max()) + 1)
+        self.crack[rows] = cracked["label"]
+        self._span = [min(self._span[0], int(rows.min())), max(self._span[1], int(rows.max()) + 1)]
+
     def _thaw(self, placement: int) -> None:
         """A thawed tile's floes take back their causes in its new rows, and count as broken."""
+        self.frozen_cracks.pop(placement, None)  # its cracks come back by row
         floes = self.frozen_floes.pop(placement, None)
         if floes is not None:
             rows = self.placements[placement].row_start + floes["cell"].astype(np.int64)
@@ -198,6 +220,9 @@ class WorldView:
             broken_by_hull=broken[self.cause[broken] == BreakCause.HULL],
             broken_by_contact=broken[self.cause[broken] == BreakCause.CONTACT],
             floe_rows=rows, floe_pose=self.pose[rows], floe_status=self.status[rows],
+            cracked=crack_events(self.crack, rows),
+            frozen_cracks=np.concatenate([np.zeros(0, dtype=FROZEN_CRACK), *(self.frozen_cracks[k] for k in frozen
+                                                                             if k in self.frozen_cracks)]),
             floes_free=len(broken), floes_frozen=sum(len(f) for f in floes),
             ice_load=self.ice_load.copy(), rejected=(), snapshot=True)
 

@@ -109,6 +109,7 @@ class FloeState(_Table):
     tile = _Column(np.int32)  # placement index of the row's tile
     status = _Column(np.uint8)  # FloeStatus; written only through set_status
     cause = _Column(np.uint8)  # BreakCause
+    crack = _Column(np.uint8)  # bending-crack label of a cell (sim_core.ice.bending); 0: none
     submerged = _Column(np.bool_)  # under the hull, out of planar contact
     resting = _Column(np.bool_)  # a free floe at rest far from the hull, out of the dynamic set
     calm = _Column(np.uint16)  # steps in a row a free floe has been at rest (saturates at 65535)
@@ -201,7 +202,10 @@ class TilePlacement(_Table):
 FROZEN_FLOE = np.dtype([("cell", np.uint32), ("cause", np.uint8), ("xy", np.float64, 2), ("yaw", np.float64),
                         ("heave", np.float32), ("roll", np.float32), ("pitch", np.float32), ("vel", np.float32, 2),
                         ("yaw_rate", np.float32), ("heave_rate", np.float32), ("roll_rate", np.float32),
-                        ("pitch_rate", np.float32)])
+                        ("pitch_rate", np.float32), ("crack", np.uint8)])
+# a cracked intact cell of a frozen tile (whose rows it gave up), as kept and published
+FROZEN_CRACK = np.dtype([("placement", "<i4"), ("cell", "<u4"), ("label", "u1")])
+_NO_CRACKS = np.zeros(0, dtype=FROZEN_CRACK)
 _KEPT = FROZEN_FLOE.names[2:]  # the columns a frozen floe keeps
 
 
@@ -211,7 +215,16 @@ class FrozenFloes:
 
     def __init__(self) -> None:
         self._tiles: dict[int, np.ndarray] = {}
+        self._cracks: dict[int, np.ndarray] = {}  # placement -> its cracked intact cells (FROZEN_CRACK)
         self.count = 0  # frozen floes held
+
+    def keep_cracks(self, placement: int, cracks: np.ndarray) -> None:
+        """Keep a freezing tile's cracked intact cells (``FROZEN_CRACK`` records)."""
+        self._cracks[placement] = cracks
+
+    def cracks(self, placement: int) -> np.ndarray:
+        """A frozen tile's cracked intact cells (``FROZEN_CRACK`` records, maybe none)."""
+        return self._cracks.get(placement, _NO_CRACKS)
 
     def freeze(self, placement: int, state: FloeState, rows: np.ndarray, cells: np.ndarray) -> None:
         """Keep the given rows (cells: their offsets in the tile) as the placement's record."""
@@ -230,11 +243,14 @@ class FrozenFloes:
         state.cause[rows] = floes["cause"]
         for name in _KEPT:
             getattr(state, name)[rows] = floes[name]
+        cracks = self.cracks(placement)
+        state.crack[first_row + cracks["cell"].astype(np.int64)] = cracks["label"]
         return rows
 
     def forget(self, placement: int) -> None:
         """Drop the placement's record (its tile has thawed)."""
         self.count -= len(self._tiles.pop(placement))
+        self._cracks.pop(placement, None)
 
     def __getitem__(self, placement: int) -> np.ndarray:
         return self._tiles[placement]

@@ -1,10 +1,11 @@
 """One step of the breakable ice: hull contact, conduction cracking, floating floes.
 
 ``ice_step(model, data, hull, dt)`` runs, in order: the hull breaks the intact cells it
-touches; the contact engine steps (hull pushes floes, floes push each other and load the
-intact edge); contacts that exceed an intact cell's capacity break it free; the free
-floes' pose and velocity come back into the arrays; their heave, roll and pitch follow the
-buoyancy. It returns the cells broken and the contact load on the hull.
+touches, and cracks the level ice about them (``sim_core.ice.bending``); the contact
+engine steps (hull pushes floes, floes push each other and load the intact edge);
+contacts that exceed an intact cell's capacity break it free; the free floes' pose and
+velocity come back into the arrays; their heave, roll and pitch follow the buoyancy. It
+returns the cells broken and cracked, and the contact load on the hull.
 
 Submersion: a planar model cannot let broken ice go under the bow, so without help the
 hull bulldozes every piece ahead of it into the level ice and the push runs through the
@@ -23,6 +24,7 @@ import numba
 import numpy as np
 
 from sim_core.ice import contact_kernels, resting
+from sim_core.ice.bending import crack_ahead
 from sim_core.ice import vertical
 from sim_core.ice.breaking import pushed_hard
 from sim_core.ice.contact_kernels import Contacts
@@ -53,6 +55,7 @@ class IceStepReport:
 
     broken_by_hull: np.ndarray
     broken_by_contact: np.ndarray
+    cracked: np.ndarray  # rows of intact cells cracked (sim_core.ice.bending)
     hull_force: np.ndarray  # N
     hull_moment: float  # N m
 
@@ -236,6 +239,8 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
     if len(by_hull):
         break_cells(data, by_hull, BreakCause.HULL)
         _update_submersion(model, data, hull, by_hull)
+    cracked = crack_ahead(model, st, data.tiles, by_hull, np.asarray(hull.xy, dtype=float), hull.angle,
+                          space.hull_outline)
     space.step(dt)
     con = space.read_contacts(st)
     by_contact, jammed = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
@@ -256,7 +261,7 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
         resting.wake_struck(model, data, con)
         resting.rest_far(model, data, moving, hull.xy, dt)
     fx, fy, moment = _hull_load(struck, impulse, point, np.asarray(hull.xy, dtype=np.float64), dt)
-    return IceStepReport(by_hull, by_contact, np.array([fx, fy]), moment)
+    return IceStepReport(by_hull, by_contact, cracked, np.array([fx, fy]), moment)
 
 
 def warm_up(model: IceModel, data: IceData) -> None:

@@ -23,7 +23,7 @@ import numpy as np
 
 from sim_core.ice.chipmunk_bodies import TileBodies
 from sim_core.ice.contact import ContactSpace
-from sim_core.ice.floes import BreakCause, FloeState, FloeStatus, FrozenFloes, TilePlacement
+from sim_core.ice.floes import FROZEN_CRACK, BreakCause, FloeState, FloeStatus, FrozenFloes, TilePlacement
 from sim_core.ice.model import IceModel, placed_centroids
 
 
@@ -158,13 +158,18 @@ def freeze_tile(data: IceData, placement: int) -> None:
     """Stop simulating a tile: its bodies leave the contact space, its free floes are kept
     with their last pose and velocity as ``FrozenFloes`` records, and its rows go back to
     the table once the bodies have left (``reclaim_rows``); until then its floes' rows are
-    FROZEN. Its intact cells are level ice again (drawn, not simulated)."""
+    FROZEN. Its intact cells are level ice again (drawn, not simulated), the cracked ones kept
+    with their crack labels."""
     tiles, st = data.tiles, data.state
     if placement in data.leaving_rows:  # its last freeze's rows: its thaw took its objects out of the space
         st.release_rows(data.leaving_rows.pop(placement))
     rows = tiles.rows(placement)
     free = rows[st.status[rows] == FloeStatus.FREE]
     data.frozen.freeze(placement, st, free, free - rows[0])
+    cracked = rows[(st.status[rows] == FloeStatus.INTACT) & (st.crack[rows] != 0)]
+    cracks = np.zeros(len(cracked), dtype=FROZEN_CRACK)
+    cracks["placement"], cracks["cell"], cracks["label"] = placement, cracked - rows[0], st.crack[cracked]
+    data.frozen.keep_cracks(placement, cracks)
     data.contacts.drop_tile(placement)
     st.set_status(free, FloeStatus.FROZEN)
     st.submerged[rows] = st.resting[rows] = False  # a frozen floe thaws afloat, in the dynamic set

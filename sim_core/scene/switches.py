@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sim_core.ice.floes import FloeStatus, TilePlacement
+from sim_core.ice.floes import FROZEN_CRACK, FloeStatus, TilePlacement
 from sim_core.ice.tiles import (
     IceData,
     PreparedTile,
@@ -157,6 +157,11 @@ def moved_rows(data: WorldData, placed: PlacedTiles) -> np.ndarray:
     moving = live[st.status[live] == FloeStatus.FREE]
     return np.union1d(moving, _tile_rows(data.ice.tiles, placed.placement.tolist())) if len(placed.placement) \
         else moving
+
+
+def frozen_cracks_of(ice: IceData, placements: list[int]) -> np.ndarray:
+    """The published records (``FROZEN_CRACK``) of frozen placements' cracked intact cells."""
+    return np.concatenate([np.zeros(0, dtype=FROZEN_CRACK), *(ice.frozen.cracks(k) for k in placements)])
 
 
 def frozen_floes_of(ice: IceData, placements: list[int]) -> np.ndarray:

@@ -1,0 +1,145 @@
+"""Bending cracks (issue 28, item 1): where the hull loads the level ice, radial and
+circumferential cracks run out into it (``sim_core.ice.bending``), the cracked cells stay in
+the sheet until they break free, the state stream carries the cracks to late joiners, and
+the environment pass draws them as thin dark lines that later bound the floes."""
+import math
+
+import numpy as np
+import pytest
+from scipy import ndimage
+from test_render import channel, view_of
+
+from bridge_node.render.channels import ChannelSet
+from bridge_node.render.classes import CLASS_INDEX, class_of_pixels
+from bridge_node.render.renderer import SceneRenderer
+from bridge_node.render.settings import RenderSettings
+from bridge_node.stream.codec import decode, encode
+from bridge_node.stream.world_view import WorldView
+from sim_core.ice.bending import (PIECE, RADIAL_REACH, breaking_length, crack_labels, crack_lines,
+                                  outward)
+from sim_core.ice.floes import FloeStatus
+from sim_core.material import characteristic_length
+from sim_core.world import snapshot, step
+
+
+def test_the_breaking_length_is_the_papers_table_3():
+    assert breaking_length(0.5) == pytest.approx(3.3, abs=1e-9)
+    assert breaking_length(1.0) == pytest.approx(4.5, abs=1e-9)
+    assert breaking_length(0.2) < breaking_length(0.5) < breaking_length(1.5)
+
+
+def _grid(spacing=1.0, half=30.0):
+    x, y = np.meshgrid(np.arange(-half, half + 1e-9, spacing), np.arange(-half, half + 1e-9, spacing))
+    return np.column_stack([x.ravel(), y.ravel()])
+
+
+@pytest.mark.parametrize("wedges", [3, 4, 5])
+def test_pieces_lie_ahead_within_the_breaking_length_split_into_wedges(wedges):
+    offset = _grid()
+    lb, reach = 4.0, 17.0
+    labels = crack_labels(offset, np.ones(len(offset)), wedges, 0.0, 11, lb, reach)
+    dist = np.hypot(*offset.T)
+    piece = (labels & PIECE) != 0
+    assert piece.any()
+    assert (dist[piece] <= lb).all() and (offset[piece, 0] >= 0).all()  # ahead, into the ice only
+    assert len(np.unique(labels[piece])) == wedges
+    assert not labels[offset[:, 0] < -1.0].any()  # nothing behind the load (the hull's side)
+
+
+def test_radial_cracks_run_from_the_pieces_to_their_reach():
+    offset = _grid(0.5)
+    lb, reach = 4.0, 17.0
+    labels = crack_labels(offset, np.full(len(offset), 1.0), 4, 0.0, 3, lb, reach)
+    radial = (labels != 0) & ((labels & PIECE) == 0)
+    dist = np.hypot(*offset.T)
+    assert radial.any() and dist[radial].max() > 0.9 * reach
+    assert dist[radial].max() <= reach + 1.0 and dist[radial].min() > lb
+    # three radial cracks between four wedges, each with its two sides labelled apart
+    assert len(np.unique(labels[radial])) == 6
+    # a crack is a line: the cells on it are a thin share of the disc it spans
+    assert radial.sum() < 0.2 * ((dist <= reach) & (offset[:, 0] > 0)).sum()
+
+
+def test_a_crack_runs_between_different_labels_with_a_piece_or_both_cracked():
+    p, q, a, b = PIECE | 1, PIECE | 2, 5, 6
+    assert crack_lines([p, p, p, a, a, 0, 0], [q, 0, a, b, 0, 0, p]).tolist() == \
+        [True, True, True, True, False, False, True]
+    assert not crack_lines([p], [p])[0]  # within one wedge: its cells hold together
+
+
+def test_the_outward_direction_fans_out_round_the_stem():
+    at = dict(hull_xy=np.zeros(2), angle=0.0, stern=-75.0, stem=75.0, half_beam=12.0)
+    assert outward(np.array([80.0, 0.0]), **at) == pytest.approx([1.0, 0.0])
+    assert outward(np.array([0.0, 20.0]), **at) == pytest.approx([0.0, 1.0])
+    bow_shoulder = outward(np.array([70.0, 10.0]), **at)
+    assert 0.2 < bow_shoulder[0] < 0.9 and bow_shoulder[1] > 0.4
+
+
+@pytest.fixture(scope="module")
+def cracked(exercise):
+    """The render tests' world (0.5 m ice, 70 s in), its cracked intact cells and the ship's
+    stem and heading (world x east, y north)."""
+    model, data = exercise
+    st = data.ice.state
+    rows = np.flatnonzero((st.crack[:st.n] != 0) & (st.status[:st.n] == FloeStatus.INTACT))
+    s = data.ship
+    heading = np.array([math.sin(s.eta[5]), math.cos(s.eta[5])])
+    stem = np.array([s.eta[1], s.eta[0]]) + heading * model.ship.particulars.length / 2
+    return model, data, rows, stem, heading
+
+
+def test_the_hull_cracks_the_level_ice_ahead_of_the_stem_within_the_bending_reach(cracked):
+    model, data, rows, stem, heading = cracked
+    st = data.ice.state
+    reach = RADIAL_REACH * characteristic_length(0.5, model.ice.material)
+    d = st.home[rows] - stem
+    ahead = d @ heading
+    assert len(rows) > 50
+    assert (ahead > 1.0).sum() >= 5  # cracks run out ahead of the stem
+    assert ahead.max() < reach + 5.0  # but no farther than the sheet bends
+
+
+def test_cracked_cells_break_free_later_along_their_cracks(cracked):
+    model, data, rows, _, _ = cracked
+    st = data.ice.state
+    labels = st.crack[rows].copy()
+    for _ in range(100):  # 10 s more: the bow reaches the cracks ahead of it
+        step(model, data, 0.1)
+    free = st.status[rows] == FloeStatus.FREE
+    assert free.any()  # cracked cells separated, as floes bounded by their cracks
+    assert (st.crack[rows[free]] == labels[free]).all()  # a floe keeps the label it cracked with
+
+
+def test_the_stream_carries_the_cracks_to_a_late_joiner(exercise):
+    model, data = exercise
+    events = snapshot(model, data)
+    assert len(events.cracked) > 0
+    decoded, _, _ = decode(encode(events))
+    assert np.array_equal(decoded.cracked, events.cracked)
+    view = WorldView()
+    view.apply(decoded)
+    rows = events.cracked["row"].astype(np.int64)
+    assert np.array_equal(view.crack[rows], events.cracked["label"])
+    again = view.to_snapshot().cracked  # the view's own snapshot, for its late joiners (rows in its order)
+    assert np.array_equal(np.sort(again, order="row"), np.sort(events.cracked, order="row"))
+
+
+def _crack_mask(ctx, model, view):
+    astern = channel(yaw_deg=180.0, pitch_deg=-35.0, eye=[-100.0, 0.0, 30.0])  # above the wake, looking down it
+    cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=[astern])), [astern])
+    cs.render(view)
+    cls = class_of_pixels(cs.class_images(view)[0])
+    return cls == CLASS_INDEX["crack"], cls == CLASS_INDEX["level_ice"]
+
+
+def test_cracks_are_thin_dark_lines_in_the_class_mask(ctx, exercise):
+    model, data = exercise
+    crack, ice = _crack_mask(ctx, model, view_of(model, data))
+    assert crack.sum() > 20, np.bincount(ice.ravel())
+    assert crack.sum() < 0.5 * ice.sum()
+    # lines, not patches: eroding by one pixel leaves almost none of them
+    assert ndimage.binary_erosion(crack).sum() < 0.1 * crack.sum()
+    view = view_of(model, data)
+    view.crack[:] = 0  # the same moment with no cracks published: none drawn
+    crack, _ = _crack_mask(ctx, model, view)
+    assert not crack.any()
