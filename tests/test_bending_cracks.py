@@ -2,6 +2,7 @@
 circumferential cracks run out into it (``sim_core.ice.bending``), the cracked cells stay in
 the sheet until they break free, the state stream carries the cracks to late joiners, and
 the environment pass draws them as thin dark lines that later bound the floes."""
+import dataclasses
 import math
 
 import numpy as np
@@ -18,6 +19,8 @@ from bridge_node.stream.world_view import WorldView
 from sim_core.ice.bending import (PIECE, RADIAL_REACH, breaking_length, crack_labels, crack_lines,
                                   outward)
 from sim_core.ice.floes import FloeStatus
+from sim_core.ice.tiles import freeze_tile, thaw_tile
+from sim_core.scene.switches import frozen_cracks_of
 from sim_core.material import characteristic_length
 from sim_core.world import snapshot, step
 
@@ -143,3 +146,29 @@ def test_cracks_are_thin_dark_lines_in_the_class_mask(ctx, exercise):
     view.crack[:] = 0  # the same moment with no cracks published: none drawn
     crack, _ = _crack_mask(ctx, model, view)
     assert not crack.any()
+
+
+def test_a_tiles_cracks_survive_its_freeze_and_thaw(exercise):
+    model, data = exercise  # (this test changes the world: it runs last)
+    st, tiles = data.ice.state, data.ice.tiles
+    live = [k for k in range(tiles.n) if tiles.row_count[k] > 0]
+    k = max(live, key=lambda p: np.count_nonzero(st.crack[tiles.rows(p)][st.status[tiles.rows(p)] == 0]))
+    rows = tiles.rows(k)
+    intact = st.status[rows] == FloeStatus.INTACT
+    cells = np.flatnonzero(intact & (st.crack[rows] != 0))
+    labels = st.crack[rows][cells].copy()
+    assert len(cells) > 10
+    freeze_tile(data.ice, k)
+    kept = data.ice.frozen.cracks(k)
+    assert np.array_equal(np.sort(kept["cell"]), cells) and (kept["placement"] == k).all()
+    # as the world publishes a tile frozen in a step: its cracks travel to the view
+    events = dataclasses.replace(snapshot(model, data), frozen=np.array([k]),
+                                 frozen_cracks=frozen_cracks_of(data.ice, [k]))
+    view = WorldView()
+    view.apply(decode(encode(events))[0])
+    assert np.array_equal(np.sort(view.frozen_cracks[k]["cell"]), cells)
+    assert np.array_equal(np.sort(view.to_snapshot().frozen_cracks["cell"]), cells)  # and on to its late joiners
+    thaw_tile(model.ice, data.ice, k)
+    rows = tiles.rows(k)
+    assert np.array_equal(st.crack[rows][cells], labels)  # the thawed rows cracked as they froze
+    assert k not in data.ice.frozen
