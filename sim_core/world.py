@@ -31,6 +31,7 @@ from sim_core.frames.ship_frame import ship_to_world, ship_vector_to_world, worl
 from sim_core.ice.floes import FROZEN_CRACK, BreakCause, FloeStatus
 from sim_core.ice.model import IceModel
 from sim_core.ice.bending import CRACK_EVENT, crack_events
+from sim_core.ice.drift import free_drift
 from sim_core.ice.step import HullMotion, ice_step
 from sim_core.instructor import Command, OtherVessel, Reposition, apply_command, move_vessels
 from sim_core.ice.step import warm_up as warm_up_ice
@@ -241,6 +242,15 @@ def _ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple
     return h, BROKEN_CHANNEL
 
 
+def _ice_drift(model: WorldModel, data: WorldData) -> np.ndarray:
+    """The velocity (world x east, y north, m/s) the broken ice drifts at: the current plus
+    its free drift in the wind (``sim_core.ice.drift``)."""
+    s = model.ice.settings
+    north, east = free_drift(*data.environment.wind_north_east(), model.origin[0], s.wind_drift_factor,
+                             math.radians(s.wind_drift_angle_deg))
+    return np.array([data.ship.current[1] + east, data.ship.current[0] + north])
+
+
 def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> WorldEvents:
     """Events with the ship's outputs, the given rows' poses and statuses, and counts."""
     st = data.ice.state
@@ -310,7 +320,7 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
         ship_model.step(model.ship, ship, dt)
     contour, hull = hull_world(model, ship)
     placed, thawed, frozen = apply_swaps(model, data, update_scene(model.scene, data.scene, contour, hull.xy))
-    report = ice_step(model.ice, data.ice, hull, dt, ship.current[::-1])
+    report = ice_step(model.ice, data.ice, hull, dt, _ice_drift(model, data))
     if data.moving_to is None:  # (a move's tiles are prepared first)
         prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3)
     load = np.array([*world_vector_to_ship(report.hull_force, ship.eta[5]), -report.hull_moment])

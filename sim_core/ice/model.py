@@ -15,6 +15,7 @@ from pydantic import Field
 from sim_core.csr import gather_ranges, offsets
 from sim_core.fracture.tile_template import TileTemplate
 from sim_core.ice.breaking import RIDE_UP_SHARE, WEDGE_COEFFICIENT, impact_constant, ride_up_load, static_capacity
+from sim_core.ice.drift import DEVIATION_DEG, WIND_FACTOR
 from sim_core.material import IceMaterial
 from sim_core.params import Params
 
@@ -23,6 +24,11 @@ class IceDynamicsSettings(Params):
     """Contact, drag, floating and breaking constants of the ice dynamics."""
 
     drag_time_s: float = Field(20.0, gt=0.5, le=600.0, description="planar velocity e-folding time in water, s")
+    wind_drift_factor: float = Field(WIND_FACTOR, ge=0.0, le=0.05,
+                                     description="free drift: broken ice speed / wind speed (Nansen's rule)")
+    wind_drift_angle_deg: float = Field(DEVIATION_DEG, ge=0.0, le=60.0,
+                                        description="free drift: degrees to the right of the wind (left in the "
+                                                    "southern hemisphere)")
     heave_damping_ratio: float = Field(0.3, ge=0.0, le=2.0)
     roll_pitch_damping_ratio: float = Field(0.3, ge=0.0, le=2.0)
     heave_added_mass: float = Field(0.5, ge=0.0, le=3.0, description="C_a: added mass / mass in heave")
