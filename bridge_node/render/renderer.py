@@ -55,6 +55,7 @@ WATER = (0.04, 0.09, 0.11)  # the sea's body colour (albedo of the light it send
 NOISE_UNIT = 8  # texture unit of the relief noise
 STATUS_UNIT = 7  # texture unit of the status texture
 NAV_LIGHT_LUX = 10.0  # lux: daylight below which navigation lights show at full strength (civil dusk)
+CRACK_REACH_PX = 4.0  # raster pixels from a cell edge within which a crack's line may be drawn (the distance)
 EYE_WHITE_LUX = 40.0  # lux a surface needs to look white to eyes adapted to the night
 
 
@@ -91,7 +92,9 @@ class SceneRenderer(SceneUploads):
         cells = cell_rasters(model, self.raster_size)
         self.rim_px = settings.wet_rim_m / scene.side * self.raster_size
         # 4 components, the 4th unused: on llvmpipe, fetches of 3 cost a tenth of the frame more
-        raster = np.dstack([cells, rim_rasters(cells, self.raster_size, self.rim_px), np.zeros_like(cells)])
+        # neighbours within the wet rim, and at least within the cracks' reach (their lines)
+        neighbours = rim_rasters(cells, self.raster_size, max(self.rim_px, CRACK_REACH_PX))
+        raster = np.dstack([cells, neighbours, np.zeros_like(cells)])
         self.cell_raster = ctx.texture((self.raster_size, raster.shape[0]), 4, raster.tobytes(), dtype="u2")
         self.cell_raster.filter = moderngl.NEAREST, moderngl.NEAREST
         self.tile_floes: dict[int, tuple[FloeBuffer, FloeBuffer]] = {}  # placement -> (tops, sides)

@@ -123,8 +123,11 @@ def crack_labels(offset: np.ndarray, size: np.ndarray, wedges: int, turn: float,
 
 def crack_ahead(model: IceModel, st: FloeState, tiles: TilePlacement, loaded: np.ndarray, hull_xy: np.ndarray,
                 angle: float, outline: np.ndarray) -> np.ndarray:
-    """Crack the level ice about each cell the hull broke (``loaded``, rows): label the
-    intact, uncracked cells of the live tiles in each load's pattern (``crack_labels``).
+    """Crack the level ice about each cell the hull broke (``loaded``, rows) that no earlier
+    pattern had cracked (the hull loading fresh ice): label the intact, uncracked cells of
+    the live tiles in each such load's pattern (``crack_labels``). A cell that was cracked
+    fails along its cracks and starts none: so patterns follow one another about a breaking
+    length apart as the bow advances.
     ``outline`` (P, 2) is the hull's waterline in its own frame (x forward, m), ``angle``
     its heading (rad CCW from east). Returns the rows cracked now (ascending)."""
     if not len(loaded):
@@ -133,6 +136,8 @@ def crack_ahead(model: IceModel, st: FloeState, tiles: TilePlacement, loaded: np
     half_beam = float(np.abs(outline[:, 1]).max())
     mat, cracked = model.material, []
     for r in loaded.tolist():
+        if st.crack[r] != 0:  # a piece or crack of an earlier load's pattern failing: no new bending
+            continue
         h = float(model.thickness[st.gcell[r]])
         lc = characteristic_length(h, mat)
         point = st.home[r].astype(float)
