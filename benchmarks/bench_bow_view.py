@@ -73,7 +73,7 @@ def main() -> None:
     seen = zone & ice
     st = data.ice.state
     rows = np.flatnonzero((st.crack[:st.n] != 0) & (st.status[:st.n] == FloeStatus.INTACT))
-    reach = float(((st.home[rows] - stem) @ heading).max())
+    reach = float(((st.home[rows] - stem) @ heading).max()) if len(rows) else math.nan
     lateral = np.abs(ground @ np.array([heading[1], -heading[0]]))
     path = zone & ice & (lateral < model.ship.particulars.beam / 2)  # straight ahead, the ship's path
     nearest = float(np.nanmin(np.where(path, along, np.nan))) if path.any() else math.inf

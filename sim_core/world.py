@@ -43,6 +43,7 @@ from sim_core.scene.switches import (
     NO_ROWS,
     PlacedTiles,
     apply_swaps,
+    cracks_published,
     frozen_cracks_of,
     frozen_floes_of,
     moved_rows,
@@ -334,7 +335,7 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
     return _publish(model, data, rows, placed=placed, thawed=thawed, frozen=frozen,
                     frozen_floes=frozen_floes_of(data.ice, frozen.tolist()), broken_by_hull=report.broken_by_hull,
                     broken_by_contact=report.broken_by_contact,
-                    cracked=crack_events(data.ice.state.crack, np.union1d(report.cracked, rows)),
+                    cracked=cracks_published(data, placed, report.cracked),
                     frozen_cracks=frozen_cracks_of(data.ice, frozen.tolist()), ice_load=load, rejected=tuple(rejected),
                     commands=applied)
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 from test_render import channel, view_of
+from test_render_frozen import channel_over
 
 from bridge_node.render.channels import ChannelSet
 from bridge_node.render.classes import CLASS_INDEX, class_of_pixels
@@ -20,7 +21,7 @@ from sim_core.ice.bending import (PIECE, RADIAL_REACH, breaking_length, crack_la
                                   outward)
 from sim_core.ice.floes import FloeStatus
 from sim_core.ice.tiles import freeze_tile, thaw_tile
-from sim_core.scene.switches import frozen_cracks_of
+from sim_core.scene.switches import frozen_cracks_of, frozen_floes_of
 from sim_core.material import characteristic_length
 from sim_core.world import snapshot, step
 
@@ -146,6 +147,43 @@ def test_cracks_are_thin_dark_lines_in_the_class_mask(ctx, exercise):
     view.crack[:] = 0  # the same moment with no cracks published: none drawn
     crack, _ = _crack_mask(ctx, model, view)
     assert not crack.any()
+
+
+def _cracks_over(ctx, model, view, c) -> np.ndarray:
+    cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=[c])), [c])
+    cs.render(view)
+    return class_of_pixels(cs.class_images(view)[0]) == CLASS_INDEX["crack"]
+
+
+def test_a_frozen_tiles_cracks_are_drawn_where_they_were(ctx, exercise):
+    model, data = exercise  # (this test and the next change the world: they run last)
+    st, tiles = data.ice.state, data.ice.tiles
+    live = [k for k in range(tiles.n) if tiles.row_count[k] > 0]
+    k = max(live, key=lambda p: np.count_nonzero(st.crack[tiles.rows(p)][st.status[tiles.rows(p)] == 0]))
+    before = view_of(model, data)
+    c = channel_over(before, k, model)
+    live_cracks = _cracks_over(ctx, model, before, c)
+    frozen = sorted({*before.frozen, k})
+    freeze_tile(data.ice, k)
+
+    def frozen_view() -> WorldView:
+        view = view_of(model, data)
+        view.apply(dataclasses.replace(snapshot(model, data), frozen=np.array(frozen),
+                                       frozen_floes=frozen_floes_of(data.ice, frozen),
+                                       frozen_cracks=frozen_cracks_of(data.ice, frozen)))
+        return view
+
+    after = frozen_view()
+    assert k in after.frozen and len(after.frozen_cracks[k]) > 10
+    frozen_cracks = _cracks_over(ctx, model, after, c)
+    assert live_cracks.sum() > 20
+    assert (live_cracks & frozen_cracks).sum() > 0.9 * live_cracks.sum()  # the same lines, from the frozen entries
+    # a record naming a cell the tile lacks (which the stream's bounds let through) is dropped
+    bad = frozen_view()
+    record = bad.frozen_cracks[k][:1].copy()
+    record["cell"] = 10 ** 6
+    bad.frozen_cracks[k] = np.concatenate([bad.frozen_cracks[k], record])
+    assert np.array_equal(_cracks_over(ctx, model, bad, c), frozen_cracks)
 
 
 def test_a_tiles_cracks_survive_its_freeze_and_thaw(exercise):

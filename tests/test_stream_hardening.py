@@ -17,6 +17,9 @@ from bridge_node.stream.codec import MAX_ROWS, TOPIC, CodecError, decode, encode
 from bridge_node.stream.publisher import StatePublisher
 from bridge_node.stream.settings import StreamSettings
 from bridge_node.stream.subscriber import StateSubscriber
+from sim_core.ice.bending import CRACK_EVENT
+from sim_core.ice.floes import FROZEN_CRACK
+from sim_core.scene.switches import FROZEN_FLOE_EVENT
 from sim_core.world import snapshot, step
 
 
@@ -45,6 +48,11 @@ def test_messages_out_of_a_views_bounds_are_codec_errors(world):
         "lengths": dataclasses.replace(events, floe_status=events.floe_status[:-1]),
         "placement": dataclasses.replace(events, thawed=np.array([1 << 40])),
         "ship": dataclasses.replace(events, ship=dataclasses.replace(events.ship, north=float("inf"))),
+        "cracked row": dataclasses.replace(events, cracked=np.array([(MAX_ROWS + 1, 3)], dtype=CRACK_EVENT)),
+        "frozen crack cell": dataclasses.replace(events, frozen_cracks=np.array([(0, MAX_ROWS + 1, 3)],
+                                                                               dtype=FROZEN_CRACK)),
+        "frozen floe cell": dataclasses.replace(events, frozen_floes=np.array([(0, MAX_ROWS + 1, 1, np.zeros(6))],
+                                                                             dtype=FROZEN_FLOE_EVENT)),
     }
     for what, message in bad.items():
         with pytest.raises(CodecError):

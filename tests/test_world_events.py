@@ -35,9 +35,13 @@ def _assert_same_state(late: WorldView, view: WorldView) -> None:
     np.testing.assert_array_equal(late.status[rows], view.status[rows])
     np.testing.assert_allclose(late.pose[rows], view.pose[rows])
     np.testing.assert_array_equal(late.cause[rows], view.cause[rows])
+    np.testing.assert_array_equal(late.crack[rows], view.crack[rows])
     assert late.frozen_floes.keys() == view.frozen_floes.keys() == view.frozen
     for k, floes in view.frozen_floes.items():
         np.testing.assert_array_equal(late.frozen_floes[k], floes)
+    assert late.frozen_cracks.keys() == view.frozen_cracks.keys()
+    for k, cracks in view.frozen_cracks.items():
+        np.testing.assert_array_equal(late.frozen_cracks[k], cracks)
 
 
 def test_events_applied_step_by_step_equal_a_snapshot(small_world):
@@ -60,6 +64,7 @@ def test_events_applied_step_by_step_equal_a_snapshot(small_world):
             assert late.take_changes().broken.size == np.count_nonzero(st.status[live] == FloeStatus.FREE)
             assert events.floes_frozen == data.ice.frozen.count == sum(len(f) for f in view.frozen_floes.values())
     assert frozen_seen > 0 and events.floes_frozen > 0 and events.seq == 2500
+    assert any(len(c) for c in view.frozen_cracks.values())  # tiles froze with cracked cells, and they compared
     assert view.ship.time == pytest.approx(data.time) and view.ship.north == data.ship.eta[0]
     assert data.ice.state.n < placed_cells  # frozen tiles' rows went to later tiles
 

@@ -39,6 +39,7 @@ from bridge_node.render.classes import CLASS_INDEX, CLASSES
 from bridge_node.render.floe_buffers import FloeBuffer, horizon_split
 from bridge_node.render.meshes import cell_rasters, rim_rasters, template_meshes
 from bridge_node.render.scene_uploads import POSE_NAMES, POSE_UNITS, SceneUploads
+from bridge_node.render.shaders import FROZEN_CRACKED
 from bridge_node.render.settings import ChannelSettings, RenderSettings, eye_point
 from bridge_node.render.ship_mesh import load_ship, nav_lights, ship_triangles
 from bridge_node.render.sky import Sky
@@ -67,6 +68,9 @@ class SceneRenderer(SceneUploads):
         self._configured_aims = [light.mount().default for light in settings.searchlights]  # before any order
         scene = model.scene
         self._make_programs(len(settings.searchlights))
+        if max((t.n_cells for t in model.ice.templates), default=0) >= FROZEN_CRACKED:
+            raise ValueError(f"the renderer draws tiles of fewer than {FROZEN_CRACKED} cells (a frozen tile's status "
+                             "entries number them)")
         if scene.nx * scene.ny > MAX_TILES:
             raise ValueError(f"the renderer draws fields of up to {MAX_TILES} tiles; "
                              f"this one has {scene.nx * scene.ny}")

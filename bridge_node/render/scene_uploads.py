@@ -16,7 +16,8 @@ from bridge_node.render.shaders import FROZEN_CRACKED, POSE_WIDTH
 from bridge_node.render.sky import sky_for
 from bridge_node.stream.world_view import Placement, WorldView
 from sim_core.frames.geodesy import local_to_geodetic
-from sim_core.ice.floes import FloeStatus
+from sim_core.ice.floes import NO_FROZEN_CRACKS, FloeStatus
+from sim_core.scene.switches import NO_FROZEN_FLOES
 
 
 POSE_NAMES, POSE_UNITS = ("pose_q", "pose_t"), (4, 5)  # the floe pose textures and their units
@@ -88,18 +89,30 @@ class SceneUploads:
         """A tile frozen: its floes get pose entries of their own, and its cells status
         entries that name each broken cell's floe (numbered from the top of the textures
         down; its rows go to other tiles); its floes' tops are drawn from these, their sides
-        made when first needed. A frozen tile without floes is level ice like the
-        unbreakable slab."""
-        p, floes = view.placements[k], view.frozen_floes[k]
+        made when first needed. A frozen tile without floes or cracks is level ice like the
+        unbreakable slab; one with cracks only gets its status entries."""
+        p, (floes, cracks) = view.placements[k], self._frozen_records(view, k)
         self._drop_floes(k)
-        if not len(floes):
+        if not len(floes) and not len(cracks):
             self._frozen.pop(k, None)
             self._write_tile_info(p, 0, False)
             return
         self._new_floes(k, p, -1)
         self._give_entries(view, k)
+        if not len(floes):  # cracks only: status entries, no floes to draw
+            self._drop_floes(k)
+            return
         self.tile_floes[k][0].append(self.meshes[p.template].corners(floes["cell"].astype(np.int64), sides=False))
         self._sides_due.add(k)
+
+    def _frozen_records(self, view: WorldView, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Frozen tile k's floes and cracked cells as the view holds them, less any record
+        naming a cell its template does not have (a message the stream's bounds let through
+        cannot index past the tile's entries)."""
+        n_cells = self.model.ice.templates[view.placements[k].template].n_cells
+        floes = view.frozen_floes.get(k, NO_FROZEN_FLOES)
+        cracks = view.frozen_cracks.get(k, NO_FROZEN_CRACKS)
+        return floes[floes["cell"] < n_cells], cracks[cracks["cell"] < n_cells]
 
     def _give_entries(self, view: WorldView, k: int) -> None:
         """Number frozen tile k's floes and cells after the entries given so far, and point
@@ -107,15 +120,16 @@ class SceneUploads:
         p = view.placements[k]
         self._frozen[k] = self._frozen_floes, self._frozen_cells
         self._write_tile_info(p, -1 - self._frozen_cells, True)
-        self._tile_draw[k].update(first=-1 - self._frozen_cells, first_floe=self._frozen_floes)
-        self._frozen_floes += len(view.frozen_floes[k])
+        if k in self._tile_draw:  # (a tile frozen with cracks only has no floes to draw)
+            self._tile_draw[k].update(first=-1 - self._frozen_cells, first_floe=self._frozen_floes)
+        self._frozen_floes += len(self._frozen_records(view, k)[0])
         self._frozen_cells += self.model.ice.templates[p.template].n_cells
 
     def _sides(self, view: WorldView, k: int) -> FloeBuffer:
         """Tile k's side faces, made now for a frozen tile that has not needed them yet."""
         if k in self._sides_due:
             self._sides_due.discard(k)
-            cells = view.frozen_floes[k]["cell"].astype(np.int64)
+            cells = self._frozen_records(view, k)[0]["cell"].astype(np.int64)
             self.tile_floes[k][1].append(self.meshes[view.placements[k].template].corners(cells, sides=True))
         return self.tile_floes[k][1]
 
@@ -192,13 +206,11 @@ class SceneUploads:
         """Upload a frozen tile's entries: its floes' poses, and its cells' status (1 + the
         place of the cell's floe among the tile's floes; 0 intact; FROZEN_CRACKED | its crack
         label for a cracked intact cell)."""
-        floes, (first_floe, first_cell) = view.frozen_floes[k], self._frozen[k]
+        (floes, cracks), (first_floe, first_cell) = self._frozen_records(view, k), self._frozen[k]
         n_cells = self.model.ice.templates[view.placements[k].template].n_cells
         status = np.zeros(n_cells, dtype=np.uint16)
         status[floes["cell"]] = 1 + np.arange(len(floes))
-        cracks = view.frozen_cracks.get(k)
-        if cracks is not None:
-            status[cracks["cell"]] = FROZEN_CRACKED | cracks["label"].astype(np.uint16)
+        status[cracks["cell"]] = FROZEN_CRACKED | cracks["label"].astype(np.uint16)
         for tex, texels in zip(self.pose, pose_textures(floes["pose"].astype(float)).astype("f4")):
             write_entries(tex, self._pose_lines, first_floe, texels)
         write_entries(self.status, self._status_lines, first_cell, status)

@@ -235,7 +235,7 @@ bool level_ice(vec2 p, ivec2 tile, ivec4 info, float footprint, out float rim, o
     if (cell.g != 0u) {
         uint other = cell_status(info.x, int(cell.g) - 1);
         if (broken(other, info.x)) {
-            rim = max(0.0, 1.0 - float(cell.b) / (256.0 * max(rim_px, 1e-6)));  // none beyond rim_px
+            rim = rim_px > 0.0 ? max(0.0, 1.0 - float(cell.b) / (256.0 * rim_px)) : 0.0;  // none beyond rim_px
         } else if (float(cell.b) < 128.0 * footprint) {  // within half a footprint of the edge
             uint a = crack_label(own, info.x), b = crack_label(other, info.x);
             crack = a != b && ((a != 0u && b != 0u) || ((a | b) & PIECE) != 0u);

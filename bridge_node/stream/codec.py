@@ -138,12 +138,13 @@ def _check_bounds(events: WorldEvents, input_time: object) -> None:
     counts = {len(getattr(p, name)) for name in _PLACED}
     rows = [events.floe_rows, events.broken_by_hull, events.broken_by_contact, p.row_start, p.row_start + p.row_count,
             p.tile, p.placement, events.thawed, events.frozen, events.frozen_floes["placement"].astype(np.int64),
-            events.cracked["row"].astype(np.int64), events.frozen_cracks["placement"].astype(np.int64)]
+            events.cracked["row"].astype(np.int64), events.frozen_cracks["placement"].astype(np.int64),
+            events.frozen_floes["cell"].astype(np.int64), events.frozen_cracks["cell"].astype(np.int64)]
     m = len(events.floe_rows)
     problems = [
         len(counts) != 1 and "placed tiles of different lengths",
-        any(len(a) and (a.min() < 0 or a.max() > MAX_ROWS) for a in rows) and "a row, placement or tile number out "
-                                                                                  "of range",
+        any(len(a) and (a.min() < 0 or a.max() > MAX_ROWS) for a in rows)
+        and "a row, placement, tile or cell number out of range",
         (events.floe_pose.shape != (m, 6) or events.floe_status.shape != (m,)) and "floe arrays of different lengths",
         p.corner.shape != (len(p.tile), 2) and "tile corners of the wrong shape",
         not (np.isfinite(events.floe_pose).all() and np.isfinite(p.corner).all()

@@ -21,7 +21,7 @@ import numpy as np
 
 from bridge_node.links.traffic_picture import TRAFFIC_DTYPE
 from sim_core.ice.bending import crack_events
-from sim_core.ice.floes import FROZEN_CRACK, BreakCause, FloeStatus
+from sim_core.ice.floes import NO_FROZEN_CRACKS, BreakCause, FloeStatus, frozen_crack_records
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.environment import Environment
 from sim_core.scene.switches import FROZEN_FLOE_EVENT, PlacedTiles
@@ -107,7 +107,7 @@ class WorldView:
         self.seq, self.time, self.ship, self.ice_load = events.seq, events.time, events.ship, events.ice_load
         self.environment = events.environment
         frozen = set(events.frozen.tolist())
-        held = self.frozen_floes
+        held, held_cracks = self.frozen_floes, self.frozen_cracks
         if events.snapshot:  # every frozen tile with all its floes; rows it does not name belong to no tile
             self.status[:], self.cause[:], self.crack[:] = FloeStatus.VACANT, BreakCause.NONE, 0
             self.frozen_floes = {k: np.zeros(0, dtype=FROZEN_FLOE_EVENT) for k in frozen}
@@ -115,13 +115,16 @@ class WorldView:
         for k in frozen - self.frozen:
             self._frozen_new.append(k)
             self.frozen_floes[k] = np.zeros(0, dtype=FROZEN_FLOE_EVENT)  # no floes, unless listed
+            self.frozen_cracks.pop(k, None)  # nor cracks
             if k in self.placements:
                 self._give_up_rows(self.placements[k])
                 self.placements[k] = dataclasses.replace(self.placements[k], row_start=0, row_count=0)
         self.frozen = frozen if events.snapshot else (self.frozen | frozen) - set(events.thawed.tolist())
         self._take_frozen_records(events)
         if events.snapshot:  # frozen before and after a gap, but thawed and frozen again within it
-            self._frozen_new += [k for k in frozen & held.keys() if not np.array_equal(held[k], self.frozen_floes[k])]
+            self._frozen_new += [k for k in frozen & held.keys() if not np.array_equal(held[k], self.frozen_floes[k])
+                                 or not np.array_equal(held_cracks.get(k, NO_FROZEN_CRACKS),
+                                                       self.frozen_cracks.get(k, NO_FROZEN_CRACKS))]
         p = events.placed
         for i in range(len(p.placement)):
             k = int(p.placement[i])
@@ -221,8 +224,7 @@ class WorldView:
             broken_by_contact=broken[self.cause[broken] == BreakCause.CONTACT],
             floe_rows=rows, floe_pose=self.pose[rows], floe_status=self.status[rows],
             cracked=crack_events(self.crack, rows),
-            frozen_cracks=np.concatenate([np.zeros(0, dtype=FROZEN_CRACK), *(self.frozen_cracks[k] for k in frozen
-                                                                             if k in self.frozen_cracks)]),
+            frozen_cracks=frozen_crack_records(self.frozen_cracks[k] for k in frozen if k in self.frozen_cracks),
             floes_free=len(broken), floes_frozen=sum(len(f) for f in floes),
             ice_load=self.ice_load.copy(), rejected=(), snapshot=True)
 

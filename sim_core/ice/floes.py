@@ -22,6 +22,7 @@ them; their pose and velocity stay as they were when they came to rest.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from enum import IntEnum
 
 import numpy as np
@@ -202,10 +203,16 @@ class TilePlacement(_Table):
 FROZEN_FLOE = np.dtype([("cell", np.uint32), ("cause", np.uint8), ("xy", np.float64, 2), ("yaw", np.float64),
                         ("heave", np.float32), ("roll", np.float32), ("pitch", np.float32), ("vel", np.float32, 2),
                         ("yaw_rate", np.float32), ("heave_rate", np.float32), ("roll_rate", np.float32),
-                        ("pitch_rate", np.float32), ("crack", np.uint8)])
+                        ("pitch_rate", np.float32)])
 # a cracked intact cell of a frozen tile (whose rows it gave up), as kept and published
 FROZEN_CRACK = np.dtype([("placement", "<i4"), ("cell", "<u4"), ("label", "u1")])
-_NO_CRACKS = np.zeros(0, dtype=FROZEN_CRACK)
+NO_FROZEN_CRACKS = np.zeros(0, dtype=FROZEN_CRACK)
+NO_FROZEN_CRACKS.flags.writeable = False  # shared by every tile frozen without cracks
+
+
+def frozen_crack_records(parts: Iterable[np.ndarray]) -> np.ndarray:
+    """``FROZEN_CRACK`` records of several tiles in one array (none: an empty one)."""
+    return np.concatenate([NO_FROZEN_CRACKS, *parts])
 _KEPT = FROZEN_FLOE.names[2:]  # the columns a frozen floe keeps
 
 
@@ -224,7 +231,7 @@ class FrozenFloes:
 
     def cracks(self, placement: int) -> np.ndarray:
         """A frozen tile's cracked intact cells (``FROZEN_CRACK`` records, maybe none)."""
-        return self._cracks.get(placement, _NO_CRACKS)
+        return self._cracks.get(placement, NO_FROZEN_CRACKS)
 
     def freeze(self, placement: int, state: FloeState, rows: np.ndarray, cells: np.ndarray) -> None:
         """Keep the given rows (cells: their offsets in the tile) as the placement's record."""
@@ -263,5 +270,5 @@ class FrozenFloes:
         return np.concatenate([np.zeros(0, dtype=FROZEN_FLOE), *self._tiles.values()])
 
     def nbytes(self) -> int:
-        """Bytes of the records."""
-        return sum(f.nbytes for f in self._tiles.values())
+        """Bytes of the records (floes and cracked cells)."""
+        return sum(f.nbytes for f in self._tiles.values()) + sum(c.nbytes for c in self._cracks.values())

@@ -14,7 +14,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sim_core.ice.floes import FROZEN_CRACK, FloeStatus, TilePlacement
+from sim_core.ice.bending import crack_events
+from sim_core.ice.floes import FloeStatus, TilePlacement, frozen_crack_records
 from sim_core.ice.tiles import (
     IceData,
     PreparedTile,
@@ -159,9 +160,17 @@ def moved_rows(data: WorldData, placed: PlacedTiles) -> np.ndarray:
         else moving
 
 
+def cracks_published(data: WorldData, placed: PlacedTiles, cracked: np.ndarray) -> np.ndarray:
+    """The crack records (``bending.CRACK_EVENT``) a step publishes: the cells it cracked,
+    and the cracked cells of the tiles placed or thawed in it (a thawed tile's come back)."""
+    rows = np.union1d(cracked, _tile_rows(data.ice.tiles, placed.placement.tolist())) if len(placed.placement) \
+        else cracked
+    return crack_events(data.ice.state.crack, rows)
+
+
 def frozen_cracks_of(ice: IceData, placements: list[int]) -> np.ndarray:
     """The published records (``FROZEN_CRACK``) of frozen placements' cracked intact cells."""
-    return np.concatenate([np.zeros(0, dtype=FROZEN_CRACK), *(ice.frozen.cracks(k) for k in placements)])
+    return frozen_crack_records(ice.frozen.cracks(k) for k in placements)
 
 
 def frozen_floes_of(ice: IceData, placements: list[int]) -> np.ndarray:
