@@ -18,6 +18,7 @@ from PIL import Image
 from scipy.ndimage import binary_dilation, gaussian_filter
 from test_render import at_start
 
+from bridge_node.node.config import load_config
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.channels import ChannelSet, create_context
 from bridge_node.render.meshes import rim_rasters
@@ -264,10 +265,9 @@ def test_thin_ice_is_darker_than_thick_ice(ctx, world):
     assert thin < thick - 80, (thin, thick)
 
 
-@pytest.mark.parametrize("look", list(LOOKS))
-def test_look_matches_its_reference(ctx, world, look):
-    c, ship, settings = LOOKS[look]
-    img = render(ctx, world, c, ship, **settings)
+def _matches_reference(img: np.ndarray, look: str) -> None:
+    """The image reaches SSIM_MIN against its look's reference (rewritten first when asked)
+    and fails it against every other look's."""
     path = REFERENCES / f"look_{look}.png"
     if os.environ.get("ICEBRIDGE_UPDATE_LOOKS"):
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -275,8 +275,37 @@ def test_look_matches_its_reference(ctx, world, look):
     reference = np.asarray(Image.open(path).convert("RGB"))
     assert ssim(img, reference) >= SSIM_MIN
     # the threshold tells the looks apart: every other look's reference fails it
-    for other in set(LOOKS) - {look}:
+    for other in {*LOOKS, BOW_AT_120} - {look}:
         assert ssim(img, np.asarray(Image.open(REFERENCES / f"look_{other}.png").convert("RGB"))) < SSIM_MIN, other
+
+
+@pytest.mark.parametrize("look", list(LOOKS))
+def test_look_matches_its_reference(ctx, world, look):
+    c, ship, settings = LOOKS[look]
+    _matches_reference(render(ctx, world, c, ship, **settings), look)
+
+
+BOW_AT_120 = "bow_at_120_s"  # the default exercise's centre channel 120 s in
+
+
+@pytest.fixture(scope="module")
+def default_at_120(tmp_path_factory):
+    """The built-in default exercise (its own template cache) run 120 s at 60 Hz."""
+    cfg = load_config()
+    cfg = cfg.model_copy(update={"paths": cfg.paths.model_copy(update={
+        "cache_dir": str(tmp_path_factory.mktemp("bow") / "tiles")})})
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    for _ in range(7200):
+        step(model, data, 1.0 / 60.0)
+    return model, data, cfg
+
+
+def test_the_bow_at_120_s_matches_its_reference(ctx, default_at_120):
+    model, data, cfg = default_at_120
+    centre = next(c for c in cfg.render.channels if c.name == "centre")
+    centre = centre.model_copy(update={"width": W, "height": H, "output": "none"})
+    _matches_reference(render(ctx, (model, data), centre, start_utc=cfg.render.start_utc), BOW_AT_120)
 
 
 def test_bad_look_settings_are_clear_config_errors(tmp_path):
