@@ -51,7 +51,7 @@ def test_a_wind_sets_the_broken_floes_drifting_downwind_turned_right(tmp_path):
     st = data.ice.state
     free = data.live_rows[st.status[data.live_rows] == FloeStatus.FREE]
     out = free[st.xy[free, 1] < 0.0]  # out of the ice, south of its edge: drifting free
-    assert len(out) > 20
+    assert len(out) > 20 and not st.resting[out].any()  # drifting free: none at rest
     reached = 0.3 * (1.0 - math.exp(-3.0))  # linear drag towards the drift velocity
     assert np.median(st.vel[out, 1]) == pytest.approx(-reached * math.cos(math.radians(30.0)), abs=0.02)
     assert np.median(st.vel[out, 0]) == pytest.approx(-reached * math.sin(math.radians(30.0)), abs=0.02)

@@ -175,12 +175,21 @@ def _take_pushes(rows, push, turn, mass, inertia, gcell, extent, vel, yaw_rate, 
     return out[:n]
 
 
-def wake_share(model: IceModel, data: IceData) -> None:
-    """Wake up to ``rest_per_step`` resting floes (the first rows): a current has set in,
-    and a floe at rest would not drift with the water."""
+def drift_settled(model: IceModel, data: IceData, water: tuple[float, float]) -> bool:
+    """Whether the floes at rest came to rest in the drift the water now has (its velocity,
+    world x east, y north, m/s: current and wind drift), so that more may. After a change
+    every resting floe is woken, ``rest_per_step`` a step, to feel the new drift, and none
+    comes to rest until they all are. A floe drifting free moves faster than ``rest_speed``
+    and never rests; those that come to rest in a drift are jammed (against the level ice at
+    a channel's edge), as in still water those the ship left behind."""
+    if data.rest_water == water:
+        return True
     rows = np.flatnonzero(data.state.resting)[:model.settings.rest_per_step]
     if len(rows):
         data.contacts.wake(data.state, rows)
+        return False
+    data.rest_water = water
+    return True
 
 
 def wake_struck(model: IceModel, data: IceData, con: Contacts) -> None:
@@ -197,10 +206,11 @@ def wake_struck(model: IceModel, data: IceData, con: Contacts) -> None:
         data.contacts.wake(st, woken)
 
 
-def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.ndarray, dt: float) -> None:
-    """Settle the floes that have shed their contacts (``ContactSpace.settle``); count the
-    moving rows' steps at rest, and start taking out of the dynamic set those at rest for
-    ``rest_after_s``, above water, settled and beyond the rest radius: up to
+def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.ndarray, dt: float,
+             new: bool = True) -> None:
+    """Settle the floes that have shed their contacts (``ContactSpace.settle``); and (if
+    ``new``) count the moving rows' steps at rest, and start taking out of the dynamic set
+    those at rest for ``rest_after_s``, above water, settled and beyond the rest radius: up to
     ``rest_per_step`` of them and the contact space's ``rest_share``, first those that come
     first among its dynamic bodies (moving is in that order), which Chipmunk finds soonest."""
     s, st = model.settings, data.state
@@ -211,6 +221,8 @@ def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.nda
         inside = settled[((st.xy[settled] - at) ** 2).sum(axis=1) < zone * zone]
         if len(inside):
             data.wake_look = (at, np.union1d(rows, inside))
+    if not new:
+        return
     steps = min(65535, max(1, math.ceil(s.rest_after_s / dt)))
     picks = _calm_far(moving, st.vel, st.yaw_rate, st.gcell, data.contacts.extent, st.calm, s.rest_speed, steps,
                       st.submerged, model.z_equilibrium, st.heave, st.roll, st.pitch, st.heave_rate, st.roll_rate,

@@ -225,15 +225,11 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
     moving at ``water`` (world x east, y north, m/s; None: still)."""
     st, space = data.state, data.contacts
     east, north = (0.0, 0.0) if water is None else (float(water[0]), float(water[1]))
-    still = east == 0.0 and north == 0.0
     space.set_water_velocity(east, north, dt)
-    # floes rest only in still water: in a current every free floe drifts, so none is calm,
-    # and those at rest when it set in are woken, a step's share at a time
-    rest = model.settings.rest_far_floes and still
-    if not still:
-        resting.wake_share(model, data)
+    resting_on = model.settings.rest_far_floes
+    rest = resting_on and resting.drift_settled(model, data, (east, north))
     space.set_hull(hull.xy, hull.angle, hull.velocity, hull.angular_velocity)
-    if rest:
+    if resting_on:
         resting.wake_near_hull(model, data, hull.xy)
     by_hull = space.hull_touching(st)
     if len(by_hull):
@@ -257,9 +253,9 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
                       dt, vertical_substeps(model, dt))
     struck, impulse, point = con.with_hull()
     _update_submersion(model, data, hull, struck[struck >= 0], jammed)
-    if rest:
+    if resting_on:
         resting.wake_struck(model, data, con)
-        resting.rest_far(model, data, moving, hull.xy, dt)
+        resting.rest_far(model, data, moving, hull.xy, dt, new=rest)
     fx, fy, moment = _hull_load(struck, impulse, point, np.asarray(hull.xy, dtype=np.float64), dt)
     return IceStepReport(by_hull, by_contact, cracked, np.array([fx, fy]), moment)
 

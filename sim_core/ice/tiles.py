@@ -40,6 +40,7 @@ class IceData:
     # rows sent under the hull, each once: a superset of the submerged rows (a row surfaces,
     # or is vacated or thawed, without leaving it), so that surfacing need not scan every row
     went_under: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    rest_water: tuple[float, float] = (0.0, 0.0)  # the drift (m/s, east, north) the resting floes came to rest in
     # the hull's reference point (m) at the last look at every row for resting floes to
     # wake, and the resting rows (ascending) within the zone it kept (``resting.wake_near_hull``)
     wake_look: tuple[np.ndarray, np.ndarray] = field(
