@@ -97,10 +97,10 @@ class SceneUploads:
             self._frozen.pop(k, None)
             self._write_tile_info(p, 0, False)
             return
-        self._new_floes(k, p, -1)
+        if len(floes):
+            self._new_floes(k, p, -1)
         self._give_entries(view, k)
         if not len(floes):  # cracks only: status entries, no floes to draw
-            self._drop_floes(k)
             return
         self.tile_floes[k][0].append(self.meshes[p.template].corners(floes["cell"].astype(np.int64), sides=False))
         self._sides_due.add(k)

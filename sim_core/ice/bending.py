@@ -41,6 +41,7 @@ WEDGES = (3, 4, 5)  # wedges a load splits the edge into (paper Table 3)
 _TABLE3 = ((0.5, 3.3), (1.0, 4.5))  # (thickness m, breaking length m), paper Table 3
 _EXPONENT = math.log(_TABLE3[1][1] / _TABLE3[0][1]) / math.log(_TABLE3[1][0] / _TABLE3[0][0])
 RADIAL_REACH = math.pi / math.sqrt(2.0)  # radial cracks' reach in characteristic lengths (Hetényi)
+_NO_ROWS = np.zeros(0, dtype=np.int64)
 _CRACK_BAND = 0.6  # a radial crack takes the cells within this share of their size from its line
 
 
@@ -72,19 +73,14 @@ def _pattern(seed: int) -> tuple[int, float, int]:
     return wedges, turn, mixed % LABELS
 
 
-def _rows_near(tiles: TilePlacement, model: IceModel, point: np.ndarray, reach: float) -> np.ndarray:
-    """Rows of the live tiles whose box comes within ``reach`` (m) of the point."""
-    n = tiles.n
-    live = np.flatnonzero(tiles.row_count[:n] > 0)
-    if not len(live):
-        return np.zeros(0, dtype=np.int64)
-    side = np.array([t.side for t in model.templates])[tiles.template[live]]
+def _rows_near(tiles: TilePlacement, sides: np.ndarray, point: np.ndarray, reach: float) -> np.ndarray:
+    """Rows of the live tiles whose box comes within ``reach`` (m) of the point; ``sides``
+    (m) by template."""
+    live = np.flatnonzero(tiles.row_count > 0)
     lo = tiles.corner[live]
-    gap = np.maximum(np.maximum(lo - point, point - (lo + side[:, None])), 0.0)
+    gap = np.maximum(np.maximum(lo - point, point - (lo + sides[tiles.template[live]][:, None])), 0.0)
     near = live[np.hypot(gap[:, 0], gap[:, 1]) <= reach]
-    if not len(near):
-        return np.zeros(0, dtype=np.int64)
-    return np.concatenate([np.arange(tiles.row_start[k], tiles.row_start[k] + tiles.row_count[k]) for k in near])
+    return np.concatenate([_NO_ROWS, *(tiles.rows(k) for k in near.tolist())])
 
 
 def crack_labels(offset: np.ndarray, size: np.ndarray, wedges: int, turn: float, base: int, lb: float,
@@ -130,10 +126,9 @@ def crack_ahead(model: IceModel, st: FloeState, tiles: TilePlacement, loaded: np
     length apart as the bow advances.
     ``outline`` (P, 2) is the hull's waterline in its own frame (x forward, m), ``angle``
     its heading (rad CCW from east). Returns the rows cracked now (ascending)."""
-    if not len(loaded):
-        return np.zeros(0, dtype=np.int64)
     stern, stem = float(outline[:, 0].min()), float(outline[:, 0].max())
     half_beam = float(np.abs(outline[:, 1]).max())
+    sides = np.array([t.side for t in model.templates])
     mat, cracked = model.material, []
     for r in loaded.tolist():
         if st.crack[r] != 0:  # a piece or crack of an earlier load's pattern failing: no new bending
@@ -142,7 +137,7 @@ def crack_ahead(model: IceModel, st: FloeState, tiles: TilePlacement, loaded: np
         lc = characteristic_length(h, mat)
         point = st.home[r].astype(float)
         reach = RADIAL_REACH * lc
-        rows = _rows_near(tiles, model, point, reach)
+        rows = _rows_near(tiles, sides, point, reach)
         rows = rows[(st.status[rows] == FloeStatus.INTACT) & (st.crack[rows] == 0)]
         if not len(rows):
             continue
@@ -155,7 +150,7 @@ def crack_ahead(model: IceModel, st: FloeState, tiles: TilePlacement, loaded: np
         hit = labels != 0
         st.crack[rows[hit]] = labels[hit]
         cracked.append(rows[hit])
-    return np.unique(np.concatenate(cracked)) if cracked else np.zeros(0, dtype=np.int64)
+    return np.unique(np.concatenate([_NO_ROWS, *cracked]))
 
 
 def crack_events(crack: np.ndarray, rows: np.ndarray) -> np.ndarray:

@@ -225,8 +225,12 @@ class FrozenFloes:
         self._cracks: dict[int, np.ndarray] = {}  # placement -> its cracked intact cells (FROZEN_CRACK)
         self.count = 0  # frozen floes held
 
-    def keep_cracks(self, placement: int, cracks: np.ndarray) -> None:
-        """Keep a freezing tile's cracked intact cells (``FROZEN_CRACK`` records)."""
+    def keep_cracks(self, placement: int, state: FloeState, rows: np.ndarray) -> None:
+        """Keep the cracked intact cells among a freezing tile's rows (all of them, from its
+        first) as its ``FROZEN_CRACK`` records."""
+        cracked = rows[(state.status[rows] == FloeStatus.INTACT) & (state.crack[rows] != 0)]
+        cracks = np.zeros(len(cracked), dtype=FROZEN_CRACK)
+        cracks["placement"], cracks["cell"], cracks["label"] = placement, cracked - rows[0], state.crack[cracked]
         self._cracks[placement] = cracks
 
     def cracks(self, placement: int) -> np.ndarray:

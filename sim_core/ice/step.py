@@ -231,12 +231,12 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
     space.set_hull(hull.xy, hull.angle, hull.velocity, hull.angular_velocity)
     if resting_on:
         resting.wake_near_hull(model, data, hull.xy)
-    by_hull = space.hull_touching(st)
+    by_hull, cracked = space.hull_touching(st), _NO_ROWS
     if len(by_hull):
         break_cells(data, by_hull, BreakCause.HULL)
         _update_submersion(model, data, hull, by_hull)
-    cracked = crack_ahead(model, st, data.tiles, by_hull, np.asarray(hull.xy, dtype=float), hull.angle,
-                          space.hull_outline)
+        cracked = crack_ahead(model, st, data.tiles, by_hull, np.asarray(hull.xy, dtype=float), hull.angle,
+                              space.hull_outline)
     space.step(dt)
     con = space.read_contacts(st)
     by_contact, jammed = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities

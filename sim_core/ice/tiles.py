@@ -23,7 +23,7 @@ import numpy as np
 
 from sim_core.ice.chipmunk_bodies import TileBodies
 from sim_core.ice.contact import ContactSpace
-from sim_core.ice.floes import FROZEN_CRACK, BreakCause, FloeState, FloeStatus, FrozenFloes, TilePlacement
+from sim_core.ice.floes import BreakCause, FloeState, FloeStatus, FrozenFloes, TilePlacement
 from sim_core.ice.model import IceModel, placed_centroids
 
 
@@ -167,10 +167,7 @@ def freeze_tile(data: IceData, placement: int) -> None:
     rows = tiles.rows(placement)
     free = rows[st.status[rows] == FloeStatus.FREE]
     data.frozen.freeze(placement, st, free, free - rows[0])
-    cracked = rows[(st.status[rows] == FloeStatus.INTACT) & (st.crack[rows] != 0)]
-    cracks = np.zeros(len(cracked), dtype=FROZEN_CRACK)
-    cracks["placement"], cracks["cell"], cracks["label"] = placement, cracked - rows[0], st.crack[cracked]
-    data.frozen.keep_cracks(placement, cracks)
+    data.frozen.keep_cracks(placement, st, rows)
     data.contacts.drop_tile(placement)
     st.set_status(free, FloeStatus.FROZEN)
     st.submerged[rows] = st.resting[rows] = False  # a frozen floe thaws afloat, in the dynamic set

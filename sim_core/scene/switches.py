@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sim_core.ice.bending import crack_events
-from sim_core.ice.floes import FloeStatus, TilePlacement, frozen_crack_records
+from sim_core.ice.floes import NO_FROZEN_CRACKS, FloeStatus, TilePlacement, frozen_crack_records
 from sim_core.ice.tiles import (
     IceData,
     PreparedTile,
@@ -170,6 +170,8 @@ def cracks_published(data: WorldData, placed: PlacedTiles, cracked: np.ndarray) 
 
 def frozen_cracks_of(ice: IceData, placements: list[int]) -> np.ndarray:
     """The published records (``FROZEN_CRACK``) of frozen placements' cracked intact cells."""
+    if not placements:  # most steps freeze nothing
+        return NO_FROZEN_CRACKS
     return frozen_crack_records(ice.frozen.cracks(k) for k in placements)
 
 
