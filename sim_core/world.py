@@ -320,7 +320,7 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
     else:
         ship_model.step(model.ship, ship, dt)
     contour, hull = hull_world(model, ship)
-    placed, thawed, frozen = apply_swaps(model, data, update_scene(model.scene, data.scene, contour, hull.xy))
+    placed, thawed, frozen = apply_swaps(model, data, update_scene(model.scene, data.scene, contour, hull.xy), contour)
     report = ice_step(model.ice, data.ice, hull, dt, _ice_drift(model, data))
     if data.moving_to is None:  # (a move's tiles are prepared first)
         prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3)

@@ -1,8 +1,9 @@
 """Level ice and open water from the ice regions in the running world (issue 26, item 1:
 level ice stays what it is today, now laid where a chart or region puts it): a tile whose
 centre lies in fast ice takes its stage's thickness, one in an ice-free region is open
-water: no tile is placed there, the ship meets no ice, and the channels draw sea. Floe
-fields are not in the world yet: their tiles keep the field's own profile."""
+water: no tile is placed there, the ship meets no ice, and the channels draw sea. A floe
+field's tiles take a class of their own, laid from its pack templates
+(tests/test_floe_fields_world.py); brash alone is not laid yet."""
 import numpy as np
 import pytest
 from conftest import exercise_config
@@ -63,7 +64,9 @@ def test_tiles_take_the_regions_thickness(lead):
     h = scene.class_thickness[scene.tile_class].reshape(scene.ny, scene.nx)
     assert np.all(h[:, 3:6] == 0.0)  # the lead: open water
     assert np.all(h[:, 6:] == pytest.approx(0.9)) and np.all(h[:6, :3] == pytest.approx(0.9))  # medium FY, 0.95 m
-    assert np.all(h[6:, :3] == pytest.approx(cfg.ice_field.thickness))  # the pack: the field's profile, for now
+    pack = scene.tile_class.reshape(scene.ny, scene.nx)[6:, :3]
+    assert np.all(h[6:, :3] == pytest.approx(0.5))  # the pack: thin first-year floes, 0.5 m
+    assert np.all([model.ice.loose[scene.class_templates[k]].all() for k in np.unique(pack)])
 
 
 def test_in_the_lead_the_ship_meets_no_ice(lead, fast_ice):
@@ -78,7 +81,11 @@ def test_in_the_lead_the_ship_meets_no_ice(lead, fast_ice):
 
 def test_the_regions_the_world_does_not_lay_yet_are_named(lead):
     _, _, cfg, _ = lead
-    assert regions_not_in_the_world(cfg.ice_field, cfg.exercise.origin_deg()) == ["pack"]
+    assert regions_not_in_the_world(cfg.ice_field, cfg.exercise.origin_deg()) == []
+    brash = RegionSettings.model_validate({**PACK, "name": "brash", "concentration": 9,
+                                           "ice": [{"stage": "grey_white", "floe_size": "brash"}]})
+    field = cfg.ice_field.model_copy(update={"regions": [*cfg.ice_field.regions, brash]})
+    assert regions_not_in_the_world(field, cfg.exercise.origin_deg()) == ["brash"]
 
 
 def test_the_channels_draw_the_lead_as_sea(lead, ctx):

@@ -15,6 +15,7 @@ from rich.progress import Progress
 from bridge_node.charts.field_regions import configured_regions
 from bridge_node.library.templates import library_template
 from bridge_node.node.config import NodeConfig, load_ship, resolve_path
+from bridge_node.node.floe_field_setup import lay_floe_fields
 from bridge_node.common.errors import UserError
 from bridge_node.common.paths import writable_dir
 from sim_core.environment import Environment
@@ -56,20 +57,24 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
         raise UserError(f"{config_path}: fracture.cells = {cfg.fracture.cells!r}: the simulated world needs "
                         "'prism' cells (voronoi3d cells overlap in plan view)")
     ship = compile_ship(load_ship(cfg.ship.name, config_path), cfg.ice_material)
-    tile_class, class_h = field_tile_classes(cfg, config_path)
+    tile_class, level_h = field_tile_classes(cfg, config_path)
+    tile_class, class_h, packs = lay_floe_fields(cfg, config_path, tile_class, level_h)
     cache = writable_dir(resolve_path(config_path, cfg.paths.cache_dir), f"{config_path or 'default config'}: "
                          "paths.cache_dir")
-    jobs = [(h, v) for h in class_h[class_h > 0.0] for v in range(cfg.fracture.variants)]  # none for open water
+    jobs = [(h, v) for h in level_h[level_h > 0.0] for v in range(cfg.fracture.variants)]  # none for open water
     task = progress.add_task("loading tile templates", total=len(jobs)) if progress else None
     templates = []
     for h, v in jobs:
         templates.append(library_template(Path(cache), float(h), v, cfg.fracture, cfg.ice_material)[0])
         if progress:
             progress.advance(task)
-    ice = compile_ice_model(templates, cfg.ice_material, cfg.ice_dynamics)
-    first = np.cumsum(class_h > 0.0) - 1  # the first template of each class with ice
+    first = np.cumsum(level_h > 0.0) - 1  # the first template of each class with ice
     per_class = [np.arange(first[k] * cfg.fracture.variants, (first[k] + 1) * cfg.fracture.variants) if h > 0.0
-                 else np.zeros(0, dtype=np.int64) for k, h in enumerate(class_h)]
+                 else np.zeros(0, dtype=np.int64) for k, h in enumerate(level_h)]
+    for variants in packs:  # a floe-field region's class: its own templates
+        per_class.append(np.arange(len(templates), len(templates) + len(variants)))
+        templates += variants
+    ice = compile_ice_model(templates, cfg.ice_material, cfg.ice_dynamics)
     try:
         scene = compile_scene(cfg.scene, tile_class, class_h, per_class, cfg.fracture.tile_side,
                               ship.particulars.length)

@@ -9,6 +9,7 @@ from PIL import Image, ImageDraw
 from scipy import ndimage
 
 from sim_core.csr import gather_ranges
+from sim_core.scene.scene import tile_layout
 from sim_core.world import WorldModel
 
 
@@ -80,6 +81,19 @@ def template_meshes(model: WorldModel) -> list[TemplateMesh]:
         rank[order] = np.arange(len(order))
         index = rank[inverse.ravel()].astype(np.uint16 if len(order) <= 1 << 16 else np.uint32)
         out.append(TemplateMesh(data[first[order]], index, start[g0:g1 + 1] - a, side_start[g0:g1] - a))
+    return out
+
+
+def floe_field_layouts(model: WorldModel) -> dict[int, int]:
+    """The tiles (flat index) of floe-field classes, and each one's template | quarter turns
+    << 16 as the scene lays it: until simulated, such a tile is drawn from its template's
+    raster, its floes where the template lays them."""
+    scene = model.scene
+    loose = np.array([len(t) > 0 and bool(model.ice.loose[t].all()) for t in scene.class_templates], dtype=bool)
+    out = {}
+    for tile in np.nonzero(loose[scene.tile_class])[0].tolist() if len(loose) else []:
+        template, turns = tile_layout(scene, tile)
+        out[tile] = template | (turns << 16)
     return out
 
 

@@ -37,9 +37,9 @@ from bridge_node.render import object_shaders, shaders
 from bridge_node.render.camera import Camera, channel_camera, set_matrix, ship_matrix, visible_boxes
 from bridge_node.render.classes import CLASS_INDEX, CLASSES
 from bridge_node.render.floe_buffers import FloeBuffer, horizon_split
-from bridge_node.render.meshes import cell_rasters, rim_rasters, template_meshes
+from bridge_node.render.meshes import cell_rasters, floe_field_layouts, rim_rasters, template_meshes
 from bridge_node.render.scene_uploads import POSE_NAMES, POSE_UNITS, SceneUploads
-from bridge_node.render.shaders import FROZEN_CRACKED
+from bridge_node.render.shaders import FROZEN_CRACKED, UNPLACED_FLOE_FIELD
 from bridge_node.render.settings import ChannelSettings, RenderSettings, eye_point
 from bridge_node.render.ship_mesh import load_ship, nav_lights, ship_triangles
 from bridge_node.render.sky import Sky
@@ -77,9 +77,8 @@ class SceneRenderer(SceneUploads):
         # per tile: first status entry (its first row, or a frozen tile's first cell entry),
         # template | quarter turns << 16, level-ice thickness (m, float bits), 1 if breakable
         self.tile_thickness = scene.class_thickness[scene.tile_class].astype("f4")
-        info = np.zeros((scene.nx * scene.ny, 4), "i4")
-        info[:, 2] = self.tile_thickness.view("i4")
-        self.tile_info = ctx.texture((scene.nx, scene.ny), 4, info.tobytes(), dtype="i4")
+        self.floe_field_info = floe_field_layouts(model)  # tile -> its template | turns << 16
+        self.tile_info = ctx.texture((scene.nx, scene.ny), 4, self._first_tile_table().tobytes(), dtype="i4")
         self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST
         mesh = load_ship(model.ship.particulars, model.contour, settings.freeboard_m)
         self.ship_extent = mesh.bounds  # (2, 3): lower and upper corner, ship frame, m
@@ -122,6 +121,15 @@ class SceneRenderer(SceneUploads):
         # the eye, below the wings), bilinear
         self.noise.filter = moderngl.NEAREST_MIPMAP_NEAREST, moderngl.LINEAR
         self.sky: Sky | None = None
+
+    def _first_tile_table(self) -> np.ndarray:
+        """The tile table before any tile is simulated: every tile's thickness, and a floe
+        field's tiles their layouts, drawn from their templates' rasters."""
+        info = np.zeros((len(self.tile_thickness), 4), "i4")
+        info[:, 2] = self.tile_thickness.view("i4")
+        for tile, layout in self.floe_field_info.items():
+            info[tile, 1], info[tile, 3] = layout, UNPLACED_FLOE_FIELD
+        return info
 
     def _make_programs(self, lights: int) -> None:
         """The shader programs (with ``lights`` searchlights) and the screen-space buffers of

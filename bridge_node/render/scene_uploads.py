@@ -12,7 +12,7 @@ import moderngl
 import numpy as np
 
 from bridge_node.render.floe_buffers import FloeBuffer, FloeCopies, pose_textures, write_entries
-from bridge_node.render.shaders import FROZEN_CRACKED, POSE_WIDTH
+from bridge_node.render.shaders import FROZEN_CRACKED, POSE_WIDTH, UNPLACED_FLOE_FIELD
 from bridge_node.render.sky import sky_for
 from bridge_node.stream.world_view import Placement, WorldView
 from sim_core.frames.geodesy import local_to_geodetic
@@ -52,7 +52,8 @@ class SceneUploads:
     def _write_tile_info(self, p: Placement, first_entry: int, breakable: bool) -> None:
         nx = self.model.scene.nx
         thickness = self.tile_thickness.view("i4")[p.tile]
-        info = np.array([first_entry, p.template | (p.quarter_turns << 16), thickness, int(breakable)], "i4")
+        flag = int(breakable) or (UNPLACED_FLOE_FIELD if p.tile in self.floe_field_info else 0)
+        info = np.array([first_entry, p.template | (p.quarter_turns << 16), thickness, flag], "i4")
         self.tile_info.write(info.tobytes(), viewport=(p.tile % nx, p.tile // nx, 1, 1))
 
     def _drop_floes(self, k: int) -> None:

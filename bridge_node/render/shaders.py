@@ -21,6 +21,7 @@ from sim_core.ice.bending import PIECE
 PERIODS = (23.0, 290.0, 2100.0)  # m: of the relief's three noise fetches
 POSE_WIDTH = 2048  # texels per line of the pose textures: a power of two, a constant in the shaders (on
                    # llvmpipe, division by a uniform is done lane by lane and cost the level ice a tenth)
+UNPLACED_FLOE_FIELD = 2  # tile table flag of a floe field's tile not simulated (its floes drawn at home)
 FROZEN_CRACKED = 0xF000  # a frozen tile's status entry of a cracked intact cell: this | its crack label (no
 # tile has this many cells, so no floe number reaches it)
 # Where an entry of the pose and status textures lies: live rows (i >= 0) fill lines from the
@@ -188,7 +189,8 @@ ENV_FS = "#version 330\n" + COMMON + """
 uniform float slab_z;
 uniform float far;               // m: level ice is looked up this far
 uniform isampler2D tile_info;    // per tile: its first status entry, template | quarter turns << 16, level-ice
-                                 // thickness (m, float bits), 1 if breakable (0: the unbreakable slab): one fetch
+                                 // thickness (m, float bits), 1 if breakable (0: the unbreakable slab; 2: a floe
+                                 // field's tile not simulated, its floes where its template lays them): one fetch
 uniform usampler2D cell_raster;  // templates stacked in y: 1 + cell index (0 in a crack), 1 + the nearest
                                  // other cell's within rim_px (0: none), distance to it (1/256 px)
 uniform float rim_px;
@@ -219,16 +221,22 @@ uint crack_label(uint entry, int first) {
 // either side or both cracked (sim_core.ice.bending.crack_lines), within half the
 // `footprint` (raster pixels a screen pixel covers, at least 1) of the edge, so that a crack
 // stays a line about a pixel wide in the distance.
-bool level_ice(vec2 p, ivec2 tile, ivec4 info, float footprint, out float rim, out bool crack) {
-    rim = 0.0;
-    crack = false;
-    if (info.w == 0) return intBitsToFloat(info.z) > 0.0;              // the unbreakable slab (none: open water)
+// the raster texel of the tile's template under p
+uvec3 raster_cell(vec2 p, ivec2 tile, ivec4 info) {
     vec2 local = p - vec2(tile) * tile_side - 0.5 * tile_side;          // about the tile centre
     int k = info.y >> 16;                                               // undo the quarter turns
     float c = k == 0 ? 1.0 : (k == 2 ? -1.0 : 0.0), s = k == 1 ? 1.0 : (k == 3 ? -1.0 : 0.0);
     local = vec2(c * local.x + s * local.y, c * local.y - s * local.x);
     vec2 uv = clamp((local / tile_side + 0.5) * float(raster_size), vec2(0.0), vec2(float(raster_size) - 1.0));
-    uvec3 cell = texelFetch(cell_raster, ivec2(uv) + ivec2(0, (info.y & 0xFFFF) * raster_size), 0).rgb;
+    return texelFetch(cell_raster, ivec2(uv) + ivec2(0, (info.y & 0xFFFF) * raster_size), 0).rgb;
+}
+bool level_ice(vec2 p, ivec2 tile, ivec4 info, float footprint, out float rim, out bool crack) {
+    rim = 0.0;
+    crack = false;
+    if (info.w == 0) return intBitsToFloat(info.z) > 0.0;              // the unbreakable slab (none: open water)
+    uvec3 cell = raster_cell(p, tile, info);
+    // a floe field's tile not simulated: its floes where the template lays them
+    if (info.w == """ + str(UNPLACED_FLOE_FIELD) + """) return cell.r != 0u;
     if (cell.r == 0u) return false;
     uint own = cell_status(info.x, int(cell.r) - 1);
     if (broken(own, info.x)) return false;

@@ -155,6 +155,7 @@ class WorldView:
             self.status[rows] = events.floe_status
             self._span = [min(self._span[0], int(rows.min())), max(self._span[1], int(rows.max()) + 1)]
         self._apply_cracks(events.cracked)
+        self._free_from_placing(p)
         self.cause[events.broken_by_hull] = BreakCause.HULL
         self.cause[events.broken_by_contact] = BreakCause.CONTACT
         self._broken += [events.broken_by_hull, events.broken_by_contact]
@@ -166,6 +167,13 @@ class WorldView:
             keys, starts = np.unique(records["placement"][order], return_index=True)
             for k, part in zip(keys.tolist(), np.split(records[order], starts[1:])):
                 kept[k] = part.copy()  # its own memory, not the message's
+
+    def _free_from_placing(self, placed: PlacedTiles) -> None:
+        """The rows of tiles given rows that are free already (a floe field's floes, a thawed
+        tile's) count as broken: they are drawn as floes."""
+        for a, n in zip(placed.row_start.tolist(), placed.row_count.tolist()):
+            given = np.arange(a, a + n)
+            self._broken.append(given[self.status[given] == FloeStatus.FREE])
 
     def _apply_cracks(self, cracked: np.ndarray) -> None:
         """Take the labels of the cells cracked (their rows' statuses are uploaded again)."""
@@ -190,7 +198,7 @@ class WorldView:
         lo, hi = self._span
         changes = ViewChanges(list(dict.fromkeys(k for k in self._new if k not in self.frozen)),
                               list(dict.fromkeys(k for k in self._frozen_new if k in self.frozen)),
-                              min(lo, hi), hi, np.concatenate(self._broken) if self._broken
+                              min(lo, hi), hi, np.unique(np.concatenate(self._broken)) if self._broken
                               else np.zeros(0, dtype=np.int64))
         self._new, self._frozen_new, self._span, self._broken = [], [], [np.iinfo(np.int64).max, 0], []
         return changes

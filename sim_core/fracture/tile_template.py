@@ -46,10 +46,17 @@ class TileTemplate:
     mass: np.ndarray  # (n,) kg
     is_sphere: np.ndarray  # (n,) bool: sphere collider (else mesh)
     sphere_radius: np.ndarray  # (n,) m, defined for every cell
+    cell_thickness: np.ndarray | None = None  # (n,) m where cells differ (a floe field's types); else ``thickness``
+    loose: bool = False  # its cells start as free floes (a floe field), not as level ice
 
     @property
     def n_cells(self) -> int:
         return self.geometry.n_cells
+
+    @property
+    def thicknesses(self) -> np.ndarray:
+        """Each cell's thickness (n,), m."""
+        return np.full(self.n_cells, self.thickness) if self.cell_thickness is None else self.cell_thickness
 
     def to_arrays(self) -> dict[str, np.ndarray]:
         """Flat dict of arrays (for np.savez and friends)."""
@@ -58,6 +65,7 @@ class TileTemplate:
             side=np.float64(self.side), thickness=np.float64(self.thickness),
             mode=np.str_(self.mode), seed=np.int64(self.seed), seeds=self.seeds,
             mass=self.mass, is_sphere=self.is_sphere, sphere_radius=self.sphere_radius,
+            cell_thickness=self.thicknesses, loose=np.bool_(self.loose),
         )
         return out
 
@@ -70,6 +78,8 @@ class TileTemplate:
             mode=str(arrays["mode"]), seed=int(arrays["seed"]), seeds=np.asarray(arrays["seeds"]),
             geometry=geometry, mass=np.asarray(arrays["mass"]),
             is_sphere=np.asarray(arrays["is_sphere"]), sphere_radius=np.asarray(arrays["sphere_radius"]),
+            cell_thickness=np.asarray(arrays["cell_thickness"]) if "cell_thickness" in arrays else None,
+            loose=bool(arrays["loose"]) if "loose" in arrays else False,
         )
 
 

@@ -65,6 +65,7 @@ class IceModel:
     settings: IceDynamicsSettings
     templates: tuple[TileTemplate, ...]
     template_start: np.ndarray  # (n_templates + 1,) first gcell of each template
+    loose: np.ndarray  # (n_templates,) bool: the template's cells start as free floes (a floe field)
     centroid: np.ndarray  # (G, 3) in the template's tile frame, m
     tris: np.ndarray  # (T, 3, 3) triangles about the centroid, m
     tri_start: np.ndarray  # (G + 1,)
@@ -122,7 +123,7 @@ def compile_ice_model(templates: list[TileTemplate], material: IceMaterial | Non
     out_counts = np.concatenate([np.diff(g.foot_start) for g in geo])
     outline_start = offsets(out_counts)
     outline = np.vstack([g.footprint for g in geo]) - centroid[np.repeat(np.arange(n), out_counts), :2]
-    thickness = np.repeat([t.thickness for t in templates], counts)
+    thickness = np.concatenate([t.thicknesses for t in templates]) if templates else np.zeros(0)
     mass = np.concatenate([t.mass for t in templates])
     cov = _second_moments(tris, owner, n) * material.density
     inertia = np.column_stack([cov[:, 1, 1] + cov[:, 2, 2], cov[:, 0, 0] + cov[:, 2, 2], cov[:, 0, 0] + cov[:, 1, 1]])
@@ -142,6 +143,7 @@ def compile_ice_model(templates: list[TileTemplate], material: IceMaterial | Non
     draft = thickness * material.density / material.water_density
     return IceModel(
         material=material, settings=settings, templates=tuple(templates), template_start=template_start,
+        loose=np.array([t.loose for t in templates], dtype=bool),
         centroid=centroid,
         tris=np.ascontiguousarray(tris), tri_start=tri_start, outline=outline, outline_start=outline_start,
         seed_offset=np.vstack([t.seeds[:, :2] for t in templates]) - centroid[:, :2],

@@ -237,6 +237,9 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
         _update_submersion(model, data, hull, by_hull)
         cracked = crack_ahead(model, st, data.tiles, by_hull, np.asarray(hull.xy, dtype=float), hull.angle,
                               space.hull_outline)
+    if len(data.under_hull):  # floes a tile switch laid under the hull go under it, as if pushed down
+        _update_submersion(model, data, hull, _NO_ROWS, data.under_hull)
+        data.under_hull = _NO_ROWS
     space.step(dt)
     con = space.read_contacts(st)
     by_contact, jammed = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities

@@ -40,6 +40,8 @@ class IceData:
     # rows sent under the hull, each once: a superset of the submerged rows (a row surfaces,
     # or is vacated or thawed, without leaving it), so that surfacing need not scan every row
     went_under: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    # free rows a tile switch laid under the hull, to go under it in the next ice step
+    under_hull: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     rest_water: tuple[float, float] = (0.0, 0.0)  # the drift (m/s, east, north) the resting floes came to rest in
     # the hull's reference point (m) at the last look at every row for resting floes to
     # wake, and the resting rows (ascending) within the zone it kept (``resting.wake_near_hull``)
@@ -51,8 +53,9 @@ class IceData:
 class PreparedTile:
     """Engine objects of a tile built ahead of its switch: the template, corner (m) and
     quarter turns it is laid with, the placement it thaws (-1 for a new one), and the cell
-    offsets and frozen floes (their places in the tile's ``FrozenFloes`` record) still to
-    build. A preparation takes no rows: rows are taken at the switch, in step order, so
+    offsets (intact), frozen floes (their places in the tile's ``FrozenFloes`` record) and
+    loose cells (a new floe-field tile's floes, at rest where the template lays them) still
+    to build. A preparation takes no rows: rows are taken at the switch, in step order, so
     that the rows (and so the physics, which orders some sums by row) do not depend on how
     much wall time preparing had."""
 
@@ -63,10 +66,11 @@ class PreparedTile:
     bodies: TileBodies
     cells: np.ndarray
     floes: np.ndarray
+    loose: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @property
     def done(self) -> bool:
-        return not len(self.cells) and not len(self.floes)
+        return not len(self.cells) and not len(self.floes) and not len(self.loose)
 
 
 def new_ice_data(model: IceModel, hull_contour: np.ndarray, hull_friction: float) -> IceData:
@@ -77,10 +81,13 @@ def new_ice_data(model: IceModel, hull_contour: np.ndarray, hull_friction: float
 
 
 def prepare_place(model: IceModel, template: int, corner: tuple[float, float], quarter_turns: int) -> PreparedTile:
-    """Start preparing a new tile of the template laid at corner (m), turned by quarter turns."""
-    n = model.templates[template].n_cells
+    """Start preparing a new tile of the template laid at corner (m), turned by quarter turns:
+    its cells intact, or loose (a floe field's template)."""
+    n, none = model.templates[template].n_cells, np.zeros(0, dtype=np.int64)
+    cells = np.arange(n)
+    intact, loose = (none, cells) if model.loose[template] else (cells, none)
     return PreparedTile(template, (float(corner[0]), float(corner[1])), quarter_turns % 4, -1,
-                        TileBodies(n), np.arange(n), np.zeros(0, dtype=np.int64))
+                        TileBodies(n), intact, none, loose)
 
 
 def prepare_thaw(model: IceModel, data: IceData, placement: int) -> PreparedTile:
@@ -120,7 +127,15 @@ def advance(data: IceData, prepared: PreparedTile, max_items: int) -> int:
         offsets = f["cell"].astype(np.int64)
         g0 = int(data.contacts.model.template_start[prepared.template])
         data.contacts.build_floes(prepared.bodies, offsets, g0 + offsets, f["xy"], f["yaw"], f["vel"], f["yaw_rate"])
-    return len(cells) + len(floes)
+    budget = max_items - len(cells) - len(floes)
+    loose, prepared.loose = prepared.loose[:budget], prepared.loose[budget:]
+    if len(loose):
+        model = data.contacts.model
+        home, yaw = placed_centroids(model, prepared.template, prepared.corner, prepared.quarter_turns)
+        data.contacts.build_floes(prepared.bodies, loose, int(model.template_start[prepared.template]) + loose,
+                                  home[loose], np.full(len(loose), yaw), np.zeros((len(loose), 2)),
+                                  np.zeros(len(loose)))
+    return len(cells) + len(floes) + len(loose)
 
 
 def discard_prepared(data: IceData, prepared: PreparedTile) -> None:
@@ -136,7 +151,8 @@ def _finish(data: IceData, prepared: PreparedTile) -> None:
 def place_tile(model: IceModel, data: IceData, template: int, corner: tuple[float, float],
                quarter_turns: int = 0, prepared: PreparedTile | None = None) -> int:
     """Lay a breakable tile with its south-west corner at (x, y) m, rotated by quarter turns
-    about its centre; all its cells intact at their floating height. With a tile prepared
+    about its centre; all its cells at their floating height, intact (level ice) or, for a
+    floe field's template, free floes at rest (their ``BreakCause`` NONE). With a tile prepared
     for this layout, only switch it in. Returns the tile's placement index (its rows:
     ``data.tiles.rows(index)``)."""
     prepared = prepared or prepare_place(model, template, corner, quarter_turns)
@@ -144,6 +160,10 @@ def place_tile(model: IceModel, data: IceData, template: int, corner: tuple[floa
     rows = data.state.add_rows(model.templates[template].n_cells, FloeStatus.INTACT)
     index = data.tiles.add(template, prepared.corner, prepared.quarter_turns, rows)
     _lay(model, data.state, rows, template, prepared.corner, prepared.quarter_turns, index)
+    if model.loose[template]:  # a floe field: every cell a floe of its own, broken by nothing
+        loose = np.arange(rows.start, rows.stop)
+        data.contacts.name_floes(prepared.bodies, loose - rows.start, loose)
+        data.state.set_status(loose, FloeStatus.FREE)
     data.contacts.insert_tile(prepared.bodies, index)
     return index
 

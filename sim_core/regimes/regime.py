@@ -17,6 +17,7 @@ from sim_core.regimes import wmo_codes
 from sim_core.regimes.wmo_codes import CodeRange
 
 SUM_SLACK = 0.5  # tenths: 9+/10 (9.5) may hold partials of 6/10 and 4/10
+MIN_FLOE_SIZE = 2.0  # m: the ice world lays floes of WMO size ranges from this up as bodies (ice cakes and up)
 
 
 @dataclass(frozen=True)
@@ -110,9 +111,17 @@ class IceRegion:
 
     @property
     def in_the_world(self) -> bool:
-        """Whether the ice world lays this region out: level ice, or ice-free water (not yet
-        floe fields, land or no data)."""
-        return self.regime.level or (self.kind in ("ice", "water") and not self.regime.types)
+        """Whether the ice world lays this region out: level ice, ice-free water, or a floe
+        field with floes of at least ``MIN_FLOE_SIZE`` (not land or no data, nor brash or
+        pancake ice alone)."""
+        return self.regime.level or (self.kind in ("ice", "water") and not self.regime.types) or self.floe_field
+
+    @property
+    def floe_field(self) -> bool:
+        """Whether the world lays this region as a floe field: sea ice that is not level, of
+        which some type's floes are ``MIN_FLOE_SIZE`` across or more."""
+        return self.kind == "ice" and not self.regime.level and any(
+            t.size_range.low >= MIN_FLOE_SIZE for t in self.regime.types)
 
 
 def effective_polygons(regions: list[IceRegion], area: shapely.Geometry) -> list[shapely.Geometry]:
@@ -132,17 +141,23 @@ def region_at(polygons: list[shapely.Geometry], x: np.ndarray, y: np.ndarray) ->
     return index
 
 
+def tile_regions(regions: list[IceRegion], nx: int, ny: int, side: float) -> np.ndarray:
+    """Index (ny, nx) of the region (as they lie, later over earlier) holding each tile's
+    centre, of a field of nx x ny tiles of ``side`` m; -1 where none does."""
+    field = shapely.box(0.0, 0.0, nx * side, ny * side)
+    x, y = np.meshgrid((np.arange(nx) + 0.5) * side, (np.arange(ny) + 0.5) * side)
+    return region_at(effective_polygons(regions, field), x, y)
+
+
 def region_tile_thickness(regions: list[IceRegion], nx: int, ny: int, side: float,
                           max_thickness: float) -> np.ndarray:
     """Thickness (ny, nx) m of each tile of a field of nx x ny tiles of ``side`` m, from the
-    region (as they lie, later over earlier) holding its centre: a level-ice region's stage
-    (the middle of its range, at most ``max_thickness``), 0 for an ice-free region (open
-    water); NaN where no region lies, or one the ice world does not lay out as level ice
-    (floe fields, land, no data), so that the field's own thickness profile holds there."""
-    field = shapely.box(0.0, 0.0, nx * side, ny * side)
-    x, y = np.meshgrid((np.arange(nx) + 0.5) * side, (np.arange(ny) + 0.5) * side)
-    index = region_at(effective_polygons(regions, field), x, y)
-    per_region = np.array([np.nan if not r.in_the_world else
+    region holding its centre (``tile_regions``): a level-ice region's stage (the middle of
+    its range, at most ``max_thickness``), 0 for an ice-free region (open water); NaN where
+    no region lies, or one the ice world does not lay out as level ice (floe fields, laid
+    from their own templates; land, no data), so that the field's own thickness profile
+    holds there."""
+    per_region = np.array([np.nan if not r.in_the_world or r.floe_field else
                            min(r.regime.types[0].stage_range.nominal, max_thickness) if r.regime.level else 0.0
                            for r in regions] + [np.nan])
-    return per_region[index]  # index -1 (no region) takes the last entry, NaN
+    return per_region[tile_regions(regions, nx, ny, side)]  # index -1 (no region) takes the last entry, NaN

@@ -1,0 +1,45 @@
+"""The floe fields of a configured exercise: the tiles whose centres lie in a floe-field
+region (a chart's or the config's) take a thickness class of their own, laid from that
+region's pack templates (``sim_core.regimes.pack_tiles``), built when the world is."""
+from __future__ import annotations
+
+import numpy as np
+import shapely
+
+from bridge_node.charts.field_regions import configured_regions
+from bridge_node.common.errors import UserError
+from bridge_node.node.config import NodeConfig
+from sim_core.fracture.tile_template import TileTemplate
+from sim_core.regimes.floe_layout import compile_regimes
+from sim_core.regimes.pack_tiles import pack_template
+from sim_core.regimes.regime import tile_regions
+from sim_core.scene.field import tile_counts
+
+MAX_CLASSES = 256  # tile classes are bytes
+
+
+def lay_floe_fields(cfg: NodeConfig, config_path: str | None, tile_class: np.ndarray,
+                    class_h: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[list[TileTemplate]]]:
+    """The field's tile classes (ny, nx) and class thicknesses (m) with a class added per
+    floe-field region that holds a tile's centre, and each added class's templates
+    (``fracture.variants`` of them). Its thickness is its thickest floes'."""
+    if not (cfg.ice_field.chart or cfg.ice_field.regions):
+        return tile_class, class_h, []
+    regions = configured_regions(cfg.ice_field, cfg.exercise.origin_deg())
+    side = cfg.fracture.tile_side
+    nx, ny = tile_counts(cfg.ice_field, side)
+    index = tile_regions(regions, nx, ny, side)
+    packs = [r for r, region in enumerate(regions) if region.floe_field and np.any(index == r)]
+    if not packs:
+        return tile_class, class_h, []
+    if len(class_h) + len(packs) > MAX_CLASSES:
+        raise UserError(f"{config_path or 'default config'}: ice_field: {len(class_h)} thickness classes and "
+                        f"{len(packs)} floe-field regions; at most {MAX_CLASSES} in all (raise class_step)")
+    regimes = compile_regimes(regions, shapely.box(0.0, 0.0, nx * side, ny * side), cfg.fracture.seed)
+    tile_class = np.array(tile_class, dtype=np.uint8)
+    templates = []
+    for j, r in enumerate(packs):
+        tile_class[index == r] = len(class_h) + j
+        templates.append([pack_template(regimes, r, v, side, cfg.ice_material) for v in range(cfg.fracture.variants)])
+    thickness = [max(t.thickness for t in variants) for variants in templates]
+    return tile_class, np.concatenate([class_h, thickness]), templates

@@ -1,0 +1,110 @@
+"""Floe fields in the running world (issue 26, item 2 in part): a floe-field region's tiles
+are laid from pack templates whose cells are its floes, free from the start with open water
+between them; the hull pushes them aside, floes laid under the hull go under it, and the
+channels draw the floes and the water between them, near the ship and far from it."""
+import numpy as np
+import pytest
+import shapely
+from conftest import exercise_config
+
+from bridge_node.node.world_setup import build_world, start_world
+from bridge_node.render.channels import ChannelSet
+from bridge_node.render.classes import CLASS_INDEX, class_of_pixels
+from bridge_node.render.renderer import SceneRenderer
+from bridge_node.render.settings import ChannelSettings, RenderSettings
+from bridge_node.stream.world_view import WorldView
+from sim_core.ice.floes import BreakCause, FloeStatus
+from sim_core.ice.tiles import broken_counts
+from sim_core.regimes.regime import MIN_FLOE_SIZE
+from sim_core.regimes.settings import RegionSettings
+from sim_core.world import snapshot, step
+
+PACK = {"name": "pack", "polygon_m": [[0.0, 0.0], [400.0, 0.0], [400.0, 600.0], [0.0, 600.0]],
+        "concentration": 7, "ice": [{"stage": "thin_first_year", "floe_size": "small_floe", "concentration": 4},
+                                    {"stage": "grey_white", "floe_size": "ice_cake", "concentration": 3}]}
+
+
+def _pack_world(tmp_path_factory, start_north):
+    cfg = exercise_config(tmp_path_factory.getbasetemp() / "pack", 400.0, 600.0, 100.0, start_north=start_north)
+    field = cfg.ice_field.model_copy(update={"regions": [RegionSettings.model_validate(PACK)]})
+    cfg = cfg.model_copy(update={"ice_field": field})
+    model = build_world(cfg, None)
+    return model, start_world(model, cfg)
+
+
+@pytest.fixture(scope="module")
+def pack(tmp_path_factory):
+    """The pack world, and the floes' state after 40 s of steaming into it from its edge."""
+    model, data = _pack_world(tmp_path_factory, -80.0)
+    step(model, data, 0.1)
+    laid = data.ice.state.status[:data.ice.state.n].copy(), broken_counts(data.ice).copy()
+    for _ in range(400):
+        step(model, data, 0.1)
+    return model, data, laid
+
+
+def _outlines(t):
+    g = t.geometry
+    return [shapely.Polygon(g.footprint[a:b]) for a, b in zip(g.foot_start[:-1], g.foot_start[1:])]
+
+
+def test_pack_templates_hold_the_floes_apart_within_the_tile(pack):
+    model, _, _ = pack
+    loose = [t for t in model.ice.templates if t.loose]
+    assert len(loose) == 2 and all(t.n_cells > 20 for t in loose)
+    for t in loose:
+        floes = _outlines(t)
+        area = sum(f.area for f in floes)
+        assert shapely.union_all(floes).area == pytest.approx(area, rel=1e-9)  # no two overlap
+        assert shapely.box(0, 0, t.side, t.side).contains(shapely.union_all(floes).buffer(-1e-6))
+        assert 0.4 < area / t.side**2 < 0.95  # about 7/10 of the tile, leads between
+        assert set(np.round(t.thicknesses, 3)) == {0.5, 0.225}  # each type its own thickness
+        assert min(np.sqrt(f.area) for f in floes) > 0.5 * MIN_FLOE_SIZE
+
+
+def test_a_pack_tile_lays_free_floes_that_nothing_broke(pack):
+    _, _, (status, counts) = pack
+    assert len(status) and np.all(status == FloeStatus.FREE)
+    assert counts[BreakCause.HULL] == 0 and counts[BreakCause.CONTACT] == 0
+
+
+def test_the_hull_pushes_the_floes_aside(pack):
+    """Of the floes laid in the ship's path behind the stem, those within the beam went
+    under the hull or aside; those beside it were pushed outward."""
+    model, data, _ = pack
+    st, ship = data.ice.state, model.ship.particulars
+    free = np.nonzero(st.status[:st.n] == FloeStatus.FREE)[0]
+    assert data.ship.eta[0] > 30.0  # well into the pack
+    moved = st.xy[free] - st.home[free]
+    off = st.home[free, 0] - data.ship.eta[1]
+    passed = (st.home[free, 1] > 0.0) & (st.home[free, 1] < data.ship.eta[0] + 0.5 * ship.length - 10.0)
+    path = passed & (np.abs(off) < 0.5 * ship.beam)
+    beside = passed & (np.abs(off) >= 0.5 * ship.beam) & (np.abs(off) < 0.5 * ship.beam + 15.0)
+    assert path.sum() >= 5 and beside.sum() >= 5
+    assert ((np.hypot(*moved[path].T) > 1.0) | st.submerged[free][path]).mean() > 0.8
+    assert (np.hypot(*moved[beside].T) > 1.0).mean() > 0.7
+    assert np.mean(np.sign(off[beside]) * moved[beside, 0]) > 1.0  # outward, m
+    assert np.all(st.status[free] == FloeStatus.FREE)  # pushed, not broken: a floe is one body
+
+
+def test_floes_laid_under_the_hull_go_under_it(tmp_path_factory):
+    model, data = _pack_world(tmp_path_factory, 60.0)  # starts in the pack
+    step(model, data, 0.1)
+    st = data.ice.state
+    free = np.nonzero(st.status[:st.n] == FloeStatus.FREE)[0]
+    assert st.submerged[free].sum() >= 3
+    assert np.hypot(*st.vel[free].T).max() < 1.0  # none thrown out of the hull
+
+
+def test_the_channels_draw_floes_and_the_water_between(pack, ctx):
+    model, data, _ = pack
+    c = ChannelSettings(name="ahead", width=320, height=180, pitch_deg=-10.0, eye=[20.0, 0.0, 25.0])
+    view = WorldView()
+    view.apply(snapshot(model, data))
+    cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=[c])), [c])
+    cls = class_of_pixels(cs.class_images(view)[0])
+    ground = cls[100:, :][cls[100:, :] != CLASS_INDEX["own_ship"]]  # below the horizon, beside the bow
+    water, floes = (ground == CLASS_INDEX["open_water"]).mean(), (ground == CLASS_INDEX["broken_floe"]).mean()
+    assert water > 0.1 and floes > 0.1  # the tiles simulated: floes, leads between
+    far = cls[60:80, :]  # towards the horizon: tiles not simulated, drawn from their templates
+    assert (far == CLASS_INDEX["open_water"]).mean() > 0.05 and (far == CLASS_INDEX["level_ice"]).mean() > 0.2
