@@ -302,7 +302,8 @@ class ContactSpace(FloeRest):
             self.set_velocity(state, rows, np.zeros((len(rows), 2)), np.zeros(len(rows)))
 
     def set_velocity(self, state: FloeState, rows: np.ndarray, velocity: np.ndarray, yaw_rate: np.ndarray) -> None:
-        """Give free rows a planar velocity (n, 2) m/s and yaw rate (n,) rad/s."""
+        """Give free rows (their bodies and state) a planar velocity (n, 2) m/s, yaw rate (n,) rad/s."""
+        state.vel[rows], state.yaw_rate[rows] = velocity, yaw_rate
         for p, v, w in zip(self._floe_bodies(state, rows), velocity.tolist(), yaw_rate.tolist()):
             lib.cpBodySetVelocity(body_at(p), (v[0], v[1]))
             lib.cpBodySetAngularVelocity(body_at(p), w)

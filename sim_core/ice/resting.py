@@ -92,11 +92,14 @@ def _look(flag, xy, at, radius, zone):
 
 
 @numba.njit(cache=True)
-def _pushes_on(a, b, impulse, point, flag, xy):
+def _pushes_on(a, b, impulse, point, flag, xy, gcell, mass, vel, vel_before):
     """The push (N s, world) and its moment (N m s, CCW about the centre) that the contacts
-    (rows a, b; impulse on a, N s; point, m) put on each row whose flag is set; returns
-    those rows (ascending), pushes and moments. Each row's contacts are summed in the order
-    of the other row, not the engine's order (which follows C pointers), so that the sums
+    (rows a, b; impulse on a, N s; point, m) put on each row whose flag is set, each
+    contact's impulse taken at the row's share m / (m + m_other) of the pair's mass (kg, by
+    global cell), and the speed (m/s) of its fastest striker, before or after the step
+    (vel_before, vel: m/s by row); returns those rows
+    (ascending), pushes, moments and speeds. Each row's contacts are summed in the order of
+    the other row, not the engine's order (which follows C pointers), so that the sums
     round the same in every rerun."""
     n = 0
     for rows in (a, b):
@@ -113,7 +116,7 @@ def _pushes_on(a, b, impulse, point, flag, xy):
                 entry[n] = side * len(a) + k
                 n += 1
     order = np.argsort(key, kind="mergesort")
-    rows_out, push, turn = np.empty(n, np.int64), np.zeros((n, 2)), np.zeros(n)
+    rows_out, push, turn, fastest = np.empty(n, np.int64), np.zeros((n, 2)), np.zeros(n), np.zeros(n)
     m = -1
     for e in order:
         k, sign = (entry[e], 1.0) if entry[e] < len(a) else (entry[e] - len(a), -1.0)
@@ -121,11 +124,17 @@ def _pushes_on(a, b, impulse, point, flag, xy):
         if m < 0 or rows_out[m] != row:
             m += 1
             rows_out[m] = row
-        jx, jy = sign * impulse[k, 0], sign * impulse[k, 1]
+        other = b[k] if sign > 0.0 else a[k]
+        share = 1.0
+        if other >= 0:
+            share = mass[gcell[row]] / (mass[gcell[row]] + mass[gcell[other]])
+            for v in (vel, vel_before):
+                fastest[m] = max(fastest[m], math.sqrt(float(v[other, 0]) ** 2 + float(v[other, 1]) ** 2))
+        jx, jy = share * sign * impulse[k, 0], share * sign * impulse[k, 1]
         push[m, 0] += jx
         push[m, 1] += jy
         turn[m] += (point[k, 0] - xy[row, 0]) * jy - (point[k, 1] - xy[row, 1]) * jx
-    return rows_out[:m + 1], push[:m + 1], turn[:m + 1]
+    return rows_out[:m + 1], push[:m + 1], turn[:m + 1], fastest[:m + 1]
 
 
 def wake_near_hull(model: IceModel, data: IceData, hull_xy: np.ndarray) -> None:
@@ -159,9 +168,11 @@ def _look_among(rows, xy, at, radius):
 
 
 @numba.njit(cache=True)
-def _take_pushes(rows, push, turn, mass, inertia, gcell, extent, vel, yaw_rate, speed):
+def _take_pushes(rows, push, turn, fastest, mass, inertia, gcell, extent, vel, yaw_rate, speed):
     """Add the pushes (N s) and their moments (N m s) to the velocities (m/s, rad/s) that
-    resting rows keep, and return the rows now moving at speed (m/s) or faster."""
+    resting rows keep, at most as fast as their fastest strikers (m/s: a floe pinched
+    between a wall and a floe the hull drives meets impulses without bound, but would have
+    moved on with it), and return the rows now moving at speed (m/s) or faster."""
     out = np.empty(len(rows), np.int64)
     n = 0
     for k in range(len(rows)):
@@ -169,6 +180,10 @@ def _take_pushes(rows, push, turn, mass, inertia, gcell, extent, vel, yaw_rate, 
         vel[i, 0] += np.float32(push[k, 0] / mass[g])
         vel[i, 1] += np.float32(push[k, 1] / mass[g])
         yaw_rate[i] += np.float32(turn[k] / inertia[g, 2])
+        now = _speed(i, vel, yaw_rate, gcell, extent)
+        if now > max(fastest[k], speed):
+            cut = max(fastest[k], speed) / now
+            vel[i, 0], vel[i, 1], yaw_rate[i] = vel[i, 0] * cut, vel[i, 1] * cut, yaw_rate[i] * cut
         if _speed(i, vel, yaw_rate, gcell, extent) >= speed:
             out[n] = i
             n += 1
@@ -192,15 +207,21 @@ def drift_settled(model: IceModel, data: IceData, water: tuple[float, float]) ->
     return True
 
 
-def wake_struck(model: IceModel, data: IceData, con: Contacts) -> None:
+def wake_struck(model: IceModel, data: IceData, con: Contacts, vel_before: np.ndarray | None = None) -> None:
     """Give the resting floes the pushes of the last step's contacts, and wake those they
     bring to ``rest_speed``. In the step a resting floe met its striker as a wall (a static
-    body takes no impulse), so the impulse it put on the striker (and its moment about the
-    floe's centre) goes into the velocity it keeps while resting, and the pair's momentum
-    is kept: a steady push too small to wake a floe in one step adds up until it does."""
+    body takes no impulse): the wall stopped the striker's approach with an impulse J. Had
+    the floe been free, the two would have moved on together (a plastic collision), the floe
+    taking J m / (m + m_striker); so that share of J (and of its moment about the floe's
+    centre) goes into the velocity it keeps while resting. A steady push too small to wake a
+    floe in one step adds up until it does; and a small cake that a heavy floe presses
+    against does not take the heavy floe's whole stopping impulse (which would throw it off
+    at tens of m/s); nor does it move faster than its fastest striker, before or after the
+    step (``vel_before``, m/s by row; the rows' velocities now where not given)."""
     st = data.state
-    rows, push, turn = _pushes_on(con.a, con.b, con.impulse, con.point, st.resting, st.xy)
-    woken = _take_pushes(rows, push, turn, model.mass, model.inertia, st.gcell, data.contacts.extent, st.vel,
+    rows, push, turn, fastest = _pushes_on(con.a, con.b, con.impulse, con.point, st.resting, st.xy, st.gcell,
+                                           model.mass, st.vel, st.vel if vel_before is None else vel_before)
+    woken = _take_pushes(rows, push, turn, fastest, model.mass, model.inertia, st.gcell, data.contacts.extent, st.vel,
                          st.yaw_rate, model.settings.rest_speed)
     if len(woken):
         data.contacts.wake(st, woken)
@@ -239,6 +260,8 @@ def warm_up(model: IceModel) -> None:
               np.zeros(2), 1.0)
     _look(none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 2.0)
     _look_among(none, np.zeros((0, 2)), np.zeros(2), 1.0)
-    _take_pushes(none, np.zeros((0, 2)), np.zeros(0), model.mass, model.inertia, none.astype(np.int32), np.ones(1),
-                 np.zeros((0, 2), np.float32), np.zeros(0, np.float32), 1.0)
-    _pushes_on(none, none, np.zeros((0, 2)), np.zeros((0, 2)), none.astype(np.bool_), np.zeros((0, 2)))
+    _take_pushes(none, np.zeros((0, 2)), np.zeros(0), np.zeros(0), model.mass, model.inertia, none.astype(np.int32),
+                 np.ones(1), np.zeros((0, 2), np.float32), np.zeros(0, np.float32), 1.0)
+    _pushes_on(none, none, np.zeros((0, 2)), np.zeros((0, 2)), none.astype(np.bool_), np.zeros((0, 2)),
+               none.astype(np.int32), np.zeros(0), np.zeros((0, 2), np.float32),
+               np.zeros((0, 2), np.float32))

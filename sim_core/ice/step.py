@@ -243,6 +243,7 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
     space.step(dt)
     con = space.read_contacts(st)
     by_contact, jammed = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
+    vel_before = st.vel.copy() if resting_on else None
     moving = space.read_free(st)
     if len(by_contact):
         break_cells(data, by_contact, BreakCause.CONTACT)
@@ -257,7 +258,7 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
     struck, impulse, point = con.with_hull()
     _update_submersion(model, data, hull, struck[struck >= 0], jammed)
     if resting_on:
-        resting.wake_struck(model, data, con)
+        resting.wake_struck(model, data, con, vel_before)
         resting.rest_far(model, data, moving, hull.xy, dt, new=rest)
     fx, fy, moment = _hull_load(struck, impulse, point, np.asarray(hull.xy, dtype=np.float64), dt)
     return IceStepReport(by_hull, by_contact, cracked, np.array([fx, fy]), moment)
