@@ -1,6 +1,7 @@
 """Floe fields in the running world (issue 26, item 2 in part): a floe-field region's tiles
 are laid from pack templates whose cells are its floes, free from the start with open water
-between them; the hull pushes them aside, floes laid under the hull go under it, and the
+between them; the hull pushes them aside, floes laid under the hull go under it, a medium
+floe (wider than the beam) is pre-fractured and splits along its cells when rammed, and the
 channels draw the floes and the water between them, near the ship and far from it."""
 import numpy as np
 import pytest
@@ -24,9 +25,12 @@ PACK = {"name": "pack", "polygon_m": [[0.0, 0.0], [400.0, 0.0], [400.0, 600.0], 
                                     {"stage": "grey_white", "floe_size": "ice_cake", "concentration": 3}]}
 
 
-def _pack_world(tmp_path_factory, start_north):
+MEDIUM = {**PACK, "concentration": 8, "ice": [{"stage": "thin_first_year", "floe_size": "medium_floe"}]}
+
+
+def _pack_world(tmp_path_factory, start_north, region=PACK):
     cfg = exercise_config(tmp_path_factory.getbasetemp() / "pack", 400.0, 600.0, 100.0, start_north=start_north)
-    field = cfg.ice_field.model_copy(update={"regions": [RegionSettings.model_validate(PACK)]})
+    field = cfg.ice_field.model_copy(update={"regions": [RegionSettings.model_validate(region)]})
     cfg = cfg.model_copy(update={"ice_field": field})
     model = build_world(cfg, None)
     return model, start_world(model, cfg)
@@ -50,7 +54,7 @@ def _outlines(t):
 
 def test_pack_templates_hold_the_floes_apart_within_the_tile(pack):
     model, _, _ = pack
-    loose = [t for t in model.ice.templates if t.loose]
+    loose = [t for t in model.ice.templates if t.floe_field]
     assert len(loose) == 2 and all(t.n_cells > 20 for t in loose)
     for t in loose:
         floes = _outlines(t)
@@ -85,6 +89,20 @@ def test_the_hull_pushes_the_floes_aside(pack):
     assert (np.hypot(*moved[beside].T) > 1.0).mean() > 0.7
     assert np.mean(np.sign(off[beside]) * moved[beside, 0]) > 1.0  # outward, m
     assert np.all(st.status[free] == FloeStatus.FREE)  # pushed, not broken: a floe is one body
+
+
+def test_a_medium_floe_splits_along_its_cells_when_rammed(tmp_path_factory):
+    model, data = _pack_world(tmp_path_factory, -80.0, MEDIUM)
+    pieces = [t for t in model.ice.templates if t.floe_field]
+    assert all(not t.free_at_start.any() for t in pieces)  # medium floes: pre-fractured, held together
+    assert max(t.n_cells for t in pieces) > 500  # the level-ice pre-fracture of 0.5 m, cut to the floes
+    for _ in range(400):
+        step(model, data, 0.1)
+    st = data.ice.state
+    assert broken_counts(data.ice)[BreakCause.HULL] > 50
+    split = [k for k in range(data.ice.tiles.n) if k not in data.ice.frozen
+             and np.any(st.cause[data.ice.tiles.rows(k)] == BreakCause.HULL)]
+    assert split and all(np.any(st.status[data.ice.tiles.rows(k)] == FloeStatus.INTACT) for k in split)
 
 
 def test_floes_laid_under_the_hull_go_under_it(tmp_path_factory):

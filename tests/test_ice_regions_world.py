@@ -66,7 +66,7 @@ def test_tiles_take_the_regions_thickness(lead):
     assert np.all(h[:, 6:] == pytest.approx(0.9)) and np.all(h[:6, :3] == pytest.approx(0.9))  # medium FY, 0.95 m
     pack = scene.tile_class.reshape(scene.ny, scene.nx)[6:, :3]
     assert np.all(h[6:, :3] == pytest.approx(0.5))  # the pack: thin first-year floes, 0.5 m
-    assert np.all([model.ice.loose[scene.class_templates[k]].all() for k in np.unique(pack)])
+    assert np.all([model.ice.floe_field[scene.class_templates[k]].all() for k in np.unique(pack)])
 
 
 def test_in_the_lead_the_ship_meets_no_ice(lead, fast_ice):

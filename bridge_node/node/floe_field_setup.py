@@ -40,6 +40,7 @@ def lay_floe_fields(cfg: NodeConfig, config_path: str | None, tile_class: np.nda
     templates = []
     for j, r in enumerate(packs):
         tile_class[index == r] = len(class_h) + j
-        templates.append([pack_template(regimes, r, v, side, cfg.ice_material) for v in range(cfg.fracture.variants)])
+        templates.append([pack_template(regimes, r, v, cfg.fracture, cfg.ice_material)
+                          for v in range(cfg.fracture.variants)])
     thickness = [max(t.thickness for t in variants) for variants in templates]
     return tile_class, np.concatenate([class_h, thickness]), templates

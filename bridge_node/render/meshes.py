@@ -89,7 +89,7 @@ def floe_field_layouts(model: WorldModel) -> dict[int, int]:
     << 16 as the scene lays it: until simulated, such a tile is drawn from its template's
     raster, its floes where the template lays them."""
     scene = model.scene
-    loose = np.array([len(t) > 0 and bool(model.ice.loose[t].all()) for t in scene.class_templates], dtype=bool)
+    loose = np.array([len(t) > 0 and bool(model.ice.floe_field[t].all()) for t in scene.class_templates], dtype=bool)
     out = {}
     for tile in np.nonzero(loose[scene.tile_class])[0].tolist() if len(loose) else []:
         template, turns = tile_layout(scene, tile)

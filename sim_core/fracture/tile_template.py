@@ -47,11 +47,17 @@ class TileTemplate:
     is_sphere: np.ndarray  # (n,) bool: sphere collider (else mesh)
     sphere_radius: np.ndarray  # (n,) m, defined for every cell
     cell_thickness: np.ndarray | None = None  # (n,) m where cells differ (a floe field's types); else ``thickness``
-    loose: bool = False  # its cells start as free floes (a floe field), not as level ice
+    floe_field: bool = False  # a floe field's template (``sim_core.regimes.pack_tiles``), not level ice
+    starts_free: np.ndarray | None = None  # (n,) bool: the cell is a floe of its own from the start; None: none is
 
     @property
     def n_cells(self) -> int:
         return self.geometry.n_cells
+
+    @property
+    def free_at_start(self) -> np.ndarray:
+        """Whether each cell (n,) is laid as a free floe (else intact, level ice)."""
+        return np.zeros(self.n_cells, dtype=bool) if self.starts_free is None else self.starts_free
 
     @property
     def thicknesses(self) -> np.ndarray:
@@ -65,7 +71,7 @@ class TileTemplate:
             side=np.float64(self.side), thickness=np.float64(self.thickness),
             mode=np.str_(self.mode), seed=np.int64(self.seed), seeds=self.seeds,
             mass=self.mass, is_sphere=self.is_sphere, sphere_radius=self.sphere_radius,
-            cell_thickness=self.thicknesses, loose=np.bool_(self.loose),
+            cell_thickness=self.thicknesses, floe_field=np.bool_(self.floe_field), starts_free=self.free_at_start,
         )
         return out
 
@@ -79,7 +85,8 @@ class TileTemplate:
             geometry=geometry, mass=np.asarray(arrays["mass"]),
             is_sphere=np.asarray(arrays["is_sphere"]), sphere_radius=np.asarray(arrays["sphere_radius"]),
             cell_thickness=np.asarray(arrays["cell_thickness"]) if "cell_thickness" in arrays else None,
-            loose=bool(arrays["loose"]) if "loose" in arrays else False,
+            floe_field=bool(arrays["floe_field"]) if "floe_field" in arrays else False,
+            starts_free=np.asarray(arrays["starts_free"]) if "starts_free" in arrays else None,
         )
 
 

@@ -65,7 +65,8 @@ class IceModel:
     settings: IceDynamicsSettings
     templates: tuple[TileTemplate, ...]
     template_start: np.ndarray  # (n_templates + 1,) first gcell of each template
-    loose: np.ndarray  # (n_templates,) bool: the template's cells start as free floes (a floe field)
+    floe_field: np.ndarray  # (n_templates,) bool: a floe field's template
+    starts_free: np.ndarray  # (G,) bool: the cell is laid as a free floe (a floe field's), not intact
     centroid: np.ndarray  # (G, 3) in the template's tile frame, m
     tris: np.ndarray  # (T, 3, 3) triangles about the centroid, m
     tri_start: np.ndarray  # (G + 1,)
@@ -143,7 +144,8 @@ def compile_ice_model(templates: list[TileTemplate], material: IceMaterial | Non
     draft = thickness * material.density / material.water_density
     return IceModel(
         material=material, settings=settings, templates=tuple(templates), template_start=template_start,
-        loose=np.array([t.loose for t in templates], dtype=bool),
+        floe_field=np.array([t.floe_field for t in templates], dtype=bool),
+        starts_free=np.concatenate([t.free_at_start for t in templates]) if templates else np.zeros(0, dtype=bool),
         centroid=centroid,
         tris=np.ascontiguousarray(tris), tri_start=tri_start, outline=outline, outline_start=outline_start,
         seed_offset=np.vstack([t.seeds[:, :2] for t in templates]) - centroid[:, :2],

@@ -82,12 +82,11 @@ def new_ice_data(model: IceModel, hull_contour: np.ndarray, hull_friction: float
 
 def prepare_place(model: IceModel, template: int, corner: tuple[float, float], quarter_turns: int) -> PreparedTile:
     """Start preparing a new tile of the template laid at corner (m), turned by quarter turns:
-    its cells intact, or loose (a floe field's template)."""
-    n, none = model.templates[template].n_cells, np.zeros(0, dtype=np.int64)
-    cells = np.arange(n)
-    intact, loose = (none, cells) if model.loose[template] else (cells, none)
+    its cells intact, but those that start free (a floe field's floes) loose."""
+    n, g0 = model.templates[template].n_cells, int(model.template_start[template])
+    free = model.starts_free[g0:g0 + n]
     return PreparedTile(template, (float(corner[0]), float(corner[1])), quarter_turns % 4, -1,
-                        TileBodies(n), intact, none, loose)
+                        TileBodies(n), np.flatnonzero(~free), np.zeros(0, dtype=np.int64), np.flatnonzero(free))
 
 
 def prepare_thaw(model: IceModel, data: IceData, placement: int) -> PreparedTile:
@@ -160,8 +159,9 @@ def place_tile(model: IceModel, data: IceData, template: int, corner: tuple[floa
     rows = data.state.add_rows(model.templates[template].n_cells, FloeStatus.INTACT)
     index = data.tiles.add(template, prepared.corner, prepared.quarter_turns, rows)
     _lay(model, data.state, rows, template, prepared.corner, prepared.quarter_turns, index)
-    if model.loose[template]:  # a floe field: every cell a floe of its own, broken by nothing
-        loose = np.arange(rows.start, rows.stop)
+    if model.floe_field[template]:  # its floes of their own from the start, broken by nothing
+        g0 = int(model.template_start[template])
+        loose = rows.start + np.flatnonzero(model.starts_free[g0:g0 + rows.stop - rows.start])
         data.contacts.name_floes(prepared.bodies, loose - rows.start, loose)
         data.state.set_status(loose, FloeStatus.FREE)
     data.contacts.insert_tile(prepared.bodies, index)

@@ -1,15 +1,19 @@
-"""Tile templates of a floe field: the floes of a region's regime on one tile, each floe a
-cell that starts loose (a free floe), with open water between them.
+"""Tile templates of a floe field: the floes of a region's regime on one tile, with open
+water between them. Floes smaller than ``BIG_FLOE_SIZE`` are a cell each that starts as a
+free floe; larger ones are the paper's thickness-dependent pre-fracture (the level-ice
+template of their thickness, §2.1) cut to the floe, cells that start intact and break free
+as level ice does.
 
 A floe-field region's tiles are laid from a few such templates (variants, turned by
 quarter turns, as level ice's templates are), so the scene, the stream, freezing and
 thawing treat a pack tile as any other tile. Each variant is a tile-sized window of the
 region's layout (``floe_layout.lay_out``, unbounded by the region's polygon) at a place of
-its own, so variants differ; a floe the window's edge cuts is cut there, so a straight
-lead runs along tile edges.
+its own, so variants differ; the floes that reach into the window are cut to it, so the
+edges of neighbouring tiles do not match: a floe ends in a straight edge there.
 
 Why by hand: a template is this project's own format (``TileTemplate``); the floes come
-from ``floe_layout``, their prisms from ``voronoi_cells.extrude_polygons``.
+from ``floe_layout``, the pre-fracture from ``tile_template.build_tile``, the cuts from
+shapely, the prisms from ``voronoi_cells.extrude_polygons``.
 
 Not laid: types whose floes are under ``MIN_FLOE_SIZE`` (brash and pancake ice), which
 would be tens of thousands of bodies a tile; their share shows as open water.
@@ -17,11 +21,12 @@ would be tens of thousands of bodies a tile; their share shows as open water.
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
 
-from sim_core.fracture.tile_template import TileTemplate
+from sim_core.fracture.tile_template import FractureSettings, TileTemplate, build_tile, template_seed
 from sim_core.fracture.voronoi_cells import CellGeometry, extrude_polygons, polygon_area_centroid
 from sim_core.material import IceMaterial
 from sim_core.regimes.floe_layout import RegimeModel, lay_out
@@ -30,66 +35,110 @@ from sim_core.csr import offsets
 
 MIN_FLOE_AREA = 0.5  # m2: slivers the tile's edge cuts off smaller than this are dropped
 VARIANT_STRIDE = 1.0e6  # m between the windows of a region's variants (far beyond any layout's reach)
+BIG_FLOE_SIZE = 100.0  # m: floes of WMO size ranges from this up (medium floes and larger) are pre-fractured
 
 
 def laid_layers(model: RegimeModel, region: int) -> list[int]:
-    """The region's layers (largest floes first) the world lays as bodies: those whose WMO
-    size range starts at ``MIN_FLOE_SIZE`` or more."""
+    """The region's layers (largest floes first) the world lays: those whose WMO size range
+    starts at ``MIN_FLOE_SIZE`` or more."""
     regime = model.regions[region].regime
     return [k for k, layer in enumerate(model.layers[region])
             if regime.types[layer.ice_type].size_range.low >= MIN_FLOE_SIZE]
 
 
-def pack_template(model: RegimeModel, region: int, variant: int, side: float,
+@dataclass
+class _Cells:
+    """A pack template's cells as they are gathered: plan polygons (shapely, window m),
+    thickness m, Voronoi seed (x, y; window m) and whether each starts free."""
+
+    polygons: list = field(default_factory=list)
+    thickness: list = field(default_factory=list)
+    seeds: list = field(default_factory=list)
+    free: list = field(default_factory=list)
+
+    def add(self, polygons: np.ndarray, thickness: float, seeds: np.ndarray, free: bool) -> None:
+        self.polygons += list(polygons)
+        self.thickness += [thickness] * len(polygons)
+        self.seeds += [tuple(p) for p in seeds]
+        self.free += [free] * len(polygons)
+
+
+def pack_template(model: RegimeModel, region: int, variant: int, fracture: FractureSettings | None = None,
                   material: IceMaterial | None = None) -> TileTemplate:
-    """The floes of a region's regime on a tile of ``side`` m, as a template whose cells
-    start loose.
+    """The floes of a region's regime on a tile of ``fracture.tile_side`` m, as a template.
 
     Parameters
     ----------
     model : the compiled regimes (``floe_layout.compile_regimes``).
     region : the region's index in it; a floe field (not level ice, not ice free).
     variant : which window of the region's layout (a different floe pattern each).
-    side : tile side, m.
+    fracture : how level ice is pre-fractured (the big floes' cells); its tile side.
 
     Returns
     -------
-    A prism ``TileTemplate`` in the tile's frame ([0, side]^2, m): one cell per floe with its
-    type's thickness (``cell_thickness``), mesh colliders, ``loose`` set.
+    A prism ``TileTemplate`` in the tile's frame ([0, side]^2, m), ``floe_field`` set: a cell
+    per floe under ``BIG_FLOE_SIZE`` (``starts_free``), the pre-fracture's cells cut to each
+    larger floe (intact), each its type's thickness (``cell_thickness``); mesh colliders.
     """
-    material = material or IceMaterial()
+    fracture, material = fracture or FractureSettings(), material or IceMaterial()
+    side, regime = fracture.tile_side, model.regions[region].regime
     unbounded = dataclasses.replace(model, polygons=tuple(
         shapely.box(-1e9, -1e9, 1e9, 1e9) if k == region else p for k, p in enumerate(model.polygons)))
     x0 = VARIANT_STRIDE * (1 + variant)
     window = (x0, x0, x0 + side, x0 + side)
-    floes, thickness = [], []
+    cells = _Cells()
     for k in laid_layers(model, region):
-        laid = lay_out(unbounded, window, region, k)
-        cut = shapely.clip_by_rect(laid.polygon, *window)
-        keep = (shapely.get_type_id(cut) == 3) & (shapely.area(cut) >= MIN_FLOE_AREA)  # 3: a polygon
-        floes += list(shapely.orient_polygons(cut[keep]))
-        thickness += laid.thickness[keep].tolist()
-    return _template(floes, np.array(thickness), (x0, x0), side, material, model, region, variant)
+        layer = model.layers[region][k]
+        reach = 2.0 * layer.spacing  # the floes of grid points this far out may reach into the window
+        grown = (window[0] - reach, window[1] - reach, window[2] + reach, window[3] + reach)
+        cut = shapely.clip_by_rect(lay_out(unbounded, grown, region, k).polygon, *window)
+        floes = shapely.orient_polygons(cut[(shapely.get_type_id(cut) == 3) & (shapely.area(cut) >= MIN_FLOE_AREA)])
+        if regime.types[layer.ice_type].size_range.low < BIG_FLOE_SIZE:
+            cells.add(floes, layer.thickness, shapely.get_coordinates(shapely.centroid(floes)), True)
+        elif len(floes):
+            level = build_tile(layer.thickness, template_seed(fracture.seed, layer.thickness, variant), fracture,
+                               material)
+            pieces, seeds = _prefractured(floes, level, (x0, x0))
+            cells.add(pieces, layer.thickness, seeds, False)
+    return _template(cells, (x0, x0), side, material, _seed(model, region, variant))
 
 
-def _template(floes: list, thickness: np.ndarray, corner: tuple[float, float], side: float,
-              material: IceMaterial, model: RegimeModel, region: int, variant: int) -> TileTemplate:
-    """Prisms of the floes (shapely polygons, m, their window's corner at ``corner``)."""
-    rings = [np.asarray(f.exterior.coords)[:-1] - corner for f in floes]
+def _seed(model: RegimeModel, region: int, variant: int) -> int:
+    """A pack template's seed: its region's first layer's hash salt and the variant."""
+    return model.layers[region][0].salt * 16 + variant
+
+
+def _prefractured(floes: np.ndarray, level: TileTemplate, corner: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """The level template's cells (laid at corner, m) cut to the floes: the pieces (convex
+    polygons, as both are convex) and each one's cell's Voronoi seed (x, y; m)."""
+    g = level.geometry
+    cell_polygons = shapely.polygons(shapely.linearrings(
+        g.footprint + corner, indices=np.repeat(np.arange(level.n_cells), np.diff(g.foot_start))))
+    cell, floe = shapely.STRtree(cell_polygons).query(floes, predicate="intersects")[::-1]
+    pieces = shapely.intersection(cell_polygons[cell], floes[floe])
+    keep = (shapely.get_type_id(pieces) == 3) & (shapely.area(pieces) >= MIN_FLOE_AREA)
+    return shapely.orient_polygons(pieces[keep]), level.seeds[cell[keep], :2] + corner
+
+
+def _template(cells: _Cells, corner: tuple[float, float], side: float, material: IceMaterial,
+              seed: int) -> TileTemplate:
+    """Prisms of the cells (their window's corner at ``corner``, m)."""
+    thickness, n = np.array(cells.thickness, dtype=float), len(cells.polygons)
+    rings = [np.asarray(f.exterior.coords)[:-1] - corner for f in cells.polygons]
     foot_start = offsets(np.array([len(r) for r in rings], dtype=np.int64))
     poly = np.vstack(rings) if rings else np.zeros((0, 2))
     area, centre = polygon_area_centroid(poly, foot_start)
     verts, vert_start, tris, tri_start = extrude_polygons(poly, foot_start, 1.0)
-    verts[:, 2] *= np.repeat(thickness, np.diff(vert_start))  # each floe its own type's thickness
-    n = len(rings)
+    verts[:, 2] *= np.repeat(thickness, np.diff(vert_start))  # each cell its own type's thickness
     centroid = np.column_stack([centre, 0.5 * thickness]) if n else np.zeros((0, 3))
     geometry = CellGeometry(verts=verts, vert_start=vert_start, tris=tris, tri_start=tri_start, footprint=poly,
                             foot_start=foot_start, volume=area * thickness, centroid=centroid,
                             adj_pairs=np.zeros((0, 2), np.int32), adj_area=np.zeros(0))
-    cell = np.repeat(np.arange(n), np.diff(vert_start))
+    owner = np.repeat(np.arange(n), np.diff(vert_start))
     enclosing = np.zeros(n)
-    np.maximum.at(enclosing, cell, np.linalg.norm(verts - centroid[cell], axis=1))
-    return TileTemplate(side=side, thickness=float(thickness.max(initial=0.0)), mode="prism",
-                        seed=model.layers[region][0].salt * 16 + variant, seeds=centroid.copy(), geometry=geometry,
-                        mass=geometry.volume * material.density, is_sphere=np.zeros(n, dtype=bool),
-                        sphere_radius=enclosing, cell_thickness=thickness, loose=True)
+    np.maximum.at(enclosing, owner, np.linalg.norm(verts - centroid[owner], axis=1))
+    seeds = np.column_stack([np.array(cells.seeds).reshape(-1, 2) - corner, 0.5 * thickness])
+    return TileTemplate(side=side, thickness=float(thickness.max(initial=0.0)), mode="prism", seed=seed,
+                        seeds=seeds, geometry=geometry, mass=geometry.volume * material.density,
+                        is_sphere=np.zeros(n, dtype=bool), sphere_radius=enclosing, cell_thickness=thickness,
+                        floe_field=True, starts_free=np.array(cells.free, dtype=bool))
