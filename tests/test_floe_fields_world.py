@@ -1,8 +1,9 @@
 """Floe fields in the running world (issue 26, item 2 in part): a floe-field region's tiles
-are laid from pack templates whose cells are its floes, free from the start with open water
-between them; the hull pushes them aside, floes laid under the hull go under it, a medium
-floe (wider than the beam) is pre-fractured and splits along its cells when rammed, and the
-channels draw the floes and the water between them, near the ship and far from it."""
+are laid from pack templates, open water between the floes. A floe narrower than the beam
+is a free floe from the start, which the hull pushes aside or under; one wider than the beam
+is the pre-fracture cut to the floe, which splits along its cells when rammed. Floes laid
+under the hull go under it, and the channels draw the floes and the water between them,
+near the ship and far from it."""
 import numpy as np
 import pytest
 import shapely
@@ -63,32 +64,38 @@ def test_pack_templates_hold_the_floes_apart_within_the_tile(pack):
         assert shapely.box(0, 0, t.side, t.side).contains(shapely.union_all(floes).buffer(-1e-6))
         assert 0.4 < area / t.side**2 < 0.95  # about 7/10 of the tile, leads between
         assert set(np.round(t.thicknesses, 3)) == {0.5, 0.225}  # each type its own thickness
-        assert min(np.sqrt(f.area) for f in floes) > 0.5 * MIN_FLOE_SIZE
+        free = [f for f, loose in zip(floes, t.free_at_start) if loose]
+        assert len(free) > 10 and min(np.sqrt(f.area) for f in free) > 0.5 * MIN_FLOE_SIZE
+        assert np.all(t.thicknesses[t.free_at_start] < 0.3)  # the cakes; the small floes are wider than the beam
 
 
 def test_a_pack_tile_lays_free_floes_that_nothing_broke(pack):
-    _, _, (status, counts) = pack
-    assert len(status) and np.all(status == FloeStatus.FREE)
+    model, data, (status, counts) = pack
+    free = model.ice.starts_free[data.ice.state.gcell[:len(status)]]
+    assert free.sum() > 20 and np.all(status[free] == FloeStatus.FREE)  # the cakes: free floes
+    assert (~free).sum() > 100 and np.all(status[~free] == FloeStatus.INTACT)  # the small floes, pre-fractured
     assert counts[BreakCause.HULL] == 0 and counts[BreakCause.CONTACT] == 0
 
 
 def test_the_hull_pushes_the_floes_aside(pack):
-    """Of the floes laid in the ship's path behind the stem, those within the beam went
-    under the hull or aside; those beside it were pushed outward."""
+    """Of the cakes laid in the ship's path behind the stem, those within the beam went
+    under the hull or aside; those just beside it were pushed outward; the small floes,
+    wider than the beam, the hull broke."""
     model, data, _ = pack
     st, ship = data.ice.state, model.ship.particulars
-    free = np.nonzero(st.status[:st.n] == FloeStatus.FREE)[0]
-    assert data.ship.eta[0] > 30.0  # well into the pack
-    moved = st.xy[free] - st.home[free]
-    off = st.home[free, 0] - data.ship.eta[1]
-    passed = (st.home[free, 1] > 0.0) & (st.home[free, 1] < data.ship.eta[0] + 0.5 * ship.length - 10.0)
+    rows = np.arange(st.n)
+    cakes = rows[model.ice.starts_free[st.gcell[rows]]]
+    assert data.ship.eta[0] > 30.0 and np.all(st.status[cakes] == FloeStatus.FREE)  # pushed, not broken
+    moved = st.xy[cakes] - st.home[cakes]
+    off = st.home[cakes, 0] - data.ship.eta[1]
+    passed = (st.home[cakes, 1] > 0.0) & (st.home[cakes, 1] < data.ship.eta[0] + 0.5 * ship.length - 10.0)
     path = passed & (np.abs(off) < 0.5 * ship.beam)
-    beside = passed & (np.abs(off) >= 0.5 * ship.beam) & (np.abs(off) < 0.5 * ship.beam + 15.0)
+    beside = passed & (np.abs(off) >= 0.5 * ship.beam) & (np.abs(off) < 0.5 * ship.beam + 5.0)
     assert path.sum() >= 5 and beside.sum() >= 5
-    assert ((np.hypot(*moved[path].T) > 1.0) | st.submerged[free][path]).mean() > 0.8
-    assert (np.hypot(*moved[beside].T) > 1.0).mean() > 0.7
-    assert np.mean(np.sign(off[beside]) * moved[beside, 0]) > 1.0  # outward, m
-    assert np.all(st.status[free] == FloeStatus.FREE)  # pushed, not broken: a floe is one body
+    assert ((np.hypot(*moved[path].T) > 1.0) | st.submerged[cakes][path]).mean() > 0.8
+    assert (np.hypot(*moved[beside].T) > 1.0).mean() > 0.6
+    assert np.mean(np.sign(off[beside]) * moved[beside, 0]) > 0.5  # outward, m
+    assert broken_counts(data.ice)[BreakCause.HULL] > 20
 
 
 def test_a_medium_floe_splits_along_its_cells_when_rammed(tmp_path_factory):

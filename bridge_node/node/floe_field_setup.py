@@ -18,11 +18,12 @@ from sim_core.scene.field import tile_counts
 MAX_CLASSES = 256  # tile classes are bytes
 
 
-def lay_floe_fields(cfg: NodeConfig, config_path: str | None, tile_class: np.ndarray,
-                    class_h: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[list[TileTemplate]]]:
+def lay_floe_fields(cfg: NodeConfig, config_path: str | None, tile_class: np.ndarray, class_h: np.ndarray,
+                    beam: float) -> tuple[np.ndarray, np.ndarray, list[list[TileTemplate]]]:
     """The field's tile classes (ny, nx) and class thicknesses (m) with a class added per
     floe-field region that holds a tile's centre, and each added class's templates
-    (``fracture.variants`` of them). Its thickness is its thickest floes'."""
+    (``fracture.variants`` of them; floes wider than the ship's ``beam``, m, pre-fractured).
+    Its thickness is its thickest floes'."""
     if not (cfg.ice_field.chart or cfg.ice_field.regions):
         return tile_class, class_h, []
     regions = configured_regions(cfg.ice_field, cfg.exercise.origin_deg())
@@ -40,7 +41,7 @@ def lay_floe_fields(cfg: NodeConfig, config_path: str | None, tile_class: np.nda
     templates = []
     for j, r in enumerate(packs):
         tile_class[index == r] = len(class_h) + j
-        templates.append([pack_template(regimes, r, v, cfg.fracture, cfg.ice_material)
+        templates.append([pack_template(regimes, r, v, cfg.fracture, cfg.ice_material, beam)
                           for v in range(cfg.fracture.variants)])
     thickness = [max(t.thickness for t in variants) for variants in templates]
     return tile_class, np.concatenate([class_h, thickness]), templates

@@ -58,7 +58,7 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
                         "'prism' cells (voronoi3d cells overlap in plan view)")
     ship = compile_ship(load_ship(cfg.ship.name, config_path), cfg.ice_material)
     tile_class, level_h = field_tile_classes(cfg, config_path)
-    tile_class, class_h, packs = lay_floe_fields(cfg, config_path, tile_class, level_h)
+    tile_class, class_h, packs = lay_floe_fields(cfg, config_path, tile_class, level_h, ship.particulars.beam)
     cache = writable_dir(resolve_path(config_path, cfg.paths.cache_dir), f"{config_path or 'default config'}: "
                          "paths.cache_dir")
     jobs = [(h, v) for h in level_h[level_h > 0.0] for v in range(cfg.fracture.variants)]  # none for open water

@@ -1,8 +1,9 @@
 """Tile templates of a floe field: the floes of a region's regime on one tile, with open
-water between them. Floes smaller than ``BIG_FLOE_SIZE`` are a cell each that starts as a
-free floe; larger ones are the paper's thickness-dependent pre-fracture (the level-ice
-template of their thickness, §2.1) cut to the floe, cells that start intact and break free
-as level ice does.
+water between them. Floes narrower than the ship's beam are a cell each that starts as a
+free floe, one body the hull pushes aside or under; wider ones, which a ship's bow breaks
+rather than pushes, are the paper's thickness-dependent pre-fracture (the level-ice template
+of their thickness, §2.1) cut to the floe, cells that start intact and break free as level
+ice does (held together: such a floe does not move as a whole).
 
 A floe-field region's tiles are laid from a few such templates (variants, turned by
 quarter turns, as level ice's templates are), so the scene, the stream, freezing and
@@ -21,6 +22,7 @@ would be tens of thousands of bodies a tile; their share shows as open water.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -35,7 +37,7 @@ from sim_core.csr import offsets
 
 MIN_FLOE_AREA = 0.5  # m2: slivers the tile's edge cuts off smaller than this are dropped
 VARIANT_STRIDE = 1.0e6  # m between the windows of a region's variants (far beyond any layout's reach)
-BIG_FLOE_SIZE = 100.0  # m: floes of WMO size ranges from this up (medium floes and larger) are pre-fractured
+BIG_FLOE_SIZE = 100.0  # m: floes this size and larger are pre-fractured, by default (the world: the ship's beam)
 
 
 def laid_layers(model: RegimeModel, region: int) -> list[int]:
@@ -64,7 +66,7 @@ class _Cells:
 
 
 def pack_template(model: RegimeModel, region: int, variant: int, fracture: FractureSettings | None = None,
-                  material: IceMaterial | None = None) -> TileTemplate:
+                  material: IceMaterial | None = None, big_floe: float = BIG_FLOE_SIZE) -> TileTemplate:
     """The floes of a region's regime on a tile of ``fracture.tile_side`` m, as a template.
 
     Parameters
@@ -73,15 +75,17 @@ def pack_template(model: RegimeModel, region: int, variant: int, fracture: Fract
     region : the region's index in it; a floe field (not level ice, not ice free).
     variant : which window of the region's layout (a different floe pattern each).
     fracture : how level ice is pre-fractured (the big floes' cells); its tile side.
+    big_floe : m: floes this size or larger (mean caliper diameter, before the tile cuts them)
+        are pre-fractured; the world gives the ship's beam.
 
     Returns
     -------
     A prism ``TileTemplate`` in the tile's frame ([0, side]^2, m), ``floe_field`` set: a cell
-    per floe under ``BIG_FLOE_SIZE`` (``starts_free``), the pre-fracture's cells cut to each
-    larger floe (intact), each its type's thickness (``cell_thickness``); mesh colliders.
+    per floe under ``big_floe`` (``starts_free``), the pre-fracture's cells cut to each larger
+    floe (intact), each its type's thickness (``cell_thickness``); mesh colliders.
     """
     fracture, material = fracture or FractureSettings(), material or IceMaterial()
-    side, regime = fracture.tile_side, model.regions[region].regime
+    side = fracture.tile_side
     unbounded = dataclasses.replace(model, polygons=tuple(
         shapely.box(-1e9, -1e9, 1e9, 1e9) if k == region else p for k, p in enumerate(model.polygons)))
     x0 = VARIANT_STRIDE * (1 + variant)
@@ -91,14 +95,16 @@ def pack_template(model: RegimeModel, region: int, variant: int, fracture: Fract
         layer = model.layers[region][k]
         reach = 2.0 * layer.spacing  # the floes of grid points this far out may reach into the window
         grown = (window[0] - reach, window[1] - reach, window[2] + reach, window[3] + reach)
-        cut = shapely.clip_by_rect(lay_out(unbounded, grown, region, k).polygon, *window)
-        floes = shapely.orient_polygons(cut[(shapely.get_type_id(cut) == 3) & (shapely.area(cut) >= MIN_FLOE_AREA)])
-        if regime.types[layer.ice_type].size_range.low < BIG_FLOE_SIZE:
-            cells.add(floes, layer.thickness, shapely.get_coordinates(shapely.centroid(floes)), True)
-        elif len(floes):
+        laid = lay_out(unbounded, grown, region, k).polygon
+        big = shapely.length(laid) / math.pi >= big_floe  # mean caliper diameter (Rothrock & Thorndike 1984)
+        cut = shapely.clip_by_rect(laid, *window)
+        keep = (shapely.get_type_id(cut) == 3) & (shapely.area(cut) >= MIN_FLOE_AREA)
+        floes = shapely.orient_polygons(cut[keep & ~big])
+        cells.add(floes, layer.thickness, shapely.get_coordinates(shapely.centroid(floes)), True)
+        if np.any(keep & big):
             level = build_tile(layer.thickness, template_seed(fracture.seed, layer.thickness, variant), fracture,
                                material)
-            pieces, seeds = _prefractured(floes, level, (x0, x0))
+            pieces, seeds = _prefractured(shapely.orient_polygons(cut[keep & big]), level, (x0, x0))
             cells.add(pieces, layer.thickness, seeds, False)
     return _template(cells, (x0, x0), side, material, _seed(model, region, variant))
 
