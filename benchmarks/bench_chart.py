@@ -3,7 +3,7 @@ polygons over 20 km x 20 km in under 10 s).
 
 A chart of 50 boxes (5 x 10, west to east and south to north from 74 N 20 E, 20 km x 20 km
 in all) is written with pyshp; its egg codes cycle through ice free, fast ice of four stages
-(grey, grey-white, thin and medium first-year) and 7/10 pack of medium floes. An exercise
+(grey, grey-white, thin and medium first-year) and 7/10 pack of small floes. An exercise
 names it (``[ice_field] chart``) over a 20 km x 20 km field of 100 m tiles (40 000 tiles).
 Timed, each stage separately: the config loaded (the chart read and checked), the world
 built (regions in the local frame, each tile's thickness, the pre-fractured templates of each
@@ -36,7 +36,7 @@ CODES = (
     {"POLY_TYPE": "I", "CT": "92", "SA": "85", "FA": "08"},  # grey-white
     {"POLY_TYPE": "I", "CT": "92", "SA": "87", "FA": "08"},  # thin first-year
     {"POLY_TYPE": "I", "CT": "92", "SA": "91", "FA": "08"},  # medium first-year
-    {"POLY_TYPE": "I", "CT": "70", "SA": "87", "FA": "04"},  # 7/10 pack, medium floes
+    {"POLY_TYPE": "I", "CT": "70", "SA": "87", "FA": "04"},  # 7/10 pack, small floes
 )
 
 

@@ -21,9 +21,9 @@ MAX_CLASSES = 256  # tile classes are bytes
 def lay_floe_fields(cfg: NodeConfig, config_path: str | None, tile_class: np.ndarray, class_h: np.ndarray,
                     beam: float) -> tuple[np.ndarray, np.ndarray, list[list[TileTemplate]]]:
     """The field's tile classes (ny, nx) and class thicknesses (m) with a class added per
-    floe-field region that holds a tile's centre, and each added class's templates
-    (``fracture.variants`` of them; floes wider than the ship's ``beam``, m, pre-fractured).
-    Its thickness is its thickest floes'."""
+    regime (egg code) of the floe-field regions that hold a tile's centre, and each added
+    class's templates (``fracture.variants`` of them, laid from the first such region; floes
+    wider than the ship's ``beam``, m, pre-fractured). Its thickness is its thickest floes'."""
     if not (cfg.ice_field.chart or cfg.ice_field.regions):
         return tile_class, class_h, []
     regions = configured_regions(cfg.ice_field, cfg.exercise.origin_deg())
@@ -33,15 +33,17 @@ def lay_floe_fields(cfg: NodeConfig, config_path: str | None, tile_class: np.nda
     packs = [r for r, region in enumerate(regions) if region.floe_field and np.any(index == r)]
     if not packs:
         return tile_class, class_h, []
-    if len(class_h) + len(packs) > MAX_CLASSES:
-        raise UserError(f"{config_path or 'default config'}: ice_field: {len(class_h)} thickness classes and "
-                        f"{len(packs)} floe-field regions; at most {MAX_CLASSES} in all (raise class_step)")
     regimes = compile_regimes(regions, shapely.box(0.0, 0.0, nx * side, ny * side), cfg.fracture.seed)
-    tile_class = np.array(tile_class, dtype=np.uint8)
-    templates = []
-    for j, r in enumerate(packs):
-        tile_class[index == r] = len(class_h) + j
-        templates.append([pack_template(regimes, r, v, cfg.fracture, cfg.ice_material, beam)
-                          for v in range(cfg.fracture.variants)])
+    tile_class, classes = np.array(tile_class, dtype=np.uint8), {}  # regime -> its class's first region
+    for r in packs:  # regions of one egg code share a class and its templates
+        classes.setdefault(regions[r].regime, r)
+    if len(class_h) + len(classes) > MAX_CLASSES:
+        raise UserError(f"{config_path or 'default config'}: ice_field: {len(class_h)} thickness classes and "
+                        f"{len(classes)} floe-field regimes; at most {MAX_CLASSES} in all (raise class_step)")
+    first = list(classes.values())
+    for r in packs:
+        tile_class[index == r] = len(class_h) + first.index(classes[regions[r].regime])
+    templates = [[pack_template(regimes, r, v, cfg.fracture, cfg.ice_material, beam)
+                  for v in range(cfg.fracture.variants)] for r in first]
     thickness = [max(t.thickness for t in variants) for variants in templates]
     return tile_class, np.concatenate([class_h, thickness]), templates
