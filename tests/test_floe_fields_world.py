@@ -9,7 +9,7 @@ import pytest
 import shapely
 from conftest import exercise_config
 
-from bridge_node.node.floe_field_setup import lay_floe_fields
+from bridge_node.node.floe_field_setup import field_regions, lay_floe_fields
 from bridge_node.node.world_setup import build_world, field_tile_classes, start_world
 from bridge_node.render.channels import ChannelSet
 from bridge_node.render.classes import CLASS_INDEX, class_of_pixels
@@ -143,8 +143,9 @@ def test_regions_of_one_egg_code_share_a_class_and_its_templates(tmp_path):
     regions = [RegionSettings.model_validate(r) for r in (west, east, {**MEDIUM, "polygon_m": west["polygon_m"][:2]
                                                                        + [[200.0, 100.0], [0.0, 100.0]]})]
     cfg = cfg.model_copy(update={"ice_field": cfg.ice_field.model_copy(update={"regions": regions})})
-    level_class, level_h = field_tile_classes(cfg, None)
-    tile_class, class_h, templates = lay_floe_fields(cfg, None, level_class, level_h, 24.0)
+    laid = field_regions(cfg)
+    level_class, level_h = field_tile_classes(cfg, None, laid)
+    tile_class, class_h, templates = lay_floe_fields(cfg, None, laid, level_class, level_h, 24.0)
     assert len(templates) == 2 and len(class_h) == len(level_h) + 2  # 7/10 pack, and 8/10 medium floes
     assert set(np.unique(tile_class[1:])) == {len(level_h)}  # both halves north of 100 m: one class
     assert set(np.unique(tile_class[0, :2])) == {len(level_h) + 1}  # the medium floes' corner

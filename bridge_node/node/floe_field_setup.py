@@ -3,6 +3,8 @@ region (a chart's or the config's) take a thickness class of their own, laid fro
 region's pack templates (``sim_core.regimes.pack_tiles``), built when the world is."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import shapely
 
@@ -12,24 +14,42 @@ from bridge_node.node.config import NodeConfig
 from sim_core.fracture.tile_template import TileTemplate
 from sim_core.regimes.floe_layout import compile_regimes
 from sim_core.regimes.pack_tiles import pack_template
-from sim_core.regimes.regime import tile_regions
+from sim_core.regimes.regime import IceRegion, tile_regions
 from sim_core.scene.field import tile_counts
 
 MAX_CLASSES = 256  # tile classes are bytes
 
 
-def lay_floe_fields(cfg: NodeConfig, config_path: str | None, tile_class: np.ndarray, class_h: np.ndarray,
-                    beam: float) -> tuple[np.ndarray, np.ndarray, list[list[TileTemplate]]]:
+@dataclass(frozen=True)
+class FieldRegions:
+    """A field's ice regions (local frame) and the index (ny, nx) of the region holding each
+    tile's centre (-1: none; None: the field has no regions)."""
+
+    regions: list[IceRegion]
+    index: np.ndarray | None
+
+
+def field_regions(cfg: NodeConfig) -> FieldRegions:
+    """The configured field's ice regions (its chart's, then its own; the chart read once)
+    and the region holding each tile's centre (``tile_regions``); none without either."""
+    if not (cfg.ice_field.chart or cfg.ice_field.regions):
+        return FieldRegions([], None)
+    regions = configured_regions(cfg.ice_field, cfg.exercise.origin_deg())
+    nx, ny = tile_counts(cfg.ice_field, cfg.fracture.tile_side)
+    return FieldRegions(regions, tile_regions(regions, nx, ny, cfg.fracture.tile_side))
+
+
+def lay_floe_fields(cfg: NodeConfig, config_path: str | None, laid: FieldRegions, tile_class: np.ndarray,
+                    class_h: np.ndarray, beam: float) -> tuple[np.ndarray, np.ndarray, list[list[TileTemplate]]]:
     """The field's tile classes (ny, nx) and class thicknesses (m) with a class added per
     regime (egg code) of the floe-field regions that hold a tile's centre, and each added
     class's templates (``fracture.variants`` of them, laid from the first such region; floes
     wider than the ship's ``beam``, m, pre-fractured). Its thickness is its thickest floes'."""
-    if not (cfg.ice_field.chart or cfg.ice_field.regions):
+    regions, index = laid.regions, laid.index
+    if index is None:
         return tile_class, class_h, []
-    regions = configured_regions(cfg.ice_field, cfg.exercise.origin_deg())
     side = cfg.fracture.tile_side
     nx, ny = tile_counts(cfg.ice_field, side)
-    index = tile_regions(regions, nx, ny, side)
     packs = [r for r, region in enumerate(regions) if region.floe_field and np.any(index == r)]
     if not packs:
         return tile_class, class_h, []

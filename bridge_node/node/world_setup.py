@@ -12,10 +12,9 @@ from pathlib import Path
 import numpy as np
 from rich.progress import Progress
 
-from bridge_node.charts.field_regions import configured_regions
 from bridge_node.library.templates import library_template
 from bridge_node.node.config import NodeConfig, load_ship, resolve_path
-from bridge_node.node.floe_field_setup import lay_floe_fields
+from bridge_node.node.floe_field_setup import FieldRegions, field_regions, lay_floe_fields
 from bridge_node.common.errors import UserError
 from bridge_node.common.paths import writable_dir
 from sim_core.environment import Environment
@@ -23,21 +22,20 @@ from sim_core.frames.units import KNOT
 from sim_core.ice.model import compile_ice_model
 from sim_core.fracture.fragment_count import MAX_THICKNESS
 from sim_core.regimes.regime import region_tile_thickness
-from sim_core.scene.field import tile_classes, tile_counts
+from sim_core.scene.field import tile_classes
 from sim_core.scene.scene import compile_scene, open_water
 from sim_core.ship.model import compile_ship
 from sim_core.world import WorldData, WorldModel, compile_world, new_world_data, step
 
 
-def field_tile_classes(cfg: NodeConfig, config_path: str | None) -> tuple[np.ndarray, np.ndarray]:
+def field_tile_classes(cfg: NodeConfig, config_path: str | None,
+                       laid: FieldRegions | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Thickness class of every tile of the configured field, and the class thicknesses (m;
-    0 for open water). Where the config's chart or regions lay level ice or open water over
-    a tile's centre, they set its thickness; elsewhere the field's thickness profile does."""
-    regions = None
-    if cfg.ice_field.chart or cfg.ice_field.regions:
-        nx, ny = tile_counts(cfg.ice_field, cfg.fracture.tile_side)
-        regions = region_tile_thickness(configured_regions(cfg.ice_field, cfg.exercise.origin_deg()), nx, ny,
-                                        cfg.fracture.tile_side, MAX_THICKNESS)
+    0 for open water). Where the config's chart or regions (``laid``, else read now) lay
+    level ice or open water over a tile's centre, they set its thickness; elsewhere the
+    field's thickness profile does."""
+    laid = laid or field_regions(cfg)
+    regions = None if laid.index is None else region_tile_thickness(laid.regions, laid.index, MAX_THICKNESS)
     grid = None
     if cfg.ice_field.thickness_profile == "grid":
         grid_path = resolve_path(config_path, cfg.ice_field.thickness_grid)
@@ -57,8 +55,9 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
         raise UserError(f"{config_path}: fracture.cells = {cfg.fracture.cells!r}: the simulated world needs "
                         "'prism' cells (voronoi3d cells overlap in plan view)")
     ship = compile_ship(load_ship(cfg.ship.name, config_path), cfg.ice_material)
-    tile_class, level_h = field_tile_classes(cfg, config_path)
-    tile_class, class_h, packs = lay_floe_fields(cfg, config_path, tile_class, level_h, ship.particulars.beam)
+    laid = field_regions(cfg)
+    tile_class, level_h = field_tile_classes(cfg, config_path, laid)
+    tile_class, class_h, packs = lay_floe_fields(cfg, config_path, laid, tile_class, level_h, ship.particulars.beam)
     cache = writable_dir(resolve_path(config_path, cfg.paths.cache_dir), f"{config_path or 'default config'}: "
                          "paths.cache_dir")
     jobs = [(h, v) for h in level_h[level_h > 0.0] for v in range(cfg.fracture.variants)]  # none for open water

@@ -185,13 +185,12 @@ class WorldView:
         self._span = [min(self._span[0], int(rows.min())), max(self._span[1], int(rows.max()) + 1)]
 
     def _thaw(self, placement: int) -> None:
-        """A thawed tile's floes take back their causes in its new rows, and count as broken."""
+        """A thawed tile's floes take back their causes in its new rows (they count as broken
+        as the free rows of any tile given rows do: ``_free_from_placing``)."""
         self.frozen_cracks.pop(placement, None)  # its cracks come back by row
         floes = self.frozen_floes.pop(placement, None)
         if floes is not None:
-            rows = self.placements[placement].row_start + floes["cell"].astype(np.int64)
-            self.cause[rows] = floes["cause"]
-            self._broken.append(rows)
+            self.cause[self.placements[placement].row_start + floes["cell"].astype(np.int64)] = floes["cause"]
 
     def take_changes(self) -> ViewChanges:
         """What changed since the last call (and forget it)."""

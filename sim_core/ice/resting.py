@@ -180,11 +180,12 @@ def _take_pushes(rows, push, turn, fastest, mass, inertia, gcell, extent, vel, y
         vel[i, 0] += np.float32(push[k, 0] / mass[g])
         vel[i, 1] += np.float32(push[k, 1] / mass[g])
         yaw_rate[i] += np.float32(turn[k] / inertia[g, 2])
-        now = _speed(i, vel, yaw_rate, gcell, extent)
-        if now > max(fastest[k], speed):
-            cut = max(fastest[k], speed) / now
+        now, top = _speed(i, vel, yaw_rate, gcell, extent), max(fastest[k], speed)
+        if now > top:
+            cut = top / now
             vel[i, 0], vel[i, 1], yaw_rate[i] = vel[i, 0] * cut, vel[i, 1] * cut, yaw_rate[i] * cut
-        if _speed(i, vel, yaw_rate, gcell, extent) >= speed:
+            now = _speed(i, vel, yaw_rate, gcell, extent)  # top, as the float32 velocities round it
+        if now >= speed:
             out[n] = i
             n += 1
     return out[:n]

@@ -149,10 +149,9 @@ def tile_regions(regions: list[IceRegion], nx: int, ny: int, side: float) -> np.
     return region_at(effective_polygons(regions, field), x, y)
 
 
-def region_tile_thickness(regions: list[IceRegion], nx: int, ny: int, side: float,
-                          max_thickness: float) -> np.ndarray:
-    """Thickness (ny, nx) m of each tile of a field of nx x ny tiles of ``side`` m, from the
-    region holding its centre (``tile_regions``): a level-ice region's stage (the middle of
+def region_tile_thickness(regions: list[IceRegion], index: np.ndarray, max_thickness: float) -> np.ndarray:
+    """Thickness (ny, nx) m of each tile of a field, from the region holding its centre
+    (``index``, from ``tile_regions``): a level-ice region's stage (the middle of
     its range, at most ``max_thickness``), 0 for an ice-free region (open water); NaN where
     no region lies, or one the ice world does not lay out as level ice (floe fields, laid
     from their own templates; land, no data), so that the field's own thickness profile
@@ -160,4 +159,4 @@ def region_tile_thickness(regions: list[IceRegion], nx: int, ny: int, side: floa
     per_region = np.array([np.nan if not r.in_the_world or r.floe_field else
                            min(r.regime.types[0].stage_range.nominal, max_thickness) if r.regime.level else 0.0
                            for r in regions] + [np.nan])
-    return per_region[tile_regions(regions, nx, ny, side)]  # index -1 (no region) takes the last entry, NaN
+    return per_region[index]  # index -1 (no region) takes the last entry, NaN
