@@ -54,7 +54,9 @@ from sim_core.scene.switches import (
 from sim_core.ship import model as ship_model
 from sim_core.ship.model import OrderRejection, ShipData, ShipModel
 from sim_core.ship.outputs import ShipOutputs, ship_outputs
+from sim_core.regimes.rubble import NO_RUBBLE, RubbleModel, rubble_at
 from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
+from sim_core.ship.rubble_resistance import brash_channel_resistance, keel_resistance
 from sim_core.ship.searchlights import SearchlightMount, SearchlightOrder, SearchlightState, order_searchlight
 from sim_core.ship.sensors import SensorFaults, sensor_readings
 from sim_core.ship.wind import wind_load
@@ -70,6 +72,7 @@ class WorldModel:
     contour: np.ndarray  # (34, 2) hull waterline contour, ship frame (x forward, y starboard), m
     origin: tuple[float, float]  # latitude, longitude of the field's south-west corner, rad
     searchlights: tuple[SearchlightMount, ...] = ()  # the own ship's, by index
+    rubble: RubbleModel = NO_RUBBLE  # brash and ridges, met through their resistance models
 
 
 @dataclass
@@ -171,10 +174,10 @@ class WorldEvents:
 
 
 def compile_world(ship: ShipModel, ice: IceModel, scene: SceneModel, origin: tuple[float, float] = (0.0, 0.0),
-                  searchlights: tuple[SearchlightMount, ...] = ()) -> WorldModel:
+                  searchlights: tuple[SearchlightMount, ...] = (), rubble: RubbleModel = NO_RUBBLE) -> WorldModel:
     """The static world; origin: latitude and longitude (rad) of the field's corner."""
     p = ship.particulars
-    return WorldModel(ship, ice, scene, waterline_contour(p.length, p.beam), origin, searchlights)
+    return WorldModel(ship, ice, scene, waterline_contour(p.length, p.beam), origin, searchlights, rubble)
 
 
 def new_world_data(model: WorldModel, north: float, east: float, heading: float, speed: float,
@@ -241,6 +244,20 @@ def _ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple
     if breaking or data.scene.tile_state[tile] not in (TileState.BREAKABLE, TileState.FROZEN):
         return h, LEVEL_ICE
     return h, BROKEN_CHANNEL
+
+
+def _rubble_loads(model: WorldModel, ship: ShipData, stem: np.ndarray) -> None:
+    """Set the ship's brash resistance (at 5 knots) and ridge-keel load from the rubble at
+    its stem (``sim_core.ship.rubble_resistance``): the brash's channel resistance times the
+    share of the tile it covers, and the keel's down to the ship's draught."""
+    if model.rubble.empty:
+        return
+    share, thickness, ridges, depth = rubble_at(model.rubble, float(stem[0]), float(stem[1]))
+    ship.brash_resistance = share * brash_channel_resistance(thickness, model.ship.bow) if share > 0.0 else 0.0
+    m = model.ice.material
+    ship.keel_load = 0.0 if ridges is None else keel_resistance(
+        min(depth, model.ship.d), model.ship.B, ridges.friction_angle, ridges.cohesion, ridges.porosity,
+        m.water_density, m.density, m.gravity)
 
 
 def _ice_drift(model: WorldModel, data: WorldData) -> np.ndarray:
@@ -313,6 +330,7 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
     wind = _environment_loads(model, data)
     contour, _ = hull_world(model, ship)
     ship.ice_h, ship.ice_condition = _ice_condition(model, data, contour[0])  # contour[0] is the stem
+    _rubble_loads(model, ship, contour[0])
     if controls is not None and controls.kinematic is not None:
         k = controls.kinematic
         ship.eta[0], ship.eta[1], ship.eta[5] = k.north, k.east, k.heading

@@ -3,10 +3,12 @@ level ice stays what it is today, now laid where a chart or region puts it): a t
 centre lies in fast ice takes its stage's thickness, one in an ice-free region is open
 water: no tile is placed there, the ship meets no ice, and the channels draw sea. A floe
 field's tiles take a class of their own, laid from its pack templates
-(tests/test_floe_fields_world.py); brash alone is not laid yet."""
+(tests/test_floe_fields_world.py); brash alone is open water that resists as brash does
+(tests/test_rubble.py); land is not laid."""
 import numpy as np
 import pytest
 from conftest import exercise_config
+from sigrid3_charts import box_ring, write_chart
 
 from bridge_node.charts.field_regions import regions_not_in_the_world
 from bridge_node.node.world_setup import build_world, start_position, start_world
@@ -79,13 +81,14 @@ def test_in_the_lead_the_ship_meets_no_ice(lead, fast_ice):
     assert data.ship.eta[0] > ice_data.ship.eta[0] + 20.0  # in 0.9 m fast ice it made less way
 
 
-def test_the_regions_the_world_does_not_lay_yet_are_named(lead):
+def test_the_regions_the_world_does_not_lay_are_named(lead, tmp_path):
     _, _, cfg, _ = lead
     assert regions_not_in_the_world(cfg.ice_field, cfg.exercise.origin_deg()) == []
     brash = RegionSettings.model_validate({**PACK, "name": "brash", "concentration": 9,
                                            "ice": [{"stage": "grey_white", "floe_size": "brash"}]})
-    field = cfg.ice_field.model_copy(update={"regions": [*cfg.ice_field.regions, brash]})
-    assert regions_not_in_the_world(field, cfg.exercise.origin_deg()) == ["brash"]
+    chart = write_chart(tmp_path / "land", [(box_ring(20.0, 74.0, 20.01, 74.002), {"POLY_TYPE": "L"})])
+    field = cfg.ice_field.model_copy(update={"regions": [*cfg.ice_field.regions, brash], "chart": str(chart)})
+    assert regions_not_in_the_world(field, cfg.exercise.origin_deg()) == ["land.shp feature 1"]
 
 
 def test_the_channels_draw_the_lead_as_sea(lead, ctx):

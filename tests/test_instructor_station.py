@@ -42,6 +42,7 @@ FLOE_RGB = (247, 251, 254)  # MAP_COLORS.floe
 LEVEL_ICE_RGB = (210, 221, 230)  # MAP_COLORS.ice
 WATER_RGB = (23, 54, 79)  # MAP_COLORS.water
 REGION_RGB = (255, 122, 217)  # MAP_COLORS.region
+RIDGE_RGB = (224, 64, 192)  # MAP_COLORS.ridge
 
 
 def write_config(folder: Path, stream: tuple[int, int], control: int, port: int, extra: str = "") -> Path:
@@ -51,6 +52,8 @@ def write_config(folder: Path, stream: tuple[int, int], control: int, port: int,
     text = ('[ship]\nname = "polar_cargo"\n[ice_field]\nwidth = 800.0\nheight = 800.0\nthickness = 0.3\n'
             '[[ice_field.regions]]\nname = "lake"\nconcentration = 0\n'  # open water in the north-west corner
             'polygon_m = [[0.0, 600.0], [200.0, 600.0], [200.0, 800.0], [0.0, 800.0]]\n'
+            '[[ice_field.ridges]]\nname = "ridges"\ndirection_deg = 90.0\nspacing_m = 150.0\n'  # one ridge line,
+            'through_m = [0.0, 400.0]\npolygon_m = [[550.0, 350.0], [800.0, 350.0], [800.0, 450.0], [550.0, 450.0]]\n'
             '[exercise]\nstart_north = -20.0\nstart_east = 450.0\n'
             f'[paths]\ncache_dir = "{folder / "tiles"}"\nsession_dir = "{folder / "sessions"}"\n'
             f'[stream]\npublish = "tcp://127.0.0.1:{stream[0]}"\nsnapshot = "tcp://127.0.0.1:{stream[1]}"\n'
@@ -158,6 +161,10 @@ def test_the_map_shows_the_regions_and_their_open_water(exercise, browser):
     edge = [near(around(200.0, north), REGION_RGB, 40).any() for north in (620.0, 650.0, 680.0, 710.0, 740.0)]
     assert np.mean(edge) >= 0.6, edge  # its outline, dashed, on its east edge
     assert not near(around(300.0, 700.0), REGION_RGB, 40).any()
+    view(browser, 650.0, 400.0, 1.0)
+    image = screenshot(browser)
+    assert all(near(around(east, 400.0), RIDGE_RGB, 30).any() for east in (600.0, 650.0, 700.0, 750.0))
+    assert not near(around(650.0, 370.0), RIDGE_RGB, 30).any()  # the ridge's line, east-west at 400 m
 
 
 def test_freeze_and_resume_from_the_page(exercise, browser):

@@ -22,8 +22,8 @@ def configured_regions(ice_field: IceFieldSettings, origin_deg: tuple[float, flo
 
 
 def regions_not_in_the_world(ice_field: IceFieldSettings, origin_deg: tuple[float, float]) -> list[str]:
-    """The names of the regions that the ice world does not lay out yet: floe fields
-    (neither level ice nor ice free), land and no data."""
+    """The names of the regions that the ice world does not lay out: land and no data
+    (level ice, open water, floe fields and brash it lays)."""
     return [r.name for r in configured_regions(ice_field, origin_deg) if not r.in_the_world]
 
 

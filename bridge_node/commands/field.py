@@ -37,7 +37,9 @@ def run(args: argparse.Namespace) -> int:
         field = shapely.box(0.0, 0.0, cfg.ice_field.width, cfg.ice_field.height)
         model = regime_model(configured_regions(cfg.ice_field, cfg.exercise.origin_deg()), field, cfg.fracture.seed,
                              str(source))
+        ridges = tuple(r.ridges(*cfg.exercise.origin_deg()) for r in cfg.ice_field.ridges)
     else:
+        ridges = ()
         regions, field, _ = chart_field(source)
         model = regime_model(regions, field, DEFAULT_SEED, str(source))
     with Progress(transient=True, disable=args.json) as progress:
@@ -47,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
             surveys.append(survey_region(model, r))
             progress.advance(task)
     picture = Path(args.out) / "field.png"
-    plot_field(model, surveys, field, picture)
+    plot_field(model, surveys, field, picture, ridges)
     if args.json:
         print(json.dumps(survey_json(model, surveys, picture)))
         return 0

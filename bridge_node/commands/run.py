@@ -142,9 +142,8 @@ def run(args: argparse.Namespace) -> int:
     console = Console(stderr=args.json)
     unlaid = regions_not_in_the_world(cfg.ice_field, cfg.exercise.origin_deg())
     if unlaid:
-        console.print(escape(f"ice_field: {', '.join(unlaid)}: floe fields, land or no data, which the ice world does "
-                             "not lay out yet (`icebridge field` lays floe fields out): the tiles under them keep the "
-                             "level ice of [ice_field]"), style="yellow")
+        console.print(escape(f"ice_field: {', '.join(unlaid)}: land or no data, which the ice world does not lay "
+                             "out: the tiles under them keep the level ice of [ice_field]"), style="yellow")
     out = Path(args.out)
     record = None if args.no_record else new_session_dir(cfg, args.config)
     point = read_save(Path(args.fork).expanduser()) if args.fork else None

@@ -22,6 +22,7 @@ from sim_core.frames.units import KNOT
 from sim_core.ice.model import compile_ice_model
 from sim_core.fracture.fragment_count import MAX_THICKNESS
 from sim_core.regimes.regime import region_tile_thickness
+from sim_core.regimes.rubble import compile_rubble
 from sim_core.scene.field import tile_classes
 from sim_core.scene.scene import compile_scene, open_water
 from sim_core.ship.model import compile_ship
@@ -80,7 +81,9 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
     except ValueError as exc:
         raise UserError(f"{config_path}: scene: {exc}") from None
     origin = math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg)
-    return compile_world(ship, ice, scene, origin, tuple(light.mount() for light in cfg.render.searchlights))
+    ridges = tuple(r.ridges(*cfg.exercise.origin_deg()) for r in cfg.ice_field.ridges)
+    rubble = compile_rubble(laid.regions, laid.index, ridges, scene.nx, scene.ny, scene.side)
+    return compile_world(ship, ice, scene, origin, tuple(light.mount() for light in cfg.render.searchlights), rubble)
 
 
 def warm_up(model: WorldModel, cfg: NodeConfig) -> None:

@@ -39,6 +39,9 @@ from bridge_node.render.classes import CLASS_INDEX, CLASSES
 from bridge_node.render.floe_buffers import FloeBuffer, horizon_split
 from bridge_node.render.meshes import cell_rasters, floe_field_layouts, rim_rasters, template_meshes
 from bridge_node.render.scene_uploads import POSE_NAMES, POSE_UNITS, SceneUploads
+from bridge_node.render.ridge_sails import SailMeshes
+from sim_core.regimes.rubble import RubbleModel
+from bridge_node.render.rubble_look import ridge_uniforms, rubble_tile_bits
 from bridge_node.render.shaders import FROZEN_CRACKED, UNPLACED_FLOE_FIELD
 from bridge_node.render.settings import ChannelSettings, RenderSettings, eye_point
 from bridge_node.render.ship_mesh import load_ship, nav_lights, ship_triangles
@@ -67,7 +70,7 @@ class SceneRenderer(SceneUploads):
         self.ctx, self.model, self.settings = ctx, model, settings
         self._configured_aims = [light.mount().default for light in settings.searchlights]  # before any order
         scene = model.scene
-        self._make_programs(len(settings.searchlights))
+        self._make_programs(len(settings.searchlights), model.rubble)
         if max((t.n_cells for t in model.ice.templates), default=0) >= FROZEN_CRACKED:
             raise ValueError(f"the renderer draws tiles of fewer than {FROZEN_CRACKED} cells (a frozen tile's status "
                              "entries number them)")
@@ -78,6 +81,7 @@ class SceneRenderer(SceneUploads):
         # template | quarter turns << 16, level-ice thickness (m, float bits), 1 if breakable
         self.tile_thickness = scene.class_thickness[scene.tile_class].astype("f4")
         self.floe_field_info = floe_field_layouts(model)  # tile -> its template | turns << 16
+        self.rubble_bits = rubble_tile_bits(model.rubble, scene.nx * scene.ny)  # the flag entry's upper bytes
         self.tile_info = ctx.texture((scene.nx, scene.ny), 4, self._first_tile_table().tobytes(), dtype="i4")
         self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST
         mesh = load_ship(model.ship.particulars, model.contour, settings.freeboard_m)
@@ -113,6 +117,7 @@ class SceneRenderer(SceneUploads):
         mat = model.ice.material
         self.slab_z = float(h * (1.0 - mat.density / mat.water_density))
         self.template_thickness = [t.thickness for t in model.ice.templates]
+        self.sails = SailMeshes(ctx, self.ship, model.rubble, self.slab_z, settings.sail_distance_m)
         noise = relief_noise()
         self.noise = ctx.texture(noise.shape[:2], 4, noise.tobytes())
         self.noise.build_mipmaps()
@@ -127,16 +132,20 @@ class SceneRenderer(SceneUploads):
         field's tiles their layouts, drawn from their templates' rasters."""
         info = np.zeros((len(self.tile_thickness), 4), "i4")
         info[:, 2] = self.tile_thickness.view("i4")
+        info[:, 3] = self.rubble_bits
         for tile, layout in self.floe_field_info.items():
-            info[tile, 1], info[tile, 3] = layout, UNPLACED_FLOE_FIELD
+            info[tile, 1], info[tile, 3] = layout, UNPLACED_FLOE_FIELD | self.rubble_bits[tile]
         return info
 
-    def _make_programs(self, lights: int) -> None:
-        """The shader programs (with ``lights`` searchlights) and the screen-space buffers of
-        the environment, sky and blend band."""
+    def _make_programs(self, lights: int, rubble: RubbleModel) -> None:
+        """The shader programs (with ``lights`` searchlights, and the environment pass with
+        brash and ridges where the field has them, and its ridge uniforms) and the
+        screen-space buffers of the environment, sky and blend band."""
         ctx = self.ctx
-        self.env = ctx.program(vertex_shader=shaders.ENV_VS,
-                               fragment_shader=shaders.with_lights(shaders.ENV_FS, lights))
+        env = shaders.with_rubble(shaders.with_lights(shaders.ENV_FS, lights), bool(np.any(rubble.brash_share > 0.0)),
+                                  bool(rubble.ridges))
+        self.ridges = ridge_uniforms(rubble)
+        self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=env)
         self.floe = ctx.program(vertex_shader=object_shaders.FLOE_VS,
                                 fragment_shader=shaders.with_lights(object_shaders.FLOE_FS, lights))
         self.ship = ctx.program(vertex_shader=object_shaders.SHIP_VS,
@@ -187,6 +196,8 @@ class SceneRenderer(SceneUploads):
             self._set(self.ship, ship_class=CLASS_INDEX["own_ship" if k == 0 else "other_vessel"])
             set_matrix(self.ship["ship_to_world"], m)
             self.ship_vao.render()
+        if self.model.rubble.ridges:
+            self._draw_sails(cam)
         tiles = self._floe_tiles(view, cam) if self.tile_floes else None
         if tiles:
             ctx.enable_direct(GL_CLIP_DISTANCE0)
@@ -205,6 +216,13 @@ class SceneRenderer(SceneUploads):
         self._blend_bands(channel, blend)
         return cam
 
+    def _draw_sails(self, cam: Camera) -> None:
+        """The ridges' sails near the eye, with the ship program (its uniforms set)."""
+        self.sails.update(cam.eye)
+        self._set(self.ship, ship_class=CLASS_INDEX["level_ice"])
+        set_matrix(self.ship["ship_to_world"], np.eye(4))
+        self.sails.render()
+
     def _draw_environment(self, cam: Camera, channel: ChannelSettings, common: dict) -> None:
         """The environment pass below the horizon (sea and level ice, per pixel) and the sky
         pass above it."""
@@ -216,7 +234,8 @@ class SceneRenderer(SceneUploads):
         if len(ground):
             self._set(self.env, slab_z=self.slab_z, far=self.settings.far_m, tile_info=0,
                       cell_raster=3, raster_size=self.raster_size, rim_px=self.rim_px, status=STATUS_UNIT,
-                      field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **common)
+                      field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **self.ridges,
+                      **common)
             self.env_vao.render(vertices=len(ground))
         if len(above):
             self._set(self.sky_prog, **common)

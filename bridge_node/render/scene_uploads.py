@@ -53,6 +53,7 @@ class SceneUploads:
         nx = self.model.scene.nx
         thickness = self.tile_thickness.view("i4")[p.tile]
         flag = int(breakable) or (UNPLACED_FLOE_FIELD if p.tile in self.floe_field_info else 0)
+        flag |= self.rubble_bits[p.tile]
         info = np.array([first_entry, p.template | (p.quarter_turns << 16), thickness, flag], "i4")
         self.tile_info.write(info.tobytes(), viewport=(p.tile % nx, p.tile // nx, 1, 1))
 

@@ -13,7 +13,7 @@ searchlights, and fogged by the visibility.
 """
 import math
 
-from bridge_node.render import classes
+from bridge_node.render import classes, rubble_look
 from bridge_node.render.textures import NOISE_RANGE
 from sim_core.ice.bending import PIECE
 
@@ -156,6 +156,14 @@ vec3 water_body(vec3 world) {
 vec4 opaque(vec3 colour) { return vec4(colour, 1.0); }
 """
 
+def with_rubble(source: str, brash: bool, ridges: bool) -> str:
+    """The environment pass's source with its brash and ridge code compiled in only where
+    the field has them: on llvmpipe a branch does not skip work, so a field without them
+    would pay for them in every ground pixel."""
+    defines = f"#define BRASH {int(brash)}\n#define RIDGES {int(ridges)}\n"
+    return source.replace("#version 330\n", "#version 330\n" + defines, 1)
+
+
 def with_lights(source: str, searchlights: int) -> str:
     """A fragment shader's source with its number of searchlights fixed when it compiles:
     on llvmpipe a loop to a uniform bound costs as much as the ice's relief, even when the
@@ -185,12 +193,13 @@ void main() { colour = classes ? CLASS_COLOUR[CLASS_SKY] : opaque(sky(normalize(
 # breakable or frozen tile the template's cell raster names the cell under the point, and
 # the cell's status (from the status texture) says intact ice or water between broken floes.
 # Level ice thus costs no triangles, and far ice does not z-fight with the water.
-ENV_FS = "#version 330\n" + COMMON + """
+ENV_FS = "#version 330\n" + COMMON + rubble_look.GLSL + """
 uniform float slab_z;
 uniform float far;               // m: level ice is looked up this far
 uniform isampler2D tile_info;    // per tile: its first status entry, template | quarter turns << 16, level-ice
-                                 // thickness (m, float bits), 1 if breakable (0: the unbreakable slab; 2: a floe
-                                 // field's tile not simulated, its floes where its template lays them): one fetch
+                                 // thickness (m, float bits), and a flag byte: 1 if breakable (0: the unbreakable
+                                 // slab; 2: a floe field's tile not simulated, its floes where its template lays
+                                 // them) | brash share << 8 | (1 + ridge field) << 16 (rubble_look): one fetch
 uniform usampler2D cell_raster;  // templates stacked in y: 1 + cell index (0 in a crack), 1 + the nearest
                                  // other cell's within rim_px (0: none), distance to it (1/256 px)
 uniform float rim_px;
@@ -233,10 +242,11 @@ uvec3 raster_cell(vec2 p, ivec2 tile, ivec4 info) {
 bool level_ice(vec2 p, ivec2 tile, ivec4 info, float footprint, out float rim, out bool crack) {
     rim = 0.0;
     crack = false;
-    if (info.w == 0) return intBitsToFloat(info.z) > 0.0;              // the unbreakable slab (none: open water)
+    int flag = info.w & 0xFF;
+    if (flag == 0) return intBitsToFloat(info.z) > 0.0;                // the unbreakable slab (none: open water)
     uvec3 cell = raster_cell(p, tile, info);
     // a floe field's tile not simulated: its floes where the template lays them
-    if (info.w == """ + str(UNPLACED_FLOE_FIELD) + """) return cell.r != 0u;
+    if (flag == """ + str(UNPLACED_FLOE_FIELD) + """) return cell.r != 0u;
     if (cell.r == 0u) return false;
     uint own = cell_status(info.x, int(cell.r) - 1);
     if (broken(own, info.x)) return false;
@@ -253,6 +263,9 @@ bool level_ice(vec2 p, ivec2 tile, ivec4 info, float footprint, out float rim, o
 }
 const vec3 WET = vec3(0.55, 0.62, 0.68);  // wet snow and slush against the dry
 const vec3 CRACK = vec3(0.28, 0.36, 0.42);  // a crack's wet slush against the dry snow
+const vec3 FRESH_ICE = vec3(0.70, 0.85, 0.88);  // a broken block's face: the blue-green of sea ice
+const vec3 WET_BRASH = vec3(0.86, 0.90, 0.93);  // brash: snow and slush, wet, greyer than dry snow
+const vec3 SUBMERGED = vec3(0.25, 0.52, 0.52);  // ice just under the water, pale blue-green
 const float WAVE_SLOPE = 0.04;
 const vec2 WAVE_DRIFT = vec2(0.6, 0.35);  // m/s: ripples travelling before a light air
 uniform float time;                       // s: the exercise's clock
@@ -279,14 +292,22 @@ void main() {
     bool crack;
     // clamped: off the field the fetch is unused, and one outside the texture is undefined
     ivec4 info = texelFetch(tile_info, clamp(tile, ivec2(0), textureSize(tile_info, 0) - 1), 0);
-    float footprint = max(1.0, 0.5 * (fwidth(p.x) + fwidth(p.y)) * float(raster_size) / tile_side);
+    float pixel_m = 0.5 * (fwidth(p.x) + fwidth(p.y));
+    float footprint = max(1.0, pixel_m * float(raster_size) / tile_side);
     bool ice = on_field && level_ice(p, tile, info, footprint, rim, crack);
+    vec3 at = eye - g * eye.z / g.z;  // on the water
+    float brash_share = on_field ? float((info.w >> 8) & 0xFF) / 255.0 : 0.0, brash_rim = 0.0, brash = 0.0;
+    vec3 piece_n;
+    float tone;
+#if BRASH
+    if (!ice && brash_share > 0.0) brash = brash_at(at.xy, brash_share, pixel_m, brash_rim, piece_n, tone);
+#endif
     if (classes) {  // the class pass: the pixel's class, no shading
-        int ground_class = ice ? (crack ? CLASS_CRACK : CLASS_LEVEL_ICE) : CLASS_OPEN_WATER;
+        int ground_class = ice ? (crack ? CLASS_CRACK : CLASS_LEVEL_ICE)
+                               : (brash > 0.5 ? CLASS_BROKEN_FLOE : CLASS_OPEN_WATER);
         colour = CLASS_COLOUR[below < 0.5 ? CLASS_SKY : ground_class];
         return;
     }
-    vec3 at = eye - g * eye.z / g.z;  // on the water
     // one fetch of the finest octave, under the snow on ice, under the moving waves on the sea
     // (on llvmpipe, both branches cost every pixel); its mip level from the snow's coordinates
     vec2 u = OCTAVE[0] * p;
@@ -297,8 +318,24 @@ void main() {
         vec3 surface = ice_surface(snow, intBitsToFloat(info.z), vec3(p, slab_z));
         ground = mix(surface, surface * WET, rim);   // wet, darker along open water
         if (crack) ground = surface * CRACK;         // a crack: sea water welled up into the snow
-    } else {  // the sea, out to the horizon
+#if RIDGES
+        int ridge = on_field ? (info.w >> 16) & 0xFF : 0;
+        vec3 block_n;
+        float gap, fresh;
+        float sail = ridge > 0 ? sail_at(p, ridge - 1, pixel_m, block_n, gap, fresh) : 0.0;
+        if (sail > 0.0) {                            // a ridge's sail beyond the meshes: tumbled blocks
+            vec3 albedo = mix(ice_albedo(intBitsToFloat(info.z)), FRESH_ICE, fresh);
+            ground = lit(albedo, block_n, vec3(p, slab_z)) * (1.0 - 0.7 * gap);
+        }
+#endif
+    } else {  // the sea, out to the horizon; brash on it
         ground = sea(g, at, finest.yz);
+#if BRASH
+        if (brash_share > 0.0) {
+            ground = mix(ground, lit(SUBMERGED, vec3(0.0, 0.0, 1.0), at), 0.6 * brash_rim);
+            ground = mix(ground, lit(WET_BRASH * tone, piece_n, at), brash);
+        }
+#endif
     }
     colour = opaque(mix(above, fogged(ground, vec3(p, slab_z)), below));  // fogged once: ice and sea alike
 }

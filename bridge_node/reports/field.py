@@ -1,6 +1,6 @@
 """The field report (``icebridge field``): per region the concentration measured in the
 floes laid against the chart's, floe sizes against the WMO ranges, ice types; and a top
-view of the field with the regions outlined."""
+view of the field with the regions outlined and the ridges drawn."""
 from __future__ import annotations
 
 import math
@@ -13,7 +13,10 @@ from rich.table import Table
 
 from bridge_node.reports.figures import plt, save_figure
 from sim_core.regimes.floe_layout import RegimeModel
+from sim_core.regimes.rubble import RidgeField
 from sim_core.regimes.survey import RegionSurvey
+
+RIDGE_COLOUR = "#e040c0"
 
 
 def survey_json(model: RegimeModel, surveys: list[RegionSurvey], picture: Path) -> dict:
@@ -63,10 +66,11 @@ def survey_table(model: RegimeModel, surveys: list[RegionSurvey]) -> Table:
     return table
 
 
-def plot_field(model: RegimeModel, surveys: list[RegionSurvey], field: shapely.Geometry, path: Path) -> None:
+def plot_field(model: RegimeModel, surveys: list[RegionSurvey], field: shapely.Geometry, path: Path,
+               ridges: tuple[RidgeField, ...] = ()) -> None:
     """Top view of the field (the floes laid white on sea blue, regions outlined in orange
-    and numbered, level ice pale, what a sample left unlaid hatched), and beside it a close
-    view of the region with the smallest floes."""
+    and numbered, level ice pale, brash grey and dotted, what a sample left unlaid hatched,
+    ridge lines magenta), and beside it a close view of the region with the smallest floes."""
     x0, y0, x1, y1 = field.bounds
     fig, (ax, zx) = plt.subplots(1, 2, figsize=(14, 7), gridspec_kw={"width_ratios": [2, 1]})
     for axis in (ax, zx):
@@ -81,13 +85,19 @@ def plot_field(model: RegimeModel, surveys: list[RegionSurvey], field: shapely.G
             at = shapely.point_on_surface(model.polygons[r])
             ax.annotate(str(r + 1), (at.x, at.y), color="#ff7f0e", fontsize=10, ha="center", va="center",
                         bbox={"fc": "black", "alpha": 0.6, "lw": 0})
+    for r in ridges:
+        for line in shapely.get_parts(shapely.intersection(r.lines(), field)):
+            ax.plot(*np.asarray(line.coords).T, color=RIDGE_COLOUR, linewidth=1.2)
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_title("ice field: floes laid from the regimes")
     _close_view(zx, model, surveys)
-    legend = "\n".join(f"{r + 1}  {region.name}: {region.regime.label()}" for r, region in enumerate(model.regions))
-    fig.text(0.01, 0.01, legend + "\nhatched: not laid (the region was sampled)", fontsize=7, va="bottom")
-    fig.tight_layout(rect=(0, 0.04 + 0.018 * len(model.regions), 1, 1))
+    lines = [f"{r + 1}  {region.name}: {region.regime.label()}" for r, region in enumerate(model.regions)]
+    lines += [f"ridge field {r.name} (magenta): sail {r.sail_height:g} m, keel {r.keel_depth:g} m deep and "
+              f"{r.width:g} m wide, every {r.spacing:g} m" for r in ridges]
+    fig.text(0.01, 0.01, "\n".join(lines) + "\nhatched: not laid (the region was sampled); dotted grey: brash",
+             fontsize=7, va="bottom")
+    fig.tight_layout(rect=(0, 0.04 + 0.018 * len(lines), 1, 1))
     save_figure(fig, path, dpi=130)
 
 
@@ -96,6 +106,8 @@ def _draw(ax, model: RegimeModel, surveys: list[RegionSurvey]) -> None:
         region, polygon = model.regions[s.region], model.polygons[s.region]
         if region.regime.level:
             _fill(ax, polygon, "#dfe8f0", None)
+        elif region.rubble_only:
+            _fill(ax, polygon, "#a9b6c2", "..")
         elif not s.whole:
             _fill(ax, shapely.difference(polygon, s.surveyed), "none", "//")
         if len(s.layout.polygon):

@@ -22,7 +22,8 @@ def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions:
     global cell's outline points (x, y about its centroid, m), outline starts (G + 1) and
     centroid in its template's tile frame (x, y, m), the open-water tiles (``water_runs``), and
     the ice regions as they lie on the field (``regions`` in the header: name, egg code, kind,
-    label point; their outline rings' points ``region_xy``, ring starts and owners)."""
+    label point; their outline rings' points ``region_xy``, ring starts and owners), and the
+    ridge lines' points ``ridge_xy`` and line starts ``ridge_start``."""
     ice, scene, ship = model.ice, model.scene, model.ship.particulars
     lat0, lon0 = model.origin
     m, n = radii(lat0)
@@ -42,8 +43,15 @@ def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions:
     header["regions"], rings = region_outlines(list(regions), shapely.box(0.0, 0.0, scene.nx * scene.side,
                                                                           scene.ny * scene.side))
     arrays = {"outline": ice.outline[:, :2], "outline_start": ice.outline_start.astype(np.int64),
-              "centroid": ice.centroid[:, :2], "water_runs": water_runs(scene)} | rings
+              "centroid": ice.centroid[:, :2], "water_runs": water_runs(scene)} | rings | ridge_lines(model)
     return pack(header, arrays)
+
+
+def ridge_lines(model: WorldModel) -> dict[str, np.ndarray]:
+    """The ridge fields' lines: points (x, y, m, flattened) and line starts (lines + 1)."""
+    lines = [shapely.get_coordinates(line) for r in model.rubble.ridges for line in shapely.get_parts(r.lines())]
+    return {"ridge_xy": np.concatenate(lines).ravel() if lines else np.zeros(0),
+            "ridge_start": offsets(np.array([len(p) for p in lines], dtype=np.int64))}
 
 
 def water_runs(scene: SceneModel) -> np.ndarray:

@@ -4,10 +4,12 @@ from __future__ import annotations
 import numpy as np
 
 CONTOUR_POINTS = 34  # paper §2.4: the hull described by 34 contour points
+BOW_FRACTION = 0.3  # share of the length the parabolic bow takes
+STERN_FRACTION = 0.15  # share of the length the parabolic run takes
 
 
 def waterline_contour(length: float, beam: float, n_points: int = CONTOUR_POINTS,
-                      bow_fraction: float = 0.3, stern_fraction: float = 0.15,
+                      bow_fraction: float = BOW_FRACTION, stern_fraction: float = STERN_FRACTION,
                       transom: float = 0.6) -> np.ndarray:
     """Convex waterline contour (n_points, 2) in the ship frame, m: a parallel midbody, a
     parabolic bow over ``bow_fraction`` of the length ending at the stem, and a parabolic

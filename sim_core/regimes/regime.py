@@ -55,6 +55,12 @@ class IceRegime:
         return len(self.types) == 1 and (self.types[0].floe_size == wmo_codes.FAST_ICE or (
             self.types[0].floe_size == wmo_codes.GIANT_FLOE and self.total >= 10.0))
 
+    @property
+    def rubble_types(self) -> tuple[IceType, ...]:
+        """The types of pieces under ``MIN_FLOE_SIZE`` (brash, pancakes): not laid as bodies,
+        they resist the hull as brash does (``sim_core.regimes.rubble``)."""
+        return tuple(t for t in self.types if t.floe_size != wmo_codes.FAST_ICE and t.size_range.low < MIN_FLOE_SIZE)
+
     def label(self) -> str:
         if not self.types:
             return "ice free"
@@ -108,13 +114,31 @@ class IceRegion:
     polygon: shapely.Geometry
     kind: RegionKind
     regime: IceRegime
+    brash_thickness: float | None = None  # m, H_M of its brash; None: its thickest brash type's nominal
 
     @property
     def in_the_world(self) -> bool:
-        """Whether the ice world lays this region out: level ice, ice-free water, or a floe
-        field with floes of at least ``MIN_FLOE_SIZE`` (not land or no data, nor brash or
-        pancake ice alone)."""
-        return self.regime.level or (self.kind in ("ice", "water") and not self.regime.types) or self.floe_field
+        """Whether the ice world lays this region out: level ice, ice-free water, a floe
+        field with floes of at least ``MIN_FLOE_SIZE``, or brash and pancakes alone (open
+        water that resists as brash does); not land or no data."""
+        return self.regime.level or (self.kind in ("ice", "water") and not self.regime.types) or self.floe_field \
+            or self.rubble_only
+
+    @property
+    def rubble_only(self) -> bool:
+        """Sea ice of pieces under ``MIN_FLOE_SIZE`` alone: brash or pancakes."""
+        return self.kind == "ice" and bool(self.regime.types) and \
+            len(self.regime.rubble_types) == len(self.regime.types)
+
+    @property
+    def rubble(self) -> tuple[float, float]:
+        """The share of the region's area its brash and pancakes cover (0-1) and their
+        thickness H_M (m): ``brash_thickness``, else the thickest such type's nominal."""
+        types = self.regime.rubble_types if self.kind == "ice" else ()
+        if not types:
+            return 0.0, 0.0
+        h = self.brash_thickness if self.brash_thickness is not None else types[0].stage_range.nominal
+        return sum(t.concentration for t in types) / 10.0, h
 
     @property
     def floe_field(self) -> bool:
@@ -152,11 +176,12 @@ def tile_regions(regions: list[IceRegion], nx: int, ny: int, side: float) -> np.
 def region_tile_thickness(regions: list[IceRegion], index: np.ndarray, max_thickness: float) -> np.ndarray:
     """Thickness (ny, nx) m of each tile of a field, from the region holding its centre
     (``index``, from ``tile_regions``): a level-ice region's stage (the middle of
-    its range, at most ``max_thickness``), 0 for an ice-free region (open water); NaN where
+    its range, at most ``max_thickness``), 0 for an ice-free region or one of brash alone
+    (open water; the brash resists through ``sim_core.regimes.rubble``); NaN where
     no region lies, or one the ice world does not lay out as level ice (floe fields, laid
     from their own templates; land, no data), so that the field's own thickness profile
     holds there."""
-    per_region = np.array([np.nan if not r.in_the_world or r.floe_field else
+    per_region = np.array([0.0 if r.rubble_only else np.nan if not r.in_the_world or r.floe_field else
                            min(r.regime.types[0].stage_range.nominal, max_thickness) if r.regime.level else 0.0
                            for r in regions] + [np.nan])
     return per_region[index]  # index -1 (no region) takes the last entry, NaN

@@ -42,6 +42,30 @@ def _code(value: str | int, table: dict, lookup, what: str) -> int:
 Pair = Annotated[list[float], Field(min_length=2, max_length=2)]
 
 
+def check_polygon(polygon_m: list | None, polygon_deg: list | None) -> None:
+    """ValueError unless exactly one of the two is given, with 3 corners or more, valid
+    (not self-intersecting), and in degrees within [-89, 89] x [-180, 180]."""
+    given = [p for p in (polygon_m, polygon_deg) if p is not None]
+    if len(given) != 1:
+        raise ValueError("give one polygon: polygon_m or polygon_deg")
+    if len(given[0]) < 3:
+        raise ValueError(f"a polygon has at least 3 corners, got {len(given[0])}")
+    ring = shapely.Polygon(given[0])
+    if not ring.is_valid:
+        raise ValueError(f"invalid polygon: {shapely.is_valid_reason(ring)}")
+    if polygon_deg is not None and any(abs(lat) > 89.0 or abs(lon) > 180.0 for lat, lon in polygon_deg):
+        raise ValueError("polygon_deg: latitudes lie in [-89, 89], longitudes in [-180, 180]")
+
+
+def local_corners(polygon_m: list | None, polygon_deg: list | None, lat0_deg: float,
+                  lon0_deg: float) -> list[list[float]]:
+    """A checked polygon's corners [east, north] m in the local frame of an origin (degrees)."""
+    if polygon_m is not None:
+        return polygon_m
+    lat0, lon0 = math.radians(lat0_deg), math.radians(lon0_deg)
+    return [list(geodetic_to_local(math.radians(lat), math.radians(lon), lat0, lon0)[::-1]) for lat, lon in polygon_deg]
+
+
 class RegionSettings(Params):
     """A region of the field: its name, one polygon (``polygon_m``: [east, north] m from the
     field's south-west corner, or ``polygon_deg``: [latitude, longitude]), its total
@@ -53,19 +77,12 @@ class RegionSettings(Params):
     polygon_deg: list[Pair] | None = Field(None, description="[[latitude, longitude], ...] deg")
     concentration: float = Field(ge=0.0, le=10.0, description="total concentration, tenths")
     ice: list[IceTypeSettings] = Field(default_factory=list, max_length=3, description="ice types, thickest first")
+    brash_thickness: float | None = Field(None, gt=0.0, le=10.0, description=(
+        "H_M, m: thickness of its brash (or pancakes) in mid channel; default: the thickest such type's nominal"))
 
     @model_validator(mode="after")
     def _checked(self) -> "RegionSettings":
-        given = [p for p in (self.polygon_m, self.polygon_deg) if p is not None]
-        if len(given) != 1:
-            raise ValueError("give one polygon: polygon_m or polygon_deg")
-        if len(given[0]) < 3:
-            raise ValueError(f"a polygon has at least 3 corners, got {len(given[0])}")
-        ring = shapely.Polygon(given[0])
-        if not ring.is_valid:
-            raise ValueError(f"invalid polygon: {shapely.is_valid_reason(ring)}")
-        if self.polygon_deg is not None and any(abs(lat) > 89.0 or abs(lon) > 180.0 for lat, lon in self.polygon_deg):
-            raise ValueError("polygon_deg: latitudes lie in [-89, 89], longitudes in [-180, 180]")
+        check_polygon(self.polygon_m, self.polygon_deg)
         self.regime()
         return self
 
@@ -75,11 +92,8 @@ class RegionSettings(Params):
 
     def region(self, lat0_deg: float, lon0_deg: float) -> IceRegion:
         """The region in the local frame of an origin (degrees)."""
-        if self.polygon_m is not None:
-            corners = self.polygon_m
-        else:
-            lat0, lon0 = math.radians(lat0_deg), math.radians(lon0_deg)
-            corners = [geodetic_to_local(math.radians(lat), math.radians(lon), lat0, lon0)[::-1]
-                       for lat, lon in self.polygon_deg]
+        corners = local_corners(self.polygon_m, self.polygon_deg, lat0_deg, lon0_deg)
         regime = self.regime()
-        return IceRegion(self.name, shapely.Polygon(corners), "ice" if regime.types else "water", regime)
+        return IceRegion(self.name, shapely.Polygon(corners), "ice" if regime.types else "water", regime,
+                         self.brash_thickness)
+

@@ -9,6 +9,7 @@ from pydantic import Field, model_validator
 
 from sim_core.fracture.fragment_count import MAX_THICKNESS
 from sim_core.params import Params
+from sim_core.regimes.ridge_settings import RidgeFieldSettings
 from sim_core.regimes.settings import RegionSettings
 
 
@@ -27,6 +28,7 @@ class IceFieldSettings(Params):
     class_step: float = Field(0.1, ge=0.01, le=0.5, description="thickness class width, m")
     chart: str | None = Field(None, description="SIGRID-3 ice chart (.shp) whose regions lie over the field")
     regions: list[RegionSettings] = Field(default_factory=list, description="regions drawn over the chart")
+    ridges: list[RidgeFieldSettings] = Field(default_factory=list, description="ridge fields over the ice")
 
     @model_validator(mode="after")
     def _profile_inputs(self) -> "IceFieldSettings":

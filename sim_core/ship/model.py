@@ -21,9 +21,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from sim_core.frames.hull_contour import BOW_FRACTION, STERN_FRACTION
 from sim_core.material import IceMaterial
 from sim_core.ship.particulars import TELEGRAPH_POSITIONS, ShipParticulars
 from sim_core.ship.resistance import OPEN_WATER, LindqvistTerms, ice_resistance, lindqvist_terms
+from sim_core.ship.rubble_resistance import BowForm, channel_speed_factor
 
 MAX_SUBSTEP = 0.1  # s
 _U_MIN = 0.05  # m/s: floor of U where the hull's r^3 terms divide by U
@@ -60,6 +62,7 @@ class ShipModel:
     rps_astern_max: float  # negative
     stem_angle: float
     waterline_angle: float
+    bow: BowForm  # for the brash channel's resistance
 
 
 @dataclass
@@ -82,6 +85,8 @@ class ShipData:
     ice_h: float = 0.0  # local level-ice thickness, m
     ice_condition: int = OPEN_WATER
     ice_resistance: float = 0.0  # N, last step (>= 0, opposing the motion)
+    brash_resistance: float = 0.0  # N at 5 knots: the brash at the bow (``rubble_resistance``)
+    keel_load: float = 0.0  # N: the ridge keel at the bow
     _ice_terms: tuple = (None, None)  # (h, LindqvistTerms) cache
 
 
@@ -109,7 +114,18 @@ def compile_ship(p: ShipParticulars, material: IceMaterial | None = None) -> Shi
         telegraph_rps={k: v / 60.0 for k, v in rpm.items()},
         rps_ahead_max=rpm["navigation_full_ahead"] / 60.0, rps_astern_max=rpm["crash_astern"] / 60.0,
         stem_angle=math.radians(p.ice.stem_angle_deg), waterline_angle=math.radians(p.ice.waterline_angle_deg),
+        bow=bow_form(p),
     )
+
+
+def bow_form(p: ShipParticulars) -> BowForm:
+    """The bow form of the waterline the ice world gives the hull (``waterline_contour``:
+    a parabolic bow over ``BOW_FRACTION`` of the length, whose waterline area is 2/3 of its
+    length times the beam), with the stem angle for the bow angle."""
+    bow = BOW_FRACTION * p.length
+    return BowForm(p.length, p.beam, p.draught, math.radians(p.ice.stem_angle_deg),
+                   math.radians(p.ice.waterline_angle_deg), bow,
+                   (1.0 - BOW_FRACTION - STERN_FRACTION) * p.length, 2.0 / 3.0 * bow * p.beam)
 
 
 def level_ice_terms(model: ShipModel, h: float) -> LindqvistTerms:
@@ -200,16 +216,18 @@ def state_derivatives(model: ShipModel, state: tuple, delta: float, n: float, ex
 
 def _ice_force(model: ShipModel, data: ShipData, u: float) -> float:
     """Surge force (N) of the ice resistance, against u, faded in near rest so that it can
-    stop the ship but never drive it backwards."""
-    if data.ice_condition == OPEN_WATER or data.ice_h <= 0.0:
-        data.ice_resistance = 0.0
-        return 0.0
-    h_cached, terms = data._ice_terms
-    if h_cached != data.ice_h:
-        terms = level_ice_terms(model, data.ice_h)
-        data._ice_terms = (data.ice_h, terms)
-    r = ice_resistance(terms, abs(u), data.ice_h, model.L, model.material.gravity, data.ice_condition,
-                       model.particulars.ice.channel_concentration)
+    stop the ship but never drive it backwards: Lindqvist's for the level ice or channel,
+    plus the brash's and a ridge keel's at the bow."""
+    r = data.keel_load
+    if data.brash_resistance > 0.0:
+        r += data.brash_resistance * channel_speed_factor(u, model.L, model.material.gravity)
+    if data.ice_condition != OPEN_WATER and data.ice_h > 0.0:
+        h_cached, terms = data._ice_terms
+        if h_cached != data.ice_h:
+            terms = level_ice_terms(model, data.ice_h)
+            data._ice_terms = (data.ice_h, terms)
+        r += ice_resistance(terms, abs(u), data.ice_h, model.L, model.material.gravity, data.ice_condition,
+                            model.particulars.ice.channel_concentration)
     data.ice_resistance = r
     return -math.copysign(r, u) * min(1.0, abs(u) / _U_ICE)
 

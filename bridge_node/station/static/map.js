@@ -8,7 +8,7 @@ const MAP_COLORS = {
   water: "#17364f", ice: "#d2dde6", tileLine: "rgba(70, 110, 140, 0.35)", frozenTile: "rgba(96, 130, 160, 0.10)",
   floe: "#f7fbfe", floeEdge: "#6d8aa1", frozenFloe: "#c3d1dc", track: "#ffb13b", ship: "#e8331f",
   shipEdge: "#ffffff", traffic: "#2fd27a", light: "rgba(255, 236, 140, 0.28)", grid: "rgba(255, 255, 255, 0.28)",
-  gridText: "rgba(255, 255, 255, 0.85)", ghost: "rgba(255, 176, 59, 0.9)", region: "#ff7ad9",
+  gridText: "rgba(255, 255, 255, 0.85)", ghost: "rgba(255, 176, 59, 0.9)", region: "#ff7ad9", ridge: "#e040c0",
 };
 
 class MapView {
@@ -47,7 +47,8 @@ class MapView {
   // -- data ------------------------------------------------------------------------------
   setGeometry(header, arrays) {
     this.geo = { ...header, outline: arrays.outline, start: arrays.outline_start, centroid: arrays.centroid,
-                 waterRuns: arrays.water_runs, regionPath: regionOutlines(arrays) };
+                 waterRuns: arrays.water_runs, regionPath: pathOf(arrays.region_xy, arrays.region_start, true),
+                 ridgePath: pathOf(arrays.ridge_xy, arrays.ridge_start, false) };
     const f = header.field;
     this.width = f.nx * f.side; this.height = f.ny * f.side;
     this.tiles.clear(); this.floes.clear();
@@ -239,12 +240,17 @@ class MapView {
     for (const f of this.floes.values()) { ctx.fill(f.path); if (s > 1) ctx.stroke(f.path); }
   }
 
-  // the ice regions (a chart's and the config's) outlined, dashed, as they lie on the field
+  // the ice regions (a chart's and the config's) outlined, dashed, as they lie on the field;
+  // the ridges' lines solid
   _drawRegions(ctx, s) {
-    if (!this.geo.regionPath) return;
     ctx.save();
-    ctx.strokeStyle = MAP_COLORS.region; ctx.lineWidth = 2 / s; ctx.setLineDash([10 / s, 6 / s]);
-    ctx.stroke(this.geo.regionPath);
+    if (this.geo.ridgePath) {
+      ctx.strokeStyle = MAP_COLORS.ridge; ctx.lineWidth = 3 / s; ctx.stroke(this.geo.ridgePath);
+    }
+    if (this.geo.regionPath) {
+      ctx.strokeStyle = MAP_COLORS.region; ctx.lineWidth = 2 / s; ctx.setLineDash([10 / s, 6 / s]);
+      ctx.stroke(this.geo.regionPath);
+    }
     ctx.restore();
   }
 
@@ -403,16 +409,16 @@ function formatLatLon(geo, x, y) {
   return `${formatAngle(o.latitude_deg + y / o.m_per_deg_lat, "N", "S", 2)} ${formatAngle(o.longitude_deg + x / o.m_per_deg_lon, "E", "W", 3)}`;
 }
 
-// the regions' outline rings (world m) as one path, or null when the exercise has none
-function regionOutlines(arrays) {
-  const xy = arrays.region_xy, start = arrays.region_start;
+// polylines (world m: points xy flattened, starts of each) as one path, rings if closed, or
+// null when there are none (the regions' outline rings, the ridges' lines)
+function pathOf(xy, start, closed) {
   if (!xy || !xy.length) return null;
   const path = new Path2D();
   for (let r = 0; r + 1 < start.length; r++) {
     for (let i = start[r]; i < start[r + 1]; i++) {
       if (i === start[r]) path.moveTo(xy[2 * i], xy[2 * i + 1]); else path.lineTo(xy[2 * i], xy[2 * i + 1]);
     }
-    path.closePath();
+    if (closed) path.closePath();
   }
   return path;
 }
