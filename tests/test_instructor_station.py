@@ -43,6 +43,7 @@ LEVEL_ICE_RGB = (210, 221, 230)  # MAP_COLORS.ice
 WATER_RGB = (23, 54, 79)  # MAP_COLORS.water
 REGION_RGB = (255, 122, 217)  # MAP_COLORS.region
 RIDGE_RGB = (224, 64, 192)  # MAP_COLORS.ridge
+BRASH_RGB = (133, 150, 166)  # MAP_COLORS.brash
 
 
 def write_config(folder: Path, stream: tuple[int, int], control: int, port: int, extra: str = "") -> Path:
@@ -52,6 +53,9 @@ def write_config(folder: Path, stream: tuple[int, int], control: int, port: int,
     text = ('[ship]\nname = "polar_cargo"\n[ice_field]\nwidth = 800.0\nheight = 800.0\nthickness = 0.3\n'
             '[[ice_field.regions]]\nname = "lake"\nconcentration = 0\n'  # open water in the north-west corner
             'polygon_m = [[0.0, 600.0], [200.0, 600.0], [200.0, 800.0], [0.0, 800.0]]\n'
+            '[[ice_field.regions]]\nname = "brash"\nconcentration = 9\n'  # brash alone in the south-east
+            'ice = [{ stage = "grey_white", floe_size = "brash" }]\n'
+            'polygon_m = [[600.0, 0.0], [800.0, 0.0], [800.0, 200.0], [600.0, 200.0]]\n'
             '[[ice_field.ridges]]\nname = "ridges"\ndirection_deg = 90.0\nspacing_m = 150.0\n'  # one ridge line,
             'through_m = [0.0, 400.0]\npolygon_m = [[550.0, 350.0], [800.0, 350.0], [800.0, 450.0], [550.0, 450.0]]\n'
             '[exercise]\nstart_north = -20.0\nstart_east = 450.0\n'
@@ -165,6 +169,10 @@ def test_the_map_shows_the_regions_and_their_open_water(exercise, browser):
     image = screenshot(browser)
     assert all(near(around(east, 400.0), RIDGE_RGB, 30).any() for east in (600.0, 650.0, 700.0, 750.0))
     assert not near(around(650.0, 370.0), RIDGE_RGB, 30).any()  # the ridge's line, east-west at 400 m
+    view(browser, 650.0, 150.0, 1.0)
+    image = screenshot(browser)
+    assert near(around(640.0, 30.0), BRASH_RGB, 6).mean() > 0.9  # brash alone: not open water (its label mid-way)
+    assert near(around(550.0, 150.0), LEVEL_ICE_RGB, 6).mean() > 0.9  # the level ice beside it
 
 
 def test_freeze_and_resume_from_the_page(exercise, browser):

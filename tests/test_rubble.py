@@ -186,3 +186,22 @@ def test_the_channels_draw_brash_in_the_channel_and_ridge_sails_on_the_ice(tmp_p
     a, b = with_sail.images()[0].astype(float), without.images()[0].astype(float)
     rows = np.abs(a - b).sum(axis=(1, 2))
     assert rows.max() > 0 and np.count_nonzero(rows) < 0.5 * len(rows)  # a band across the view, not the whole
+
+
+def test_the_bow_rises_in_a_keel_and_settles_after_it(tmp_path_factory):
+    """The keel's load lifts the bow (``sim_core.ship.vertical``): the ship pitches bow up and
+    heaves up while its stem crosses the keel, several times more than in the level ice
+    before it, and settles again after it; the outputs carry both."""
+    start = RIDGE_LINE - 10.0 - 40.0 - 75.0  # the stem 40 m short of the keel
+    model, data = _world(tmp_path_factory, start, ridges=[RIDGES])
+    before, during, after = [], [], []
+    for _ in range(450):
+        events = step(model, data, 0.1)
+        stem = data.ship.eta[0] + 75.0
+        part = before if stem < RIDGE_LINE - 10.0 else during if stem < RIDGE_LINE + 10.0 else after
+        part.append((events.ship.pitch, events.ship.heave))
+    assert len(during) > 20 and len(after) > 150
+    pitch_before, pitch_during = max(p for p, _ in before), max(p for p, _ in during)
+    assert pitch_during > 0.002 and pitch_during > 3.0 * pitch_before, (pitch_before, pitch_during)
+    assert max(z for _, z in during) > 0.05  # m up
+    assert abs(after[-1][0]) < 0.3 * pitch_during  # settled in the level ice beyond

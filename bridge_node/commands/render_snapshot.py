@@ -45,6 +45,7 @@ def run(args: argparse.Namespace) -> int:
     channels = open_channels(cfg.render, model)
     view = WorldView()
     view.apply(snapshot(model, data))
+    channels.renderer.build_all(view)
     t0 = time.perf_counter()
     channels.render(view)
     ms = (time.perf_counter() - t0) * 1e3

@@ -18,11 +18,15 @@ def set_matrix(uniform, m: np.ndarray) -> None:
     uniform.write(np.ascontiguousarray(m.T, dtype="f4").tobytes())
 
 
-def ship_matrix(north: float, east: float, psi: float) -> np.ndarray:
-    """Ship frame (x forward, y starboard, z up) to world (x east, y north, z up), 4x4."""
+def ship_matrix(north: float, east: float, psi: float, heave: float = 0.0, pitch: float = 0.0) -> np.ndarray:
+    """Ship frame (x forward, y starboard, z up) to world (x east, y north, z up), 4x4; the
+    ship heaved up by ``heave`` m and pitched bow up by ``pitch`` rad."""
+    c, s = math.cos(pitch), math.sin(pitch)
+    attitude = np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
     m = np.eye(4)
     m[:2, :2] = ship_rotation(psi)
-    m[:2, 3] = east, north
+    m[:3, :3] = m[:3, :3] @ attitude
+    m[:3, 3] = east, north, heave
     return m
 
 
@@ -38,13 +42,15 @@ class Camera:
 
 
 def channel_camera(channel: ChannelSettings, eye: tuple[float, float, float], north: float, east: float, psi: float,
-                   far: float) -> Camera:
+                   far: float, heave: float = 0.0, pitch: float = 0.0) -> Camera:
     """The channel's camera at `eye` (ship frame, m) for the ship at (north, east) m with
-    heading psi (rad, from north)."""
-    eye = (ship_matrix(north, east, psi) @ np.array([*eye, 1.0]))[:3]
-    az, el = psi + math.radians(channel.yaw_deg), math.radians(channel.pitch_deg)
-    f = np.array([math.sin(az) * math.cos(el), math.cos(az) * math.cos(el), math.sin(el)])
-    r = np.cross(f, [0.0, 0.0, 1.0])
+    heading psi (rad, from north), heaved up ``heave`` m and pitched bow up ``pitch`` rad:
+    the eye and its view move with the ship, as a trainee's on its bridge."""
+    to_world = ship_matrix(north, east, psi, heave, pitch)
+    eye = (to_world @ np.array([*eye, 1.0]))[:3]
+    yaw, el = math.radians(channel.yaw_deg), math.radians(channel.pitch_deg)
+    f = to_world[:3, :3] @ [math.cos(yaw) * math.cos(el), math.sin(yaw) * math.cos(el), math.sin(el)]
+    r = np.cross(f, to_world[:3, 2])
     r /= np.linalg.norm(r)
     u = np.cross(r, f)
     view = np.eye(4)

@@ -170,7 +170,8 @@ class SceneRenderer(SceneUploads):
         ctx, s = self.ctx, self.settings
         north, east, psi = view.ship.north, view.ship.east, view.ship.heading
         p = self.model.ship.particulars
-        cam = channel_camera(channel, eye_point(channel.eye, p.look.bridge_eye, p.beam), north, east, psi, s.far_m)
+        cam = channel_camera(channel, eye_point(channel.eye, p.look.bridge_eye, p.beam), north, east, psi, s.far_m,
+                             view.ship.heave, view.ship.pitch)
         vp = cam.view_proj
         sky = self.sky
         common = {"eye": tuple(cam.eye), "visibility": view.environment.visibility, "sun": sky.sun,
@@ -216,6 +217,11 @@ class SceneRenderer(SceneUploads):
         self._blend_bands(channel, blend)
         return cam
 
+    def build_all(self, view: WorldView) -> None:
+        """Build now what the renderer otherwise builds a little each frame (the ridges'
+        sails near the ship): for a single frame that should show everything (a snapshot)."""
+        self.sails.update(np.array([view.ship.east, view.ship.north]), budget_s=math.inf)
+
     def _draw_sails(self, cam: Camera) -> None:
         """The ridges' sails near the eye, with the ship program (its uniforms set)."""
         self.sails.update(cam.eye)
@@ -248,7 +254,7 @@ class SceneRenderer(SceneUploads):
         off. Each is aimed as published (the console's orders), else as configured."""
         n = max(len(self.settings.searchlights), 1)  # the shaders' arrays (see shaders.with_lights), filled whole
         pos, axis, cos, power = np.zeros((n, 3)), np.zeros((n, 3)), np.ones(n), np.zeros(n)
-        to_world = ship_matrix(ship.north, ship.east, ship.heading)
+        to_world = ship_matrix(ship.north, ship.east, ship.heading, ship.heave, ship.pitch)
         for k, light in enumerate(self.settings.searchlights):
             aim = ship.searchlights[k] if k < len(ship.searchlights) else self._configured_aims[k]
             az, el = ship.heading + aim.bearing, aim.elevation
@@ -332,7 +338,7 @@ class SceneRenderer(SceneUploads):
         far distance, scaled to its length and beam (the own ship's where unknown, 0) and in
         height as in beam."""
         ship = view.ship
-        out = [ship_matrix(ship.north, ship.east, ship.heading)]
+        out = [ship_matrix(ship.north, ship.east, ship.heading, ship.heave, ship.pitch)]
         traffic = getattr(view, "traffic", None)
         if traffic is None or len(traffic) == 0:
             return out

@@ -1,7 +1,10 @@
 """The sails of the ridges near the eye as rubble: triangles, built per tile when a tile
 comes within ``sail_distance_m`` of the eye and dropped when it leaves, so a field of any
 size costs only the ridges near the ship. Beyond that distance a sail is a few pixels high
-and the environment pass draws it flat (``rubble_look``).
+and the environment pass draws it flat (``rubble_look``), as it does a tile whose sails
+are not built yet: a frame builds the nearest tiles first, for at most ``BUILD_BUDGET_S``,
+so that coming into a ridge field (a row of tiles entering the distance, or the first
+frame) does not hold a frame up.
 
 A sail is a jagged crest along its ridge line, its height varying block by block between
 45 % and 100 % of the sail height and its crest wandering across the line, on a base four
@@ -12,6 +15,7 @@ each time it is built (seeded by the tile), so a sail does not change when the s
 from __future__ import annotations
 
 import math
+import time
 
 import moderngl
 import numpy as np
@@ -21,6 +25,7 @@ from bridge_node.render.rubble_look import SAIL_BASE
 from sim_core.regimes.rubble import RubbleModel
 
 BLOCK_LENGTH = 2.0  # m along the crest
+BUILD_BUDGET_S = 0.003  # s of sail building a frame
 SNOW = np.array([0.92, 0.94, 0.96])
 FRESH = np.array([0.70, 0.85, 0.88])  # as the environment pass's FRESH_ICE
 FRESH_SHARE = 0.15  # of the faces
@@ -77,20 +82,20 @@ class SailMeshes:
         self.lines = [r.lines() for r in rubble.ridges]
         self.tiles: dict[int, tuple[moderngl.Buffer, moderngl.VertexArray, int]] = {}
 
-    def update(self, eye: np.ndarray) -> None:
-        """Build the tiles within the sail distance of the eye (x, y m), drop those beyond
-        1.2 times it."""
+    def update(self, eye: np.ndarray, budget_s: float = BUILD_BUDGET_S) -> None:
+        """Build the tiles within the sail distance of the eye (x, y m), nearest first, for
+        at most ``budget_s``; drop those beyond 1.2 times it."""
         r = self.rubble
-        if not r.ridges:
-            return
-        side = r.side
-        lo = np.floor((eye[:2] - self.distance) / side).astype(int).clip(0, [r.nx - 1, r.ny - 1])
-        hi = np.floor((eye[:2] + self.distance) / side).astype(int).clip(0, [r.nx - 1, r.ny - 1])
-        for j in range(lo[1], hi[1] + 1):
-            for i in range(lo[0], hi[0] + 1):
-                tile = j * r.nx + i
-                if tile not in self.tiles and r.ridge_tile[tile] >= 0:
-                    self._build(tile, i, j)
+        lo = np.floor((eye[:2] - self.distance) / r.side).astype(int).clip(0, [r.nx - 1, r.ny - 1])
+        hi = np.floor((eye[:2] + self.distance) / r.side).astype(int).clip(0, [r.nx - 1, r.ny - 1])
+        j, i = np.mgrid[lo[1]:hi[1] + 1, lo[0]:hi[0] + 1]
+        tiles = (j * r.nx + i).ravel()
+        tiles = [int(t) for t in tiles if r.ridge_tile[t] >= 0 and t not in self.tiles]
+        start = time.perf_counter()
+        for tile in sorted(tiles, key=lambda t: self._gap(t, eye)):
+            if self._gap(tile, eye) > self.distance or time.perf_counter() - start > budget_s:
+                break
+            self._build(tile, tile % r.nx, tile // r.nx)
         for tile in [t for t in self.tiles if self._gap(t, eye) > 1.2 * self.distance]:
             self._free(self.tiles.pop(tile))
 

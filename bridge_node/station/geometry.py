@@ -20,7 +20,8 @@ def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions:
     """The ``geometry`` message: JSON for the field, ship (``ship_name``), templates and the
     station's update rate (``rate_hz``, Hz); arrays of every
     global cell's outline points (x, y about its centroid, m), outline starts (G + 1) and
-    centroid in its template's tile frame (x, y, m), the open-water tiles (``water_runs``), and
+    centroid in its template's tile frame (x, y, m), the open-water tiles (``water_runs``), the
+    tiles of brash alone (``brash_runs``), and
     the ice regions as they lie on the field (``regions`` in the header: name, egg code, kind,
     label point; their outline rings' points ``region_xy``, ring starts and owners), and the
     ridge lines' points ``ridge_xy`` and line starts ``ridge_start``."""
@@ -43,7 +44,8 @@ def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions:
     header["regions"], rings = region_outlines(list(regions), shapely.box(0.0, 0.0, scene.nx * scene.side,
                                                                           scene.ny * scene.side))
     arrays = {"outline": ice.outline[:, :2], "outline_start": ice.outline_start.astype(np.int64),
-              "centroid": ice.centroid[:, :2], "water_runs": water_runs(scene)} | rings | ridge_lines(model)
+              "centroid": ice.centroid[:, :2], "water_runs": water_runs(scene),
+              "brash_runs": brash_runs(model)} | rings | ridge_lines(model)
     return pack(header, arrays)
 
 
@@ -55,11 +57,25 @@ def ridge_lines(model: WorldModel) -> dict[str, np.ndarray]:
 
 
 def water_runs(scene: SceneModel) -> np.ndarray:
-    """The field's open-water tiles (thickness 0: an ice-free region) as runs along the tile
-    rows, flattened (row, first column, tiles) triples: a lake of thousands of tiles is a few
-    numbers."""
-    water = (scene.class_thickness[scene.tile_class] <= 0.0).reshape(scene.ny, scene.nx)
-    edges = np.diff(np.pad(water.astype(np.int8), ((0, 0), (1, 1))), axis=1)
+    """The field's open-water tiles (thickness 0: an ice-free region, or brash alone) as
+    runs along the tile rows (``tile_runs``)."""
+    return tile_runs((scene.class_thickness[scene.tile_class] <= 0.0).reshape(scene.ny, scene.nx))
+
+
+def brash_runs(model: WorldModel) -> np.ndarray:
+    """The field's tiles of brash alone (open water to the ice world, brash on it) as runs
+    along the tile rows (``tile_runs``)."""
+    scene, rubble = model.scene, model.rubble
+    if len(rubble.brash_share) != scene.nx * scene.ny:
+        return np.zeros(0, dtype=np.int64)
+    brash = (rubble.brash_share > 0.0) & (scene.class_thickness[scene.tile_class] <= 0.0)
+    return tile_runs(brash.reshape(scene.ny, scene.nx))
+
+
+def tile_runs(mask: np.ndarray) -> np.ndarray:
+    """The tiles of a mask (ny, nx) as runs along the tile rows, flattened (row, first
+    column, tiles) triples: a lake of thousands of tiles is a few numbers."""
+    edges = np.diff(np.pad(mask.astype(np.int8), ((0, 0), (1, 1))), axis=1)
     rows, starts = np.nonzero(edges == 1)
     _, stops = np.nonzero(edges == -1)
     return np.column_stack([rows, starts, stops - starts]).astype(np.int64).ravel()

@@ -1,4 +1,5 @@
-"""3-DOF MMG manoeuvring model (surge, sway, yaw) with steering gear, engine and ice load.
+"""3-DOF MMG manoeuvring model (surge, sway, yaw) with steering gear, engine and ice load;
+heave and pitch under the ice's lift at the bow (``sim_core.ship.vertical``).
 
 The MMG standard form of Yasukawa & Yoshimura (2015): hull, propeller and rudder forces
 about midship, with the centre of gravity at x_G. ``compile_ship`` turns the particulars
@@ -24,8 +25,10 @@ import numpy as np
 from sim_core.frames.hull_contour import BOW_FRACTION, STERN_FRACTION
 from sim_core.material import IceMaterial
 from sim_core.ship.particulars import TELEGRAPH_POSITIONS, ShipParticulars
-from sim_core.ship.resistance import OPEN_WATER, LindqvistTerms, ice_resistance, lindqvist_terms
+from sim_core.ship.resistance import LEVEL_ICE, OPEN_WATER, LindqvistTerms, breaking_resistance, ice_resistance, \
+    lindqvist_terms
 from sim_core.ship.rubble_resistance import BowForm, channel_speed_factor
+from sim_core.ship.vertical import VerticalModel, compile_vertical, step_vertical
 
 MAX_SUBSTEP = 0.1  # s
 _U_MIN = 0.05  # m/s: floor of U where the hull's r^3 terms divide by U
@@ -63,12 +66,14 @@ class ShipModel:
     stem_angle: float
     waterline_angle: float
     bow: BowForm  # for the brash channel's resistance
+    vertical: VerticalModel  # heave and pitch
 
 
 @dataclass
 class ShipData:
-    """Per-step state of one ship. Pose and velocity carry 6 DOF (heave, roll and pitch are
-    held at zero by the 3-DOF model) so a 6-DOF model can use the same layout."""
+    """Per-step state of one ship. Pose and velocity carry 6 DOF: surge, sway and yaw from
+    the MMG model, heave and pitch from the ice's lift at the bow (``sim_core.ship.vertical``),
+    roll held at zero."""
 
     eta: np.ndarray = field(default_factory=lambda: np.zeros(6))  # north, east, down m; roll, pitch, yaw rad
     nu: np.ndarray = field(default_factory=lambda: np.zeros(6))  # u, v, w m/s; p, q, r rad/s
@@ -87,6 +92,7 @@ class ShipData:
     ice_resistance: float = 0.0  # N, last step (>= 0, opposing the motion)
     brash_resistance: float = 0.0  # N at 5 knots: the brash at the bow (``rubble_resistance``)
     keel_load: float = 0.0  # N: the ridge keel at the bow
+    bow_resistance: float = 0.0  # N, last step: the share of ``ice_resistance`` at the bow (it lifts the bow)
     _ice_terms: tuple = (None, None)  # (h, LindqvistTerms) cache
 
 
@@ -115,6 +121,9 @@ def compile_ship(p: ShipParticulars, material: IceMaterial | None = None) -> Shi
         rps_ahead_max=rpm["navigation_full_ahead"] / 60.0, rps_astern_max=rpm["crash_astern"] / 60.0,
         stem_angle=math.radians(p.ice.stem_angle_deg), waterline_angle=math.radians(p.ice.waterline_angle_deg),
         bow=bow_form(p),
+        vertical=compile_vertical(L, p.beam, p.displacement, rho, material.gravity, math.radians(p.ice.stem_angle_deg),
+                                  material.hull_friction, p.motions.heave_damping, p.motions.pitch_damping,
+                                  p.motions.gyration_y),
     )
 
 
@@ -218,17 +227,21 @@ def _ice_force(model: ShipModel, data: ShipData, u: float) -> float:
     """Surge force (N) of the ice resistance, against u, faded in near rest so that it can
     stop the ship but never drive it backwards: Lindqvist's for the level ice or channel,
     plus the brash's and a ridge keel's at the bow."""
-    r = data.keel_load
+    g = model.material.gravity
+    bow = data.keel_load
     if data.brash_resistance > 0.0:
-        r += data.brash_resistance * channel_speed_factor(u, model.L, model.material.gravity)
+        bow += data.brash_resistance * channel_speed_factor(u, model.L, g)
+    r = bow
     if data.ice_condition != OPEN_WATER and data.ice_h > 0.0:
         h_cached, terms = data._ice_terms
         if h_cached != data.ice_h:
             terms = level_ice_terms(model, data.ice_h)
             data._ice_terms = (data.ice_h, terms)
-        r += ice_resistance(terms, abs(u), data.ice_h, model.L, model.material.gravity, data.ice_condition,
+        r += ice_resistance(terms, abs(u), data.ice_h, model.L, g, data.ice_condition,
                             model.particulars.ice.channel_concentration)
-    data.ice_resistance = r
+        if data.ice_condition == LEVEL_ICE:
+            bow += breaking_resistance(terms, abs(u), data.ice_h, g)
+    data.ice_resistance, data.bow_resistance = r, bow
     return -math.copysign(r, u) * min(1.0, abs(u) / _U_ICE)
 
 
@@ -298,6 +311,7 @@ def step(model: ShipModel, data: ShipData, dt: float) -> None:
         eta[0], eta[1], eta[5], nu[0], nu[1], nu[5] = s1
         eta[0] += h * data.current[0]
         eta[1] += h * data.current[1]
+        step_vertical(model.vertical, eta, nu, data.bow_resistance * min(1.0, abs(s0[3]) / _U_ICE), h)
 
 
 def new_ship_data(model: ShipModel, speed: float = 0.0, rps: float | None = None, heading: float = 0.0) -> ShipData:

@@ -31,6 +31,8 @@ class ShipOutputs:
     utc: float = 0.0  # the exercise clock: UTC of this state, unix s
     searchlights: tuple[SearchlightState, ...] = ()  # every configured light as commanded, by index
     fix_valid: bool = True  # False: no position fix (a GNSS receiver without one; ``sim_core.ship.sensors``)
+    heave: float = 0.0  # m, + up, from the floating position
+    pitch: float = 0.0  # rad, + bow up
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -56,5 +58,5 @@ def ship_outputs(data: ShipData, time: float, lat0: float, lon0: float, utc: flo
         heading=psi % two_pi, course_over_ground=math.atan2(ve, vn) % two_pi,
         speed_over_ground=math.hypot(vn, ve), speed_longitudinal=u, speed_transverse=v,
         rate_of_turn=r, rudder_angle=data.rudder, shaft_rps=data.rps, ice_resistance=data.ice_resistance, utc=utc,
-        searchlights=searchlights,
+        searchlights=searchlights, heave=-float(data.eta[2]), pitch=float(data.eta[4]),
     )

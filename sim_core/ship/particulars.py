@@ -144,6 +144,16 @@ class Windage(Params):
     c_n: float = Field(0.1, ge=0.05, le=0.2, description="c_n of C_N = c_n sin(2 gamma)")
 
 
+class Motions(Params):
+    """Heave and pitch of the hull under the ice's vertical load (``sim_core.ship.vertical``):
+    damping ratios and the pitch radius of gyration. The defaults are typical of merchant
+    hulls."""
+
+    heave_damping: float = Field(0.2, ge=0.0, le=1.0, description="heave damping ratio, of critical")
+    pitch_damping: float = Field(0.2, ge=0.0, le=1.0, description="pitch damping ratio, of critical")
+    gyration_y: float = Field(0.25, gt=0.1, lt=0.5, description="pitch radius of gyration / L")
+
+
 class ShipParticulars(Params):
     """Everything static about one ship."""
 
@@ -165,4 +175,5 @@ class ShipParticulars(Params):
     engine: Engine
     ice: IceHull
     look: ShipLook = Field(default_factory=ShipLook)
+    motions: Motions = Field(default_factory=Motions)
     windage: Windage | None = Field(None, description="unset: the wind exerts no load on this ship")

@@ -70,4 +70,9 @@ def ice_resistance(terms: LindqvistTerms, speed: float, h: float, length: float,
     submersion = terms.submersion * (1.0 + 9.4 * speed / math.sqrt(g * length))
     if condition == BROKEN_CHANNEL:
         return concentration * submersion
-    return (terms.crushing + terms.bending) * (1.0 + 1.4 * speed / math.sqrt(g * h)) + submersion
+    return breaking_resistance(terms, speed, h, g) + submersion
+
+
+def breaking_resistance(terms: LindqvistTerms, speed: float, h: float, g: float) -> float:
+    """The bow's share of the level-ice resistance (N): crushing and bending at speed (m/s)."""
+    return (terms.crushing + terms.bending) * (1.0 + 1.4 * speed / math.sqrt(g * h))

@@ -8,7 +8,7 @@ const MAP_COLORS = {
   water: "#17364f", ice: "#d2dde6", tileLine: "rgba(70, 110, 140, 0.35)", frozenTile: "rgba(96, 130, 160, 0.10)",
   floe: "#f7fbfe", floeEdge: "#6d8aa1", frozenFloe: "#c3d1dc", track: "#ffb13b", ship: "#e8331f",
   shipEdge: "#ffffff", traffic: "#2fd27a", light: "rgba(255, 236, 140, 0.28)", grid: "rgba(255, 255, 255, 0.28)",
-  gridText: "rgba(255, 255, 255, 0.85)", ghost: "rgba(255, 176, 59, 0.9)", region: "#ff7ad9", ridge: "#e040c0",
+  gridText: "rgba(255, 255, 255, 0.85)", ghost: "rgba(255, 176, 59, 0.9)", region: "#ff7ad9", ridge: "#e040c0", brash: "#8596a6",
 };
 
 class MapView {
@@ -47,7 +47,7 @@ class MapView {
   // -- data ------------------------------------------------------------------------------
   setGeometry(header, arrays) {
     this.geo = { ...header, outline: arrays.outline, start: arrays.outline_start, centroid: arrays.centroid,
-                 waterRuns: arrays.water_runs, regionPath: pathOf(arrays.region_xy, arrays.region_start, true),
+                 waterRuns: arrays.water_runs, brashRuns: arrays.brash_runs, regionPath: pathOf(arrays.region_xy, arrays.region_start, true),
                  ridgePath: pathOf(arrays.ridge_xy, arrays.ridge_start, false) };
     const f = header.field;
     this.width = f.nx * f.side; this.height = f.ny * f.side;
@@ -222,6 +222,11 @@ class MapView {
     const runs = this.geo.waterRuns, side = this.geo.field.side;  // open-water tiles: (row, column, count)
     ctx.fillStyle = MAP_COLORS.water;
     for (let i = 0; i + 2 < runs.length; i += 3) ctx.fillRect(runs[i + 1] * side, runs[i] * side, runs[i + 2] * side, side);
+    const brash = this.geo.brashRuns || [];  // tiles of brash alone: open water with brash on it
+    ctx.fillStyle = MAP_COLORS.brash;
+    for (let i = 0; i + 2 < brash.length; i += 3) {
+      ctx.fillRect(brash[i + 1] * side, brash[i] * side, brash[i + 2] * side, side);
+    }
     ctx.lineWidth = 1 / s;
     const frozen = new Path2D(), tileLines = new Path2D();
     for (const t of this.tiles.values()) {
