@@ -81,6 +81,7 @@ class SailMeshes:
         self.ctx, self.program, self.rubble, self.base_z, self.distance = ctx, program, rubble, base_z, distance
         self.lines = [r.lines() for r in rubble.ridges]
         self.tiles: dict[int, tuple[moderngl.Buffer, moderngl.VertexArray, int]] = {}
+        self.built = np.zeros(len(rubble.ridge_tile), dtype=bool)  # by tile: in ``tiles``
 
     def update(self, eye: np.ndarray, budget_s: float = BUILD_BUDGET_S) -> None:
         """Build the tiles within the sail distance of the eye (x, y m), nearest first, for
@@ -90,20 +91,25 @@ class SailMeshes:
         hi = np.floor((eye[:2] + self.distance) / r.side).astype(int).clip(0, [r.nx - 1, r.ny - 1])
         j, i = np.mgrid[lo[1]:hi[1] + 1, lo[0]:hi[0] + 1]
         tiles = (j * r.nx + i).ravel()
-        tiles = [int(t) for t in tiles if r.ridge_tile[t] >= 0 and t not in self.tiles]
+        tiles = tiles[(r.ridge_tile[tiles] >= 0) & ~self.built[tiles]]
+        gap = self._gaps(tiles, eye)
         start = time.perf_counter()
-        for tile in sorted(tiles, key=lambda t: self._gap(t, eye)):
-            if self._gap(tile, eye) > self.distance or time.perf_counter() - start > budget_s:
+        for k in np.argsort(gap)[:np.count_nonzero(gap <= self.distance)].tolist():
+            if time.perf_counter() - start > budget_s:
                 break
+            tile = int(tiles[k])
             self._build(tile, tile % r.nx, tile // r.nx)
-        for tile in [t for t in self.tiles if self._gap(t, eye) > 1.2 * self.distance]:
+        built = np.fromiter(self.tiles, dtype=np.int64, count=len(self.tiles))
+        for tile in built[self._gaps(built, eye) > 1.2 * self.distance].tolist():
             self._free(self.tiles.pop(tile))
+            self.built[tile] = False
 
-    def _gap(self, tile: int, eye: np.ndarray) -> float:
+    def _gaps(self, tiles: np.ndarray, eye: np.ndarray) -> np.ndarray:
+        """Distance (m) from the eye (x, y) to each tile's square (n,)."""
         side = self.rubble.side
-        lo = np.array([tile % self.rubble.nx, tile // self.rubble.nx]) * side
+        lo = np.column_stack([tiles % self.rubble.nx, tiles // self.rubble.nx]) * side
         gap = np.maximum(np.maximum(lo - eye[:2], eye[:2] - lo - side), 0.0)
-        return float(np.hypot(*gap))
+        return np.hypot(gap[:, 0], gap[:, 1])
 
     def _build(self, tile: int, i: int, j: int) -> None:
         k = int(self.rubble.ridge_tile[tile])
@@ -111,6 +117,7 @@ class SailMeshes:
         inside = shapely.intersection(self.lines[k], shapely.box(i * side, j * side, (i + 1) * side, (j + 1) * side))
         parts = [shapely.get_coordinates(g) for g in shapely.get_parts(inside) if g.geom_type == "LineString"]
         parts = [c for c in parts if len(c) >= 2 and np.linalg.norm(c[-1] - c[0]) > 0.1]
+        self.built[tile] = True
         if not parts:
             self.tiles[tile] = (None, None, 0)
             return

@@ -51,34 +51,52 @@ const int RIDGE_SLOTS = {RIDGE_SLOTS};
 uniform vec2 ridge_anchor[RIDGE_SLOTS];  // m: a point of a ridge line
 uniform vec2 ridge_normal[RIDGE_SLOTS];  // unit, across the lines
 uniform vec3 ridge_shape[RIDGE_SLOTS];   // spacing, sail half base width, sail height (m)
-float hash(vec2 c) {{ return fract(sin(dot(c, vec2(127.1, 311.7))) * 43758.5453); }}
-// one layer of brash pieces on the grid q (cells of `cell` m): 1 on a piece (its mean where a
-// pixel's footprint `w`, in cells, spans pieces), `rim` 1 at its submerged edge, `n` its
-// normal, `tone` its shade (slush to snow)
-float brash_layer(vec2 q, float share, float w, out float rim, out vec3 n, out float tone) {{
+// eight pseudo-random values in [0, 1] of a cell (and a salt), a byte each of the two words
+// of pcg2d (Jarzynski & Olano 2020, "Hash functions for GPU rendering", JCGT 9(3)): on
+// llvmpipe far cheaper than a sine-based hash per value
+void cell_random(vec2 c, uint salt, out vec4 a, out vec4 b) {{
+    uvec2 v = uvec2(ivec2(c)) ^ uvec2(salt, salt * 747796405u);
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * 1664525u; v.y += v.x * 1664525u;
+    v ^= v >> 16u;
+    v.x += v.y * 1664525u; v.y += v.x * 1664525u;
+    v ^= v >> 16u;
+    a = vec4((uvec4(v.x) >> uvec4(0u, 8u, 16u, 24u)) & 255u) / 255.0;
+    b = vec4((uvec4(v.y) >> uvec4(0u, 8u, 16u, 24u)) & 255u) / 255.0;
+}}
+// one layer of brash pieces on the grid q: 1 on a piece (`mean` where a pixel's footprint `w`,
+// in cells, spans pieces), `rim` 1 at its submerged edge, `n` its normal, `tone` its shade
+// (slush to snow)
+float brash_layer(vec2 q, uint salt, float share, float mean, float w, out float rim, out vec3 n, out float tone) {{
     vec2 c = floor(q);
-    float a = 6.2832 * hash(c + 3.1), s = sin(a), k = cos(a);
-    vec2 f = mat2(k, s, -s, k) * (fract(q) - 0.5 - 0.35 * (vec2(hash(c), hash(c + 1.7)) - 0.5));
-    float half_side = 0.5 * sqrt(share) * (0.6 + 0.8 * hash(c + 5.3));
-    float d = max(abs(f.x) * (1.0 + 0.5 * hash(c + 6.1)), abs(f.y)) * 0.7 + length(f) * 0.35;
+    vec4 r, t;
+    cell_random(c, salt, r, t);
+    float a = 6.2832 * r.x, s = sin(a), k = cos(a);
+    vec2 f = mat2(k, s, -s, k) * (fract(q) - 0.5 - 0.35 * (r.yz - 0.5));
+    float half_side = 0.5 * sqrt(share) * (0.6 + 0.8 * r.w);
+    float d = max(abs(f.x) * (1.0 + 0.5 * t.x), abs(f.y)) * 0.7 + length(f) * 0.35;
     float piece = 1.0 - smoothstep(half_side - w, half_side + w, d);
     rim = (1.0 - smoothstep(half_side + 0.05, half_side + 0.12 + w, d)) * (1.0 - piece);
-    n = normalize(vec3(hash(c + 7.9) - 0.5, hash(c + 9.1) - 0.5, 2.5));
-    tone = 0.8 + 0.2 * hash(c + 4.4);
     float far = smoothstep(0.25, 0.8, w);
+    n = normalize(vec3((t.yz - 0.5) * (1.0 - far), 2.5));
+    tone = 0.8 + 0.2 * t.w;
     rim = mix(rim, 0.0, far);
     tone = mix(tone, 0.9, far);
-    return mix(piece, share, far);
+    return mix(piece, mean, far);
 }}
 // the brash under p of a tile covered `share` (0-1): pieces of about {BRASH_PIECE} m on two
 // turned grids, the smaller filling the gaps of the larger; a pixel's footprint in m
 float brash_at(vec2 p, float share, float footprint, out float rim, out vec3 n, out float tone) {{
-    float rim_b, tone_b;
-    vec3 n_b;
-    float big = brash_layer(mat2(0.83, 0.56, -0.56, 0.83) * p / {BRASH_PIECE}, share, footprint / {BRASH_PIECE},
-                            rim, n, tone);
-    float small = brash_layer(mat2(0.31, -0.95, 0.95, 0.31) * p / {0.45 * BRASH_PIECE} + 0.37, share,
-                              footprint / {0.45 * BRASH_PIECE}, rim_b, n_b, tone_b);
+    rim = 0.0; n = vec3(0.0, 0.0, 1.0); tone = 0.9;
+    float mean = 0.9 * share;  // the two layers' cover, 0.87-0.93 of the share (sampled in Python)
+    if (footprint > 0.8 * {BRASH_PIECE}) return mean;  // far: both layers at their mean
+    float rim_b = 0.0, tone_b = 0.9, small = mean;
+    vec3 n_b = n;
+    float big = brash_layer(mat2(0.83, 0.56, -0.56, 0.83) * p / {BRASH_PIECE}, 1u, share, mean,
+                            footprint / {BRASH_PIECE}, rim, n, tone);
+    if (footprint < {0.8 * 0.45 * BRASH_PIECE})  // the small pieces, where they are not at their mean
+        small = brash_layer(mat2(0.31, -0.95, 0.95, 0.31) * p / {0.45 * BRASH_PIECE} + 0.37, 2u, share, mean,
+                            footprint / {0.45 * BRASH_PIECE}, rim_b, n_b, tone_b);
     float cover = max(big, share * small * (1.0 - big));
     rim = max(rim, rim_b * (1.0 - big));
     if (small * (1.0 - big) > big) {{ n = n_b; tone = tone_b; }}
@@ -98,12 +116,14 @@ float sail_at(vec2 p, int k, float footprint, out vec3 n, out float gap, out flo
     vec2 q = vec2(dot(p, vec2(-nn.y, nn.x)), d) / {BLOCK};
     q.x += 0.5 * floor(q.y);                           // rows of blocks laid over each other
     vec2 c = floor(q), f = fract(q) - 0.5;
-    vec2 tilt = 1.4 * (vec2(hash(c + 2.3), hash(c + 4.1)) - 0.5);
+    vec4 r, spare;  // (a block needs three of the eight values)
+    cell_random(c, uint(3 + k), r, spare);
+    vec2 tilt = 1.4 * (r.xy - 0.5);
     vec2 slope = -sign(d) * shape.z / shape.y * nn;
     float near = 1.0 - smoothstep(0.25, 0.8, footprint / {BLOCK});
     n = normalize(vec3(slope + near * (tilt.x * vec2(-nn.y, nn.x) + tilt.y * nn), 1.0));
     gap = near * smoothstep(0.38, 0.5, max(abs(f.x), abs(f.y)));
-    fresh = near * step(0.85, hash(c + 8.8));
+    fresh = near * step(0.85, r.z);
     return on;
 }}
 """

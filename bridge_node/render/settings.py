@@ -134,7 +134,7 @@ class RenderSettings(Params):
                                                                "open water (0: none)")
     freeboard_m: float = Field(9.0, ge=0.5, le=40.0, description="own ship's deck height above the waterline")
     lod_distance_m: float = Field(300.0, ge=0.0, le=1.0e6, description="floe side faces drawn within this distance")
-    sail_distance_m: float = Field(1500.0, ge=0.0, le=1.0e5, description="ridge sails drawn as rubble within this "
+    sail_distance_m: float = Field(800.0, ge=0.0, le=1.0e5, description="ridge sails drawn as rubble within this "
                                                                         "distance; beyond, flat")
     reflection_distance_m: float = Field(150.0, ge=0.0, le=1.0e6, description="floes' reflections in the sea drawn "
                                                                              "within this distance (0: none)")
