@@ -12,7 +12,8 @@ clockwise from north; the ice world in x east, y north with angles counter-clock
 east. The ice's contact load on the hull (from the last ice step) enters the ship as its
 external load, and the ship's Lindqvist resistance is set from where the bow is: level ice
 while the hull is breaking cells, a broken channel in breakable or frozen tiles, open water
-off the field. The instructor's environment (``sim_core.environment``) lives in the data and
+off the field; the brash and a ridge keel at the stem add theirs (``sim_core.regimes.rubble``).
+The instructor's environment (``sim_core.environment``) lives in the data and
 is published with every step: the wind loads the ship (``sim_core.ship.wind``), the current
 carries the ship and the floes with the water, and a frozen exercise takes its orders but
 moves nothing and stops its clock, while every tick still publishes a step.

@@ -79,10 +79,12 @@ class RubbleModel:
     brash_thickness: np.ndarray = field(default_factory=lambda: np.zeros(0))
     ridges: tuple[RidgeField, ...] = ()
     ridge_tile: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    has_brash: bool = False  # some tile has brash
 
     @property
     def empty(self) -> bool:
-        return not self.ridges and not np.any(self.brash_share > 0.0)
+        """Whether the field has neither brash nor ridges (the step then looks nothing up)."""
+        return not self.ridges and not self.has_brash
 
 
 NO_RUBBLE = RubbleModel()
@@ -107,7 +109,7 @@ def compile_rubble(regions: list[IceRegion], index: np.ndarray | None, ridges: t
     ridge_tile = np.full(nx * ny, -1, dtype=np.int64)
     for k, r in enumerate(ridges):
         ridge_tile[shapely.contains_xy(r.polygon, x.ravel(), y.ravel())] = k
-    return RubbleModel(nx, ny, side, share, thickness, tuple(ridges), ridge_tile)
+    return RubbleModel(nx, ny, side, share, thickness, tuple(ridges), ridge_tile, bool(np.any(share > 0.0)))
 
 
 def rubble_at(model: RubbleModel, x: float, y: float) -> tuple[float, float, RidgeField | None, float]:
