@@ -87,6 +87,8 @@ class SailMeshes:
         """Build the tiles within the sail distance of the eye (x, y m), nearest first, for
         at most ``budget_s``; drop those beyond 1.2 times it."""
         r = self.rubble
+        if not r.ridges:
+            return
         lo = np.floor((eye[:2] - self.distance) / r.side).astype(int).clip(0, [r.nx - 1, r.ny - 1])
         hi = np.floor((eye[:2] + self.distance) / r.side).astype(int).clip(0, [r.nx - 1, r.ny - 1])
         j, i = np.mgrid[lo[1]:hi[1] + 1, lo[0]:hi[0] + 1]
