@@ -55,7 +55,7 @@ from sim_core.scene.switches import (
 from sim_core.ship import model as ship_model
 from sim_core.ship.model import OrderRejection, ShipData, ShipModel
 from sim_core.ship.outputs import ShipOutputs, ship_outputs
-from sim_core.regimes.rubble import NO_RUBBLE, RubbleModel, rubble_at
+from sim_core.regimes.rubble import RubbleModel, compile_rubble, rubble_at
 from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
 from sim_core.ship.rubble_resistance import brash_channel_resistance, keel_resistance
 from sim_core.ship.searchlights import SearchlightMount, SearchlightOrder, SearchlightState, order_searchlight
@@ -72,8 +72,8 @@ class WorldModel:
     scene: SceneModel
     contour: np.ndarray  # (34, 2) hull waterline contour, ship frame (x forward, y starboard), m
     origin: tuple[float, float]  # latitude, longitude of the field's south-west corner, rad
-    searchlights: tuple[SearchlightMount, ...] = ()  # the own ship's, by index
-    rubble: RubbleModel = NO_RUBBLE  # brash and ridges, met through their resistance models
+    searchlights: tuple[SearchlightMount, ...]  # the own ship's, by index
+    rubble: RubbleModel  # brash and ridges, met through their resistance models
 
 
 @dataclass
@@ -175,9 +175,12 @@ class WorldEvents:
 
 
 def compile_world(ship: ShipModel, ice: IceModel, scene: SceneModel, origin: tuple[float, float] = (0.0, 0.0),
-                  searchlights: tuple[SearchlightMount, ...] = (), rubble: RubbleModel = NO_RUBBLE) -> WorldModel:
-    """The static world; origin: latitude and longitude (rad) of the field's corner."""
+                  searchlights: tuple[SearchlightMount, ...] = (), rubble: RubbleModel | None = None) -> WorldModel:
+    """The static world; origin: latitude and longitude (rad) of the field's corner;
+    ``rubble``: the field's brash and ridges (None: none)."""
     p = ship.particulars
+    if rubble is None:
+        rubble = compile_rubble([], None, (), scene.nx, scene.ny, scene.side)
     return WorldModel(ship, ice, scene, waterline_contour(p.length, p.beam), origin, searchlights, rubble)
 
 
@@ -254,7 +257,7 @@ def _rubble_loads(model: WorldModel, ship: ShipData, stem: np.ndarray) -> None:
     if model.rubble.empty:
         return
     share, thickness, ridges, depth = rubble_at(model.rubble, float(stem[0]), float(stem[1]))
-    ship.brash_resistance = share * brash_channel_resistance(thickness, model.ship.bow) if share > 0.0 else 0.0
+    ship.brash_resistance = share * brash_channel_resistance(thickness, model.ship.bow)
     m = model.ice.material
     ship.keel_load = 0.0 if ridges is None else keel_resistance(
         min(depth, model.ship.d), model.ship.B, ridges.friction_angle, ridges.cohesion, ridges.porosity,

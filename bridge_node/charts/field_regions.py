@@ -9,6 +9,7 @@ from bridge_node.charts.sigrid3 import chart_regions, read_chart
 from bridge_node.common.errors import UserError
 from sim_core.regimes.floe_layout import RegimeModel, compile_regimes
 from sim_core.regimes.regime import IceRegion
+from sim_core.regimes.rubble import RidgeField
 from sim_core.scene.field import IceFieldSettings
 
 
@@ -19,6 +20,12 @@ def configured_regions(ice_field: IceFieldSettings, origin_deg: tuple[float, flo
     lat0, lon0 = origin_deg
     regions = chart_regions(read_chart(Path(ice_field.chart)), lat0, lon0) if ice_field.chart else []
     return regions + [r.region(lat0, lon0) for r in ice_field.regions]
+
+
+def configured_ridges(ice_field: IceFieldSettings, origin_deg: tuple[float, float]) -> tuple[RidgeField, ...]:
+    """The ridge fields of a config's ``[ice_field]`` in the local frame of the exercise's
+    origin (latitude, longitude, degrees)."""
+    return tuple(r.ridges(*origin_deg) for r in ice_field.ridges)
 
 
 def regions_not_in_the_world(ice_field: IceFieldSettings, origin_deg: tuple[float, float]) -> list[str]:

@@ -12,7 +12,7 @@ import shapely
 from rich.console import Console
 from rich.progress import Progress
 
-from bridge_node.charts.field_regions import chart_field, configured_regions, regime_model
+from bridge_node.charts.field_regions import chart_field, configured_regions, configured_ridges, regime_model
 from bridge_node.common.errors import UserError
 from bridge_node.node.config import load_config
 from bridge_node.reports.field import plot_field, survey_json, survey_table
@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
         field = shapely.box(0.0, 0.0, cfg.ice_field.width, cfg.ice_field.height)
         model = regime_model(configured_regions(cfg.ice_field, cfg.exercise.origin_deg()), field, cfg.fracture.seed,
                              str(source))
-        ridges = tuple(r.ridges(*cfg.exercise.origin_deg()) for r in cfg.ice_field.ridges)
+        ridges = configured_ridges(cfg.ice_field, cfg.exercise.origin_deg())
     else:
         ridges = ()
         regions, field, _ = chart_field(source)

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 from rich.progress import Progress
 
+from bridge_node.charts.field_regions import configured_ridges
 from bridge_node.library.templates import library_template
 from bridge_node.node.config import NodeConfig, load_ship, resolve_path
 from bridge_node.node.floe_field_setup import FieldRegions, field_regions, lay_floe_fields
@@ -81,7 +82,7 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
     except ValueError as exc:
         raise UserError(f"{config_path}: scene: {exc}") from None
     origin = math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg)
-    ridges = tuple(r.ridges(*cfg.exercise.origin_deg()) for r in cfg.ice_field.ridges)
+    ridges = configured_ridges(cfg.ice_field, cfg.exercise.origin_deg())
     rubble = compile_rubble(laid.regions, laid.index, ridges, scene.nx, scene.ny, scene.side)
     return compile_world(ship, ice, scene, origin, tuple(light.mount() for light in cfg.render.searchlights), rubble)
 

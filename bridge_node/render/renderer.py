@@ -81,7 +81,7 @@ class SceneRenderer(SceneUploads):
         # template | quarter turns << 16, level-ice thickness (m, float bits), 1 if breakable
         self.tile_thickness = scene.class_thickness[scene.tile_class].astype("f4")
         self.floe_field_info = floe_field_layouts(model)  # tile -> its template | turns << 16
-        self.rubble_bits = rubble_tile_bits(model.rubble, scene.nx * scene.ny)  # the flag entry's upper bytes
+        self.rubble_bits = rubble_tile_bits(model.rubble)  # the tile table flag entry's upper bytes
         self.tile_info = ctx.texture((scene.nx, scene.ny), 4, self._first_tile_table().tobytes(), dtype="i4")
         self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST
         mesh = load_ship(model.ship.particulars, model.contour, settings.freeboard_m)
@@ -139,13 +139,12 @@ class SceneRenderer(SceneUploads):
 
     def _make_programs(self, lights: int, rubble: RubbleModel) -> None:
         """The shader programs (with ``lights`` searchlights, and the environment pass with
-        brash and ridges where the field has them, and its ridge uniforms) and the
+        brash and ridges where the field has them, its ridge uniforms set once) and the
         screen-space buffers of the environment, sky and blend band."""
         ctx = self.ctx
-        env = shaders.with_rubble(shaders.with_lights(shaders.ENV_FS, lights), bool(np.any(rubble.brash_share > 0.0)),
-                                  bool(rubble.ridges))
-        self.ridges = ridge_uniforms(rubble)
+        env = shaders.with_rubble(shaders.with_lights(shaders.ENV_FS, lights), rubble.has_brash, bool(rubble.ridges))
         self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=env)
+        self._set(self.env, **ridge_uniforms(rubble))
         self.floe = ctx.program(vertex_shader=object_shaders.FLOE_VS,
                                 fragment_shader=shaders.with_lights(object_shaders.FLOE_FS, lights))
         self.ship = ctx.program(vertex_shader=object_shaders.SHIP_VS,
@@ -240,7 +239,7 @@ class SceneRenderer(SceneUploads):
         if len(ground):
             self._set(self.env, slab_z=self.slab_z, far=self.settings.far_m, tile_info=0,
                       cell_raster=3, raster_size=self.raster_size, rim_px=self.rim_px, status=STATUS_UNIT,
-                      field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side, **self.ridges,
+                      field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side,
                       **common)
             self.env_vao.render(vertices=len(ground))
         if len(above):

@@ -24,11 +24,9 @@ BRASH_PIECE = 1.2  # m: the pieces' grid, the mean brash size of WMO's 0-2 m
 BLOCK = 1.5  # m: the sail's blocks' grid
 
 
-def rubble_tile_bits(rubble: RubbleModel, n_tiles: int) -> np.ndarray:
+def rubble_tile_bits(rubble: RubbleModel) -> np.ndarray:
     """Per tile (n_tiles,) int32: brash share << 8 | (1 + ridge field) << 16, for the tile
-    table's flag entry (all 0 for a world without rubble)."""
-    if len(rubble.brash_share) != n_tiles:
-        return np.zeros(n_tiles, dtype=np.int32)
+    table's flag entry."""
     share = np.clip(np.rint(rubble.brash_share * 255.0), 0, 255).astype(np.int32)
     return share << 8 | (rubble.ridge_tile.astype(np.int32) + 1) << 16
 

@@ -160,16 +160,20 @@ def with_rubble(source: str, brash: bool, ridges: bool) -> str:
     """The environment pass's source with its brash and ridge code compiled in only where
     the field has them: on llvmpipe a branch does not skip work, so a field without them
     would pay for them in every ground pixel."""
-    defines = f"#define BRASH {int(brash)}\n#define RIDGES {int(ridges)}\n"
-    return source.replace("#version 330\n", "#version 330\n" + defines, 1)
+    return _defined(source, BRASH=int(brash), RIDGES=int(ridges))
 
 
 def with_lights(source: str, searchlights: int) -> str:
     """A fragment shader's source with its number of searchlights fixed when it compiles:
     on llvmpipe a loop to a uniform bound costs as much as the ice's relief, even when the
     bound is 0, while a loop to a constant 0 costs nothing."""
-    slots = max(searchlights, 1)  # GLSL has no empty arrays
-    return source.replace("#version 330\n", f"#version 330\n#define LIGHTS {searchlights}\n#define LIGHT_SLOTS {slots}\n", 1)
+    return _defined(source, LIGHTS=searchlights, LIGHT_SLOTS=max(searchlights, 1))  # GLSL has no empty arrays
+
+
+def _defined(source: str, **defines: int) -> str:
+    """The source with ``#define NAME value`` lines after its ``#version``."""
+    lines = "".join(f"#define {name} {value}\n" for name, value in defines.items())
+    return source.replace("#version 330\n", "#version 330\n" + lines, 1)
 
 
 ENV_VS = """

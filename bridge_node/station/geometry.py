@@ -66,8 +66,6 @@ def brash_runs(model: WorldModel) -> np.ndarray:
     """The field's tiles of brash alone (open water to the ice world, brash on it) as runs
     along the tile rows (``tile_runs``)."""
     scene, rubble = model.scene, model.rubble
-    if len(rubble.brash_share) != scene.nx * scene.ny:
-        return np.zeros(0, dtype=np.int64)
     brash = (rubble.brash_share > 0.0) & (scene.class_thickness[scene.tile_class] <= 0.0)
     return tile_runs(brash.reshape(scene.ny, scene.nx))
 

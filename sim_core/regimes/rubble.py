@@ -12,7 +12,7 @@ fields over earlier).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import shapely
@@ -70,24 +70,21 @@ def keel_depth_at(ridges: RidgeField, x: float, y: float) -> float:
 class RubbleModel:
     """Static rubble of a field of nx x ny tiles of ``side`` m: the share of each tile
     (n_tiles,) covered with brash and its thickness H_M (m), the ridge fields and the one
-    holding each tile (n_tiles,; -1: none)."""
+    holding each tile (n_tiles,; -1: none). Build with ``compile_rubble``."""
 
-    nx: int = 0
-    ny: int = 0
-    side: float = 1.0
-    brash_share: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    brash_thickness: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    ridges: tuple[RidgeField, ...] = ()
-    ridge_tile: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    has_brash: bool = False  # some tile has brash
+    nx: int
+    ny: int
+    side: float
+    brash_share: np.ndarray
+    brash_thickness: np.ndarray
+    ridges: tuple[RidgeField, ...]
+    ridge_tile: np.ndarray
+    has_brash: bool  # some tile has brash
 
     @property
     def empty(self) -> bool:
         """Whether the field has neither brash nor ridges (the step then looks nothing up)."""
         return not self.ridges and not self.has_brash
-
-
-NO_RUBBLE = RubbleModel()
 
 
 def tile_rubble(regions: list[IceRegion], index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

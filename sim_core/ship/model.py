@@ -92,7 +92,6 @@ class ShipData:
     ice_resistance: float = 0.0  # N, last step (>= 0, opposing the motion)
     brash_resistance: float = 0.0  # N at 5 knots: the brash at the bow (``rubble_resistance``)
     keel_load: float = 0.0  # N: the ridge keel at the bow
-    bow_resistance: float = 0.0  # N, last step: the share of ``ice_resistance`` at the bow (it lifts the bow)
     _ice_terms: tuple = (None, None)  # (h, LindqvistTerms) cache
 
 
@@ -223,10 +222,11 @@ def state_derivatives(model: ShipModel, state: tuple, delta: float, n: float, ex
     return (u * c - v * s, u * s + v * c, r, du, dv, dr)
 
 
-def _ice_force(model: ShipModel, data: ShipData, u: float) -> float:
+def _ice_force(model: ShipModel, data: ShipData, u: float) -> tuple[float, float]:
     """Surge force (N) of the ice resistance, against u, faded in near rest so that it can
     stop the ship but never drive it backwards: Lindqvist's for the level ice or channel,
-    plus the brash's and a ridge keel's at the bow."""
+    plus the brash's and a ridge keel's at the bow; and the bow's share of the resistance
+    (N, >= 0, faded in alike: it lifts the bow)."""
     g = model.material.gravity
     bow = data.keel_load
     if data.brash_resistance > 0.0:
@@ -241,8 +241,9 @@ def _ice_force(model: ShipModel, data: ShipData, u: float) -> float:
                             model.particulars.ice.channel_concentration)
         if data.ice_condition == LEVEL_ICE:
             bow += breaking_resistance(terms, abs(u), data.ice_h, g)
-    data.ice_resistance, data.bow_resistance = r, bow
-    return -math.copysign(r, u) * min(1.0, abs(u) / _U_ICE)
+    data.ice_resistance = r
+    fade = min(1.0, abs(u) / _U_ICE)
+    return -math.copysign(r, u) * fade, bow * fade
 
 
 def _steering_gear(model: ShipModel, data: ShipData, dt: float) -> None:
@@ -302,7 +303,7 @@ def step(model: ShipModel, data: ShipData, dt: float) -> None:
         _steering_gear(model, data, h)
         _engine(model, data, h)
         s0 = (eta[0], eta[1], eta[5], nu[0], nu[1], nu[5])
-        ice_x = _ice_force(model, data, s0[3])
+        ice_x, bow = _ice_force(model, data, s0[3])
         k1 = state_derivatives(model, s0, data.rudder, data.rps, ext, ice_x)
         k2 = state_derivatives(model, tuple(a + 0.5 * h * b for a, b in zip(s0, k1)), data.rudder, data.rps, ext, ice_x)
         k3 = state_derivatives(model, tuple(a + 0.5 * h * b for a, b in zip(s0, k2)), data.rudder, data.rps, ext, ice_x)
@@ -311,7 +312,7 @@ def step(model: ShipModel, data: ShipData, dt: float) -> None:
         eta[0], eta[1], eta[5], nu[0], nu[1], nu[5] = s1
         eta[0] += h * data.current[0]
         eta[1] += h * data.current[1]
-        step_vertical(model.vertical, eta, nu, data.bow_resistance * min(1.0, abs(s0[3]) / _U_ICE), h)
+        step_vertical(model.vertical, eta, nu, bow, h)
 
 
 def new_ship_data(model: ShipModel, speed: float = 0.0, rps: float | None = None, heading: float = 0.0) -> ShipData:
@@ -332,7 +333,7 @@ def equilibrium_rps(model: ShipModel, speed: float, ice_h: float = 0.0, ice_cond
     if speed <= 0.0:
         return 0.0
     probe = ShipData(ice_h=ice_h, ice_condition=ice_condition)
-    ice_x = _ice_force(model, probe, speed)
+    ice_x, _ = _ice_force(model, probe, speed)
 
     def surge(n: float) -> float:
         return mmg_forces(model, speed, 0.0, 0.0, 0.0, n)[0] + ice_x
