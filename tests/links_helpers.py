@@ -23,7 +23,8 @@ STATE = ShipOutputs(time=10.0, north=100.0, east=50.0, latitude=math.radians(74.
                     longitude=math.radians(20.0054321), heading=math.radians(123.4),
                     course_over_ground=math.radians(125.0), speed_over_ground=4.321, speed_longitudinal=4.3,
                     speed_transverse=-0.2, rate_of_turn=math.radians(0.35), rudder_angle=math.radians(-12.3),
-                    shaft_rps=1.234, ice_resistance=1.5e5)
+                    shaft_rps=1.234, ice_resistance=1.5e5, pitch=math.radians(0.4),
+                    roll=math.radians(-2.5))
 
 
 def console_frame(name: str, source: int = 0x42, **values) -> can.Message:

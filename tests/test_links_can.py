@@ -71,7 +71,7 @@ def test_outputs_decode_with_an_independent_decoder(can_hub):
     hub, peer = can_hub
     tick(hub, STATE, time.monotonic())
     out = decoded_outputs(peer)
-    assert set(out) == {60928, 127245, 127488, 127489, 127250, 127251, 129025, 129026}  # the claim, then outputs
+    assert set(out) == {60928, 127245, 127488, 127489, 127250, 127251, 127257, 129025, 129026}  # the claim, outputs
     assert out[127245][1] == 0x09F10D23  # priority 2, our source address 0x23
     assert out[127245][0]["position"] == pytest.approx(STATE.rudder_angle, abs=1e-4)
     assert out[127245][0]["angleOrder"] is None  # not available
@@ -79,6 +79,10 @@ def test_outputs_decode_with_an_independent_decoder(can_hub):
     assert out[127489][0]["discreteStatus1"] in ("", [], None, 0)  # fast packet reassembled; no alarms
     assert out[127250][0]["heading"] == pytest.approx(STATE.heading, abs=1e-4)
     assert out[127251][0]["rate"] == pytest.approx(STATE.rate_of_turn, abs=3.2e-8)
+    assert out[127257][1] >> 26 == 3  # the attitude at canboat's priority 3
+    assert out[127257][0]["yaw"] == pytest.approx(STATE.heading - 2.0 * math.pi * (STATE.heading > math.pi), abs=1e-4)
+    assert out[127257][0]["pitch"] == pytest.approx(STATE.pitch, abs=1e-4)
+    assert out[127257][0]["roll"] == pytest.approx(STATE.roll, abs=1e-4)
     assert out[129025][0]["latitude"] == pytest.approx(74.0012345, abs=1e-7)
     assert out[129025][0]["longitude"] == pytest.approx(20.0054321, abs=1e-7)
     assert out[129026][0]["cog"] == pytest.approx(STATE.course_over_ground, abs=1e-4)

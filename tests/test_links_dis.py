@@ -69,7 +69,7 @@ def test_own_ship_pdu_decodes_with_opendis_to_position_and_orientation():
     assert lat == pytest.approx(STATE.latitude, abs=1e-8) and lon == pytest.approx(STATE.longitude, abs=1e-8)
     assert alt == pytest.approx(0.0, abs=0.01)
     assert yaw == pytest.approx(STATE.heading, abs=1e-5)  # float32 angles
-    assert roll == pytest.approx(0.0, abs=1e-5) and pitch == pytest.approx(0.0, abs=1e-5)
+    assert roll == pytest.approx(STATE.roll, abs=1e-5) and pitch == pytest.approx(STATE.pitch, abs=1e-5)
     north, east, down = GPS().ecefvec2nedvec(lat, lon)
     v = np.array([pdu.entityLinearVelocity.x, pdu.entityLinearVelocity.y, pdu.entityLinearVelocity.z])
     assert math.hypot(v @ north, v @ east) == pytest.approx(STATE.speed_over_ground, abs=1e-5)

@@ -20,7 +20,7 @@ from bridge_node.links.can.settings import CanLinkSettings
 
 # canboat's database (github canboat/canboat docs/canboat.json, commit 01d0dc3, 2026-08-16):
 # "Priority" of every PGN the node sends
-CANBOAT_PRIORITY = {127245: 2, 127488: 2, 127489: 2, 127250: 2, 127251: 2, 129025: 2, 129026: 2, 60928: 6,
+CANBOAT_PRIORITY = {127245: 2, 127488: 2, 127489: 2, 127250: 2, 127251: 2, 127257: 3, 129025: 2, 129026: 2, 60928: 6,
                     59392: 6, 126996: 6, 126464: 6, 126993: 7}
 NODE_NAME = {"identity_number": 4242, "manufacturer_code": 2046, "device_function": 170, "device_class": 60}
 

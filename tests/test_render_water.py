@@ -18,8 +18,8 @@ from sim_core.ice.floes import FloeStatus
 from sim_core.world import snapshot, step
 
 W, H = 192, 108
-SHIP = {"north": -400.0, "east": 200.0, "heading": 0.0, "heave": 0.0, "pitch": 0.0}  # in open water south of
-# the field, heading north, at rest on the water
+SHIP = {"north": -400.0, "east": 200.0, "heading": 0.0, "heave": 0.0, "pitch": 0.0, "roll": 0.0}  # in open water south
+# of the field, heading north, at rest on the water
 LOW = ChannelSettings(name="low", width=W, height=H, hfov_deg=30.0, pitch_deg=-8.0, eye=[85.0, 12.0, 4.0])
 SPOT = (212.0, -295.0)  # m (east, north): 20 m ahead of the low eye, 10 m ahead of the bow
 REACH = {"lod_distance_m": 1000.0, "reflection_distance_m": 1000.0}  # the floe's tile lies 285 m on, in the field

@@ -189,7 +189,7 @@ def test_the_channels_draw_brash_in_the_channel_and_ridge_sails_on_the_ice(tmp_p
 
 
 def test_the_bow_rises_in_a_keel_and_settles_after_it(tmp_path_factory):
-    """The keel's load lifts the bow (``sim_core.ship.vertical``): the ship pitches bow up and
+    """The keel's load lifts the bow (``sim_core.ship.motions``): the ship pitches bow up and
     heaves up while its stem crosses the keel, several times more than in the level ice
     before it, and settles again after it; the outputs carry both."""
     start = RIDGE_LINE - 10.0 - 40.0 - 75.0  # the stem 40 m short of the keel

@@ -9,6 +9,7 @@ import numpy as np
 
 from bridge_node.render.settings import ChannelSettings
 from sim_core.frames.ship_frame import ship_rotation
+from sim_core.ship.outputs import ShipOutputs
 
 NEAR = 0.5  # m
 
@@ -18,16 +19,25 @@ def set_matrix(uniform, m: np.ndarray) -> None:
     uniform.write(np.ascontiguousarray(m.T, dtype="f4").tobytes())
 
 
-def ship_matrix(north: float, east: float, psi: float, heave: float = 0.0, pitch: float = 0.0) -> np.ndarray:
+def ship_matrix(north: float, east: float, psi: float, heave: float = 0.0, pitch: float = 0.0,
+                roll: float = 0.0) -> np.ndarray:
     """Ship frame (x forward, y starboard, z up) to world (x east, y north, z up), 4x4; the
-    ship heaved up by ``heave`` m and pitched bow up by ``pitch`` rad."""
+    ship heaved up by ``heave`` m, pitched bow up by ``pitch`` rad and rolled starboard
+    down by ``roll`` rad (yaw, then pitch, then roll)."""
     c, s = math.cos(pitch), math.sin(pitch)
-    attitude = np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+    cr, sr = math.cos(roll), math.sin(roll)
+    attitude = np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]]) @ np.array(
+        [[1.0, 0.0, 0.0], [0.0, cr, sr], [0.0, -sr, cr]])
     m = np.eye(4)
     m[:2, :2] = ship_rotation(psi)
     m[:3, :3] = m[:3, :3] @ attitude
     m[:3, 3] = east, north, heave
     return m
+
+
+def outputs_matrix(ship: ShipOutputs) -> np.ndarray:
+    """``ship_matrix`` of a ship's published outputs: its place, heading, heave, pitch and roll."""
+    return ship_matrix(ship.north, ship.east, ship.heading, ship.heave, ship.pitch, ship.roll)
 
 
 @dataclass(frozen=True)
@@ -42,11 +52,12 @@ class Camera:
 
 
 def channel_camera(channel: ChannelSettings, eye: tuple[float, float, float], north: float, east: float, psi: float,
-                   far: float, heave: float = 0.0, pitch: float = 0.0) -> Camera:
+                   far: float, heave: float = 0.0, pitch: float = 0.0, roll: float = 0.0) -> Camera:
     """The channel's camera at `eye` (ship frame, m) for the ship at (north, east) m with
-    heading psi (rad, from north), heaved up ``heave`` m and pitched bow up ``pitch`` rad:
-    the eye and its view move with the ship, as a trainee's on its bridge."""
-    to_world = ship_matrix(north, east, psi, heave, pitch)
+    heading psi (rad, from north), heaved up ``heave`` m, pitched bow up ``pitch`` rad and
+    rolled starboard down ``roll`` rad: the eye and its view move with the ship, as a
+    trainee's on its bridge."""
+    to_world = ship_matrix(north, east, psi, heave, pitch, roll)
     eye = (to_world @ np.array([*eye, 1.0]))[:3]
     yaw, el = math.radians(channel.yaw_deg), math.radians(channel.pitch_deg)
     f = to_world[:3, :3] @ [math.cos(yaw) * math.cos(el), math.sin(yaw) * math.cos(el), math.sin(el)]

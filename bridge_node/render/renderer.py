@@ -34,7 +34,7 @@ import moderngl
 import numpy as np
 
 from bridge_node.render import object_shaders, shaders
-from bridge_node.render.camera import Camera, channel_camera, set_matrix, ship_matrix, visible_boxes
+from bridge_node.render.camera import Camera, channel_camera, outputs_matrix, set_matrix, ship_matrix, visible_boxes
 from bridge_node.render.classes import CLASS_INDEX, CLASSES
 from bridge_node.render.floe_buffers import FloeBuffer, horizon_split
 from bridge_node.render.meshes import cell_rasters, floe_field_layouts, rim_rasters, template_meshes
@@ -170,7 +170,7 @@ class SceneRenderer(SceneUploads):
         north, east, psi = view.ship.north, view.ship.east, view.ship.heading
         p = self.model.ship.particulars
         cam = channel_camera(channel, eye_point(channel.eye, p.look.bridge_eye, p.beam), north, east, psi, s.far_m,
-                             view.ship.heave, view.ship.pitch)
+                             view.ship.heave, view.ship.pitch, view.ship.roll)
         vp = cam.view_proj
         sky = self.sky
         common = {"eye": tuple(cam.eye), "visibility": view.environment.visibility, "sun": sky.sun,
@@ -253,7 +253,7 @@ class SceneRenderer(SceneUploads):
         off. Each is aimed as published (the console's orders), else as configured."""
         n = max(len(self.settings.searchlights), 1)  # the shaders' arrays (see shaders.with_lights), filled whole
         pos, axis, cos, power = np.zeros((n, 3)), np.zeros((n, 3)), np.ones(n), np.zeros(n)
-        to_world = ship_matrix(ship.north, ship.east, ship.heading, ship.heave, ship.pitch)
+        to_world = outputs_matrix(ship)
         for k, light in enumerate(self.settings.searchlights):
             aim = ship.searchlights[k] if k < len(ship.searchlights) else self._configured_aims[k]
             az, el = ship.heading + aim.bearing, aim.elevation
@@ -337,7 +337,7 @@ class SceneRenderer(SceneUploads):
         far distance, scaled to its length and beam (the own ship's where unknown, 0) and in
         height as in beam."""
         ship = view.ship
-        out = [ship_matrix(ship.north, ship.east, ship.heading, ship.heave, ship.pitch)]
+        out = [outputs_matrix(ship)]
         traffic = getattr(view, "traffic", None)
         if traffic is None or len(traffic) == 0:
             return out

@@ -1,5 +1,5 @@
 """3-DOF MMG manoeuvring model (surge, sway, yaw) with steering gear, engine and ice load;
-heave and pitch under the ice's lift at the bow (``sim_core.ship.vertical``).
+heave, roll and pitch (``sim_core.ship.motions``).
 
 The MMG standard form of Yasukawa & Yoshimura (2015): hull, propeller and rudder forces
 about midship, with the centre of gravity at x_G. ``compile_ship`` turns the particulars
@@ -28,7 +28,7 @@ from sim_core.ship.particulars import TELEGRAPH_POSITIONS, ShipParticulars
 from sim_core.ship.resistance import LEVEL_ICE, OPEN_WATER, LindqvistTerms, breaking_resistance, ice_resistance, \
     lindqvist_terms
 from sim_core.ship.rubble_resistance import BowForm, channel_speed_factor
-from sim_core.ship.vertical import VerticalModel, compile_vertical, step_vertical
+from sim_core.ship.motions import MotionsModel, compile_motions, heeling_moment, step_motions
 
 MAX_SUBSTEP = 0.1  # s
 _U_MIN = 0.05  # m/s: floor of U where the hull's r^3 terms divide by U
@@ -66,14 +66,14 @@ class ShipModel:
     stem_angle: float
     waterline_angle: float
     bow: BowForm  # for the brash channel's resistance
-    vertical: VerticalModel  # heave and pitch
+    motions: MotionsModel  # heave, roll and pitch
 
 
 @dataclass
 class ShipData:
     """Per-step state of one ship. Pose and velocity carry 6 DOF: surge, sway and yaw from
-    the MMG model, heave and pitch from the ice's lift at the bow (``sim_core.ship.vertical``),
-    roll held at zero."""
+    the MMG model; heave, roll and pitch from the ice's lift at the bow and the lateral
+    forces' heel (``sim_core.ship.motions``)."""
 
     eta: np.ndarray = field(default_factory=lambda: np.zeros(6))  # north, east, down m; roll, pitch, yaw rad
     nu: np.ndarray = field(default_factory=lambda: np.zeros(6))  # u, v, w m/s; p, q, r rad/s
@@ -120,9 +120,8 @@ def compile_ship(p: ShipParticulars, material: IceMaterial | None = None) -> Shi
         rps_ahead_max=rpm["navigation_full_ahead"] / 60.0, rps_astern_max=rpm["crash_astern"] / 60.0,
         stem_angle=math.radians(p.ice.stem_angle_deg), waterline_angle=math.radians(p.ice.waterline_angle_deg),
         bow=bow_form(p),
-        vertical=compile_vertical(L, p.beam, p.displacement, rho, material.gravity, math.radians(p.ice.stem_angle_deg),
-                                  material.hull_friction, p.motions.heave_damping, p.motions.pitch_damping,
-                                  p.motions.gyration_y),
+        motions=compile_motions(L, p.beam, d, p.displacement, rho, material.gravity, math.radians(p.ice.stem_angle_deg),
+                                material.hull_friction, p.motions),
     )
 
 
@@ -304,6 +303,7 @@ def step(model: ShipModel, data: ShipData, dt: float) -> None:
         _engine(model, data, h)
         s0 = (eta[0], eta[1], eta[5], nu[0], nu[1], nu[5])
         ice_x, bow = _ice_force(model, data, s0[3])
+        heel = heeling_moment(model.motions, mmg_forces(model, s0[3], s0[4], s0[5], data.rudder, data.rps)[1], ext[1])
         k1 = state_derivatives(model, s0, data.rudder, data.rps, ext, ice_x)
         k2 = state_derivatives(model, tuple(a + 0.5 * h * b for a, b in zip(s0, k1)), data.rudder, data.rps, ext, ice_x)
         k3 = state_derivatives(model, tuple(a + 0.5 * h * b for a, b in zip(s0, k2)), data.rudder, data.rps, ext, ice_x)
@@ -312,7 +312,7 @@ def step(model: ShipModel, data: ShipData, dt: float) -> None:
         eta[0], eta[1], eta[5], nu[0], nu[1], nu[5] = s1
         eta[0] += h * data.current[0]
         eta[1] += h * data.current[1]
-        step_vertical(model.vertical, eta, nu, bow, h)
+        step_motions(model.motions, eta, nu, bow, heel, h)
 
 
 def new_ship_data(model: ShipModel, speed: float = 0.0, rps: float | None = None, heading: float = 0.0) -> ShipData:

@@ -33,6 +33,7 @@ class ShipOutputs:
     fix_valid: bool = True  # False: no position fix (a GNSS receiver without one; ``sim_core.ship.sensors``)
     heave: float = 0.0  # m, + up, from the floating position
     pitch: float = 0.0  # rad, + bow up
+    roll: float = 0.0  # rad, + starboard down
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -59,4 +60,5 @@ def ship_outputs(data: ShipData, time: float, lat0: float, lon0: float, utc: flo
         speed_over_ground=math.hypot(vn, ve), speed_longitudinal=u, speed_transverse=v,
         rate_of_turn=r, rudder_angle=data.rudder, shaft_rps=data.rps, ice_resistance=data.ice_resistance, utc=utc,
         searchlights=searchlights, heave=-float(data.eta[2]), pitch=float(data.eta[4]),
+        roll=float(data.eta[3]),
     )

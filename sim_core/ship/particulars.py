@@ -145,13 +145,17 @@ class Windage(Params):
 
 
 class Motions(Params):
-    """Heave and pitch of the hull under the ice's vertical load (``sim_core.ship.vertical``):
-    damping ratios and the pitch radius of gyration. The defaults are typical of merchant
-    hulls."""
+    """Heave, roll and pitch of the hull (``sim_core.ship.motions``): damping ratios, the
+    pitch radius of gyration, and the stability that sets the roll (GM and KG for the
+    ship's loading condition; without both the ship does not roll). The damping defaults
+    are typical of merchant hulls."""
 
     heave_damping: float = Field(0.2, ge=0.0, le=1.0, description="heave damping ratio, of critical")
     pitch_damping: float = Field(0.2, ge=0.0, le=1.0, description="pitch damping ratio, of critical")
+    roll_damping: float = Field(0.1, ge=0.0, le=1.0, description="roll damping ratio, of critical")
     gyration_y: float = Field(0.25, gt=0.1, lt=0.5, description="pitch radius of gyration / L")
+    metacentric_height: float | None = Field(None, gt=0.05, le=15.0, description="GM, transverse, m")
+    centre_of_gravity_height: float | None = Field(None, gt=0.0, le=60.0, description="KG, above the keel, m")
 
 
 class ShipParticulars(Params):

@@ -1,6 +1,6 @@
 """CAN link (python-can): console frames in (decoded with the user's DBC), NMEA 2000 PGN
 127245 rudder orders in as a helm source, and the ship's state out as NMEA 2000 PGNs
-127245, 127488, 127489 (fast packet), 127250, 127251, 129025, 129026 at their rates and
+127245, 127488, 127489 (fast packet), 127250, 127251, 127257, 129025, 129026 at their rates and
 at the priorities of canboat's database. The node is an NMEA 2000 citizen: it claims and
 defends its address, answers ISO requests and sends its heartbeat (``n2k_network``). Over a
 serial line (slcan) the frames go out through a writer thread: the loop never waits for a
@@ -35,7 +35,7 @@ RUDDER_PGN = 127245
 OUTPUTS = {"rudder": ("Rudder", 127245, 2), "engine_rapid": ("EngineRapid", 127488, 2),
            "engine_dynamic": ("EngineDynamic", 127489, 2), "heading": ("VesselHeading", 127250, 2),
            "rate_of_turn": ("RateOfTurn", 127251, 2), "position": ("PositionRapid", 129025, 2),
-           "cog_sog": ("CogSogRapid", 129026, 2)}
+           "cog_sog": ("CogSogRapid", 129026, 2), "attitude": ("Attitude", 127257, 3)}
 FAST_PGNS = FAST_PACKET_PGNS | {127489}
 
 
@@ -70,6 +70,9 @@ def _n2k_fields(name: str, s: ShipOutputs, sid: int) -> dict:
     if name == "heading":
         return {"SID": sid, "Heading": s.heading, "Deviation": 3.2767, "Variation": 3.2767, "Reference": 0,
                 "Reserved": 63}
+    if name == "attitude":  # yaw: the heading within +-pi; pitch bow up, roll starboard down, as the XDR's
+        return {"SID": sid, "Yaw": math.remainder(s.heading, 2.0 * math.pi), "Pitch": s.pitch, "Roll": s.roll,
+                "Reserved": 255}
     if name == "rate_of_turn":
         return {"SID": sid, "Rate": s.rate_of_turn, "Reserved": 16777215}
     if name == "position":  # no fix: both fields not available (0x7FFFFFFF)

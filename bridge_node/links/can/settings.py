@@ -29,7 +29,7 @@ def checked_dbc(path: Path, where: str) -> None:
 
 
 N2K_OUTPUTS = {"rudder": 10.0, "engine_rapid": 10.0, "engine_dynamic": 2.0, "heading": 10.0,
-               "rate_of_turn": 10.0, "position": 10.0, "cog_sog": 4.0}  # standard rates, Hz
+               "rate_of_turn": 10.0, "position": 10.0, "cog_sog": 4.0, "attitude": 10.0}  # standard rates, Hz
 
 
 class CanLinkSettings(LinkSettingsBase):

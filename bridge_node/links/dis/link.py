@@ -96,8 +96,7 @@ def dis_timestamp(unix_time: float) -> int:
 def entity_state_pdu(s: DisLinkSettings, state: ShipOutputs, unix_time: float) -> bytes:
     """The own ship's Entity State PDU."""
     to_ecef = ned_to_ecef(state.latitude, state.longitude)
-    c, h = math.cos(state.heading), math.sin(state.heading)
-    body = to_ecef @ np.array([[c, -h, 0.0], [h, c, 0.0], [0.0, 0.0, 1.0]])  # level: pitch and roll 0
+    body = to_ecef @ matrix_from_euler(state.heading, state.pitch, state.roll)  # body (x fwd, y stbd, z down) to NED
     velocity = to_ecef @ np.array([state.speed_over_ground * math.cos(state.course_over_ground),
                                    state.speed_over_ground * math.sin(state.course_over_ground), 0.0])
     location = geodetic_to_ecef(state.latitude, state.longitude)

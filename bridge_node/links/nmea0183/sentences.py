@@ -32,7 +32,7 @@ COMMON_ORDER_TALKERS = ("AG", "AP", "RC", "II", "IN")
 DEFAULT_RATES = {"RMC": 1.0, "GGA": 1.0, "VTG": 1.0, "ZDA": 1.0, "HDT": 10.0, "ROT": 5.0, "RSA": 5.0,
                  "RPM": 2.0, "VBW": 1.0, "XDR": 1.0}  # Hz
 TYPICAL_LENGTH = {"RMC": 72, "GGA": 74, "VTG": 40, "ZDA": 36, "HDT": 18, "ROT": 18, "RSA": 22, "RPM": 28,
-                  "VBW": 44, "XDR": 34}  # characters with CR LF, to budget a line's baud rate
+                  "VBW": 44, "XDR": 62}  # characters with CR LF, to budget a line's baud rate
 
 _DECIMAL = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)")
 # a framed sentence: $ or !, an address (talker + type, or a proprietary P...), fields of
@@ -254,7 +254,10 @@ def render_outputs(names: list[str], s: ShipOutputs, utc: dt.datetime, talkers: 
         "RPM": lambda: ("RPM", ("S", "0", f"{s.shaft_rps * 60.0:.1f}", "", "A")),
         "VBW": lambda: ("VBW", (f"{s.speed_longitudinal / KNOT:.2f}", f"{s.speed_transverse / KNOT:.2f}", "A",
                                 "", "", "V")),
-        "XDR": lambda: ("XDR", ("F", f"{s.ice_resistance:.0f}", "N", "ICE_RES")),
+        # the ice resistance, then pitch (bow up +) and roll (starboard down +) under the
+        # transducer names of Airmar's attitude sensors
+        "XDR": lambda: ("XDR", ("F", f"{s.ice_resistance:.0f}", "N", "ICE_RES", "A", f"{math.degrees(s.pitch):.1f}",
+                                "D", "PTCH", "A", f"{math.degrees(s.roll):.1f}", "D", "ROLL")),
     }
     out = []
     for name in names:
