@@ -21,7 +21,9 @@ moves nothing and stops its clock, while every tick still publishes a step.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -53,8 +55,9 @@ from sim_core.scene.switches import (
     prepare_switch,
 )
 from sim_core.ship import model as ship_model
-from sim_core.ship.model import OrderRejection, ShipData, ShipModel
+from sim_core.ship.model import OrderRejection, ShipData, ShipModel, propeller_thrust
 from sim_core.ship.outputs import ShipOutputs, ship_outputs
+from sim_core.ship.propeller_jet import jet_velocity, propeller_jet
 from sim_core.regimes.rubble import RubbleModel, compile_rubble, rubble_at
 from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
 from sim_core.ship.rubble_resistance import brash_channel_resistance, keel_resistance
@@ -273,6 +276,19 @@ def _ice_drift(model: WorldModel, data: WorldData) -> np.ndarray:
     return np.array([data.ship.current[1] + east, data.ship.current[0] + north])
 
 
+def _wash(model: WorldModel, ship: ShipData) -> Callable[[np.ndarray], np.ndarray] | None:
+    """The propeller's jet as a water velocity field over world points, or None (no
+    thrust, or the wash switched off): ``sim_core.ship.propeller_jet``."""
+    m = model.ship
+    if not model.ice.settings.propeller_wash:
+        return None
+    thrust, _, inflow = propeller_thrust(m, ship.nu[0], ship.nu[1], ship.nu[5], ship.rps)
+    north, east, psi = ship.eta[0], ship.eta[1], ship.eta[5]
+    origin = ship_to_world(np.array([[m.x_p * m.L, 0.0]]), north, east, psi)[0]
+    jet = propeller_jet(origin, np.array(ship_vector_to_world((1.0, 0.0), psi)), thrust, inflow, m.d_p, m.d, m.rho)
+    return None if jet is None else functools.partial(jet_velocity, jet)
+
+
 def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> WorldEvents:
     """Events with the ship's outputs, the given rows' poses and statuses, and counts."""
     st = data.ice.state
@@ -343,7 +359,7 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
         ship_model.step(model.ship, ship, dt)
     contour, hull = hull_world(model, ship)
     placed, thawed, frozen = apply_swaps(model, data, update_scene(model.scene, data.scene, contour, hull.xy), contour)
-    report = ice_step(model.ice, data.ice, hull, dt, _ice_drift(model, data))
+    report = ice_step(model.ice, data.ice, hull, dt, _ice_drift(model, data), _wash(model, ship))
     if data.moving_to is None:  # (a move's tiles are prepared first)
         prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3)
     load = np.array([*world_vector_to_ship(report.hull_force, ship.eta[5]), -report.hull_moment])

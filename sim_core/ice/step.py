@@ -18,6 +18,7 @@ contact and are pushed aside, and those pushes crack the channel edge.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
@@ -219,10 +220,33 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
         space.set_submerged(st, up, False)
 
 
-def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
-             water: np.ndarray | None = None) -> IceStepReport:
+WASH_SHARES = 6  # the wash drags a sixth of the floes in it each step, each by six steps' drag
+
+
+def _wash(data: IceData, moving: np.ndarray, wash: Callable[[np.ndarray], np.ndarray], dt: float) -> None:
+    """Drag the moving floes above water towards the local water velocity ``wash`` (xy (n, 2)
+    m -> velocity (n, 2) m/s, on top of the uniform water's) by the same linear drag as the
+    space gives them towards the uniform one (``ContactSpace.set_water_velocity``). Setting
+    a body's velocity is a call per floe, so each step takes one of ``WASH_SHARES`` shares of
+    the floes in turn and gives it the drag of that many steps: with a drag time of seconds,
+    the same as every floe every step, at a sixth of the calls."""
+    st, space = data.state, data.contacts
+    rows = moving[~st.submerged[moving]]
+    data.wash_turn = (data.wash_turn + 1) % WASH_SHARES
+    rows = rows[rows % WASH_SHARES == data.wash_turn]
+    extra = wash(st.xy[rows])
+    hit = np.any(extra != 0.0, axis=1)
+    if hit.any():
+        rows = rows[hit]
+        share = 1.0 - space.space.damping ** (WASH_SHARES * dt)
+        space.set_velocity(st, rows, st.vel[rows] + share * extra[hit], st.yaw_rate[rows])
+
+
+def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float, water: np.ndarray | None = None,
+             wash: Callable[[np.ndarray], np.ndarray] | None = None) -> IceStepReport:
     """Advance the breakable ice by dt seconds with the hull moving as given, in water
-    moving at ``water`` (world x east, y north, m/s; None: still)."""
+    moving at ``water`` (world x east, y north, m/s; None: still) and, where ``wash`` is
+    given, locally faster by what it gives at a floe's centre (a propeller's jet)."""
     st, space = data.state, data.contacts
     east, north = (0.0, 0.0) if water is None else (float(water[0]), float(water[1]))
     space.set_water_velocity(east, north, dt)
@@ -245,6 +269,8 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float,
     by_contact, jammed = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
     vel_before = st.vel.copy() if resting_on else None
     moving = space.read_free(st)
+    if wash is not None and len(moving):
+        _wash(data, moving, wash, dt)
     if len(by_contact):
         break_cells(data, by_contact, BreakCause.CONTACT)
     free = _unsettled(moving, st.submerged, st.gcell, model.z_equilibrium, st.heave, st.roll, st.pitch,

@@ -43,6 +43,7 @@ class IceData:
     # free rows a tile switch laid under the hull, to go under it in the next ice step
     under_hull: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     rest_water: tuple[float, float] = (0.0, 0.0)  # the drift (m/s, east, north) the resting floes came to rest in
+    wash_turn: int = 0  # the share of the floes the propeller's wash drags this step (``step._wash``)
     # the hull's reference point (m) at the last look at every row for resting floes to
     # wake, and the resting rows (ascending) within the zone it kept (``resting.wake_near_hull``)
     wake_look: tuple[np.ndarray, np.ndarray] = field(
