@@ -17,9 +17,15 @@ holds from the propeller on, the centreline speed capped at U_0: within the zone
 establishment it is too narrow near the axis, but the floes float at the surface, 1.5 D_0 or
 more above the shaft of a ship's propeller, where the jet arrives only as it spreads.
 
-Simplifications, all of them the still-water jet's: the ship's own advance (a jet behind a
-moving ship is swept back into a trail), the hull and the free surface above the jet, and
-the rudder, which deflects it, are not modelled. The shaft's depth is not in the ship
+The jet is left out beyond 25 D_0 (99 m for the default ship), where its centreline speed
+has fallen to a quarter. Under way the hull's frictional wake, which the ship drags forward,
+carries back the momentum the jet adds: the far wake of a self-propelled ship carries none,
+its thrust equalling its resistance. So the still-water jet overstates the far wash of a ship
+under way (and leaves out some of it at the bollard), and floes it pushed would be kept
+moving far astern, each a body the contact engine steps. Other simplifications, all of them
+the still-water jet's: the ship's own advance (a jet behind a moving ship is swept back into
+a trail), the hull and the free surface above the jet, and the rudder, which deflects it,
+are not modelled. The shaft's depth is not in the ship
 file: its axis is put 0.55 D above the keel (a tip clearance of 5 % of D).
 """
 from __future__ import annotations
@@ -31,7 +37,7 @@ import numpy as np
 
 ESTABLISHED = 6.2  # x / D_0 where the zone of flow establishment ends (Albertson et al. 1950)
 SPREAD = 0.081  # the Gaussian's standard deviation over x (Albertson et al. 1950)
-REACH = 50.0  # x / D_0 beyond which the jet is left out (its centreline at 12 % of U_0)
+REACH = 25.0  # x / D_0 beyond which the jet is left out (its centreline at 25 % of U_0): module docstring
 AXIS_HEIGHT = 0.55  # shaft axis above the keel over D
 
 
