@@ -6,6 +6,7 @@ import math
 import os
 import signal
 import threading
+import time
 
 import can
 import pytest
@@ -140,3 +141,29 @@ def test_sigterm_ends_the_loop_after_the_tick_in_hand(tmp_path):
     assert seen[5] == "after the signal" and len(seen) == 6  # ended after that tick, not in it
     assert stats.ticks == 5 and data.time == pytest.approx(5 / 30.0)
     assert signal.getsignal(signal.SIGTERM) is before
+
+
+def test_a_tick_over_two_periods_is_kept_with_where_its_time_went(tmp_path):
+    """A listener that holds the tick three periods: the loop keeps that tick's record, with
+    the time by phase (the orders, the world step, each listener) and the collector's, and
+    no record of the ticks within their period."""
+    base = load_config()
+    cfg = base.model_copy(update={
+        "ice_field": base.ice_field.model_copy(update={"width": 400.0, "height": 400.0}),
+        "links": [], "paths": base.paths.model_copy(update={"cache_dir": str(tmp_path / "tiles")})})
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    period = 1.0 / 30.0
+
+    def stall(outcome) -> None:
+        if outcome.events.seq == 4:
+            time.sleep(3.0 * period)
+
+    with LinkHub(cfg.links, cfg.arbitration) as hub:
+        stats = run_realtime(model, data, hub, 30.0, None, [stall], should_stop=lambda: data.time >= 0.3 - 1e-9)
+    slow = [t for t in stats.slow_ticks if t["sim_s"] == pytest.approx(4 * period, abs=1e-3)]
+    assert len(slow) == 1, stats.slow_ticks
+    assert slow[0]["tick_ms"] >= 3e3 * period and slow[0][stall.__qualname__] >= 3e3 * period  # the stalling listener's phase
+    assert {"orders", "world", "gc_ms"} <= set(slow[0])
+    assert all(t["tick_ms"] > 2e3 * period for t in stats.slow_ticks)  # only ticks over two periods
+    assert stats.summary()["slow_ticks"] == stats.slow_ticks

@@ -13,6 +13,7 @@ pacing (``bridge_node.exercise.pacer``).
 """
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Protocol
@@ -79,6 +80,7 @@ class _Callback(StepListener):
 
     def __init__(self, function: Callable[[TickOutcome], None]) -> None:
         self.on_step = function
+        self.phase_name = getattr(function, "__qualname__", type(function).__name__)
 
 
 def as_listener(listener: StepListener | Callable[[TickOutcome], None]) -> StepListener:
@@ -89,7 +91,9 @@ def as_listener(listener: StepListener | Callable[[TickOutcome], None]) -> StepL
 class ExerciseTick:
     """The one tick: orders from ``orders``, the world stepped, the outcome to ``listeners``
     (``StepListener`` objects or functions of the outcome) in the order given. A context
-    manager: leaving it stops the listeners (once)."""
+    manager: leaving it stops the listeners (once). ``phase_ms`` holds the last tick's wall
+    time (ms) by phase: the orders (commands and polling), the world step, and each kind of
+    listener: where a slow tick's time went."""
 
     def __init__(self, model: WorldModel, data: WorldData, orders: OrderSource,
                  listeners: Iterable[StepListener | Callable[[TickOutcome], None]] = (),
@@ -97,11 +101,13 @@ class ExerciseTick:
         self.model, self.data, self.orders, self.commands = model, data, orders, commands
         self.listeners = [as_listener(listener) for listener in listeners]
         self.refusals = OrderRefusals()
+        self.phase_ms: dict[str, float] = {}
         self._stopped = False
 
     def __call__(self, dt: float, now: float, send: bool = True) -> TickOutcome:
         """One tick of dt s at ``now`` (the source's clock, s); ``send`` False: a step run
         ahead, whose outputs do not go out (its alarm changes still do)."""
+        t0 = time.perf_counter()
         taken = self.commands.take(self.model, self.data) if self.commands is not None else ()
         node = tuple(c for c in taken if isinstance(c, NODE_COMMANDS))
         for fault in (c for c in node if isinstance(c, LinkFault)):
@@ -109,12 +115,19 @@ class ExerciseTick:
         decision = self.orders.poll(now)
         for listener in self.listeners:
             listener.on_polled(self.data.seq, now)
+        t1 = time.perf_counter()
         events = step(self.model, self.data, dt, decision.controls,
                       tuple(c for c in taken if not isinstance(c, NODE_COMMANDS)))
         alarms = (*decision.alarms, *self.refusals.note(events.rejected, now))
         outcome = TickOutcome(events, decision.controls, alarms, now, decision.input_time, send, node)
+        t2 = time.perf_counter()
+        phases = self.phase_ms = {"orders": (t1 - t0) * 1e3, "world": (t2 - t1) * 1e3}
         for listener in self.listeners:
             listener.on_step(outcome)
+            t3 = time.perf_counter()
+            name = getattr(listener, "phase_name", type(listener).__name__)
+            phases[name] = phases.get(name, 0.0) + (t3 - t2) * 1e3
+            t2 = t3
         return outcome
 
     def stop(self) -> None:

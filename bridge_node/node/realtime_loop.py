@@ -42,6 +42,33 @@ from sim_core.world import WorldData, WorldModel
 
 TRIM_EVERY_S = 5.0  # s of wall time between the C heap's page give-backs (c_heap.py)
 TRIM_SLACK = 0.5  # periods a tick must have left over for a give-back to go in its slack
+SLOW_TICKS_KEPT = 50  # ticks over two periods whose phases the loop keeps (the first ones)
+
+
+class GcClock:
+    """Wall time (ms) the garbage collector took since the last ``take``, from Python's
+    ``gc.callbacks``; a collection runs inside whatever phase allocated, so a slow tick's
+    record gives it beside the phases. A context manager: leaving it unhooks the clock."""
+
+    def __init__(self) -> None:
+        self._ms, self._start = 0.0, 0.0
+
+    def _callback(self, phase: str, _info: dict) -> None:
+        if phase == "start":
+            self._start = time.perf_counter()
+        else:
+            self._ms += (time.perf_counter() - self._start) * 1e3
+
+    def take(self) -> float:
+        ms, self._ms = self._ms, 0.0
+        return ms
+
+    def __enter__(self) -> GcClock:
+        gc.callbacks.append(self._callback)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        gc.callbacks.remove(self._callback)
 # the memory records' measured columns: (summary key, column in LoopStats.memory, label)
 MEMORY_SERIES = (("rss", 2, "resident"), ("heap_in_use", 3, "C heap in use"))
 
@@ -63,6 +90,7 @@ class LoopStats:
     trim_ms: array = field(default_factory=lambda: array("f"))  # wall times of the heap's page give-backs
     refusals: OrderRefusals = field(default_factory=OrderRefusals)
     input_to_outputs_ms: array = field(default_factory=lambda: array("f"))
+    slow_ticks: list = field(default_factory=list)  # the first SLOW_TICKS_KEPT ticks over two periods: where time went
 
     def summary(self) -> dict:
         ms = np.array(self.step_ms, dtype=float) if self.step_ms else np.zeros(1)
@@ -70,7 +98,8 @@ class LoopStats:
                 "sim_s": round(self.sim_s, 2), "real_time_factor": round(self.sim_s / max(self.wall_s, 1e-9), 3),
                 "tick_ms_median": round(float(np.median(ms)), 2), "tick_ms_p99": round(float(np.percentile(ms, 99)), 2),
                 "tick_ms_max": round(float(ms.max()), 2), "orders_rejected": dict(self.refusals.counts),
-                "input_to_outputs_ms": distribution(self.input_to_outputs_ms), "memory": self.memory_summary()}
+                "input_to_outputs_ms": distribution(self.input_to_outputs_ms), "memory": self.memory_summary(),
+                "slow_ticks": self.slow_ticks}
 
     def memory_summary(self) -> dict:
         """Resident memory and the C heap's bytes in use at the start and end (MiB), and
@@ -171,11 +200,16 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
     gc.freeze()
     pacer = Pacer(period)
     start = last_trim = time.monotonic()
-    with _stop_between_ticks() as stop:
+    with _stop_between_ticks() as stop, GcClock() as gc_clock:
         while (duration is None or time.monotonic() - start < duration) and not should_stop() and not stop.requested:
             t0 = time.monotonic()
             outcome = tick(period, t0)
-            _note(stats, outcome, rate_hz, (time.monotonic() - t0) * 1e3)
+            tick_ms = (time.monotonic() - t0) * 1e3
+            _note(stats, outcome, rate_hz, tick_ms)
+            gc_ms = gc_clock.take()
+            if tick_ms > 2e3 * period and len(stats.slow_ticks) < SLOW_TICKS_KEPT:
+                stats.slow_ticks.append({"sim_s": round(stats.sim_s, 3), "tick_ms": round(tick_ms, 2),
+                                         "gc_ms": round(gc_ms, 2), **{k: round(v, 2) for k, v in tick.phase_ms.items()}})
             pacer.advance()
             if time.monotonic() - last_trim >= TRIM_EVERY_S and pacer.slack() >= TRIM_SLACK * period:
                 last_trim = time.monotonic()
