@@ -117,16 +117,21 @@ def test_the_loop_ticks_on_while_a_lost_slcan_adapter_reopens(tmp_path):
     assert stats.ticks == len(states)
 
 
-def test_sigterm_ends_the_loop_after_the_tick_in_hand(tmp_path):
-    """SIGTERM (as Ctrl-C) in the middle of a tick does not cut the tick: the loop ends after
-    it, with every tick counted and published, and the process's handlers back as they were
-    (a signal raised inside a link's poll used to leave recorded frames uncounted)."""
+def _small_world(tmp_path):
+    """The default config on a 400 m x 400 m field without links, its world built and started."""
     base = load_config()
     cfg = base.model_copy(update={
         "ice_field": base.ice_field.model_copy(update={"width": 400.0, "height": 400.0}),
         "links": [], "paths": base.paths.model_copy(update={"cache_dir": str(tmp_path / "tiles")})})
     model = build_world(cfg, None)
-    data = start_world(model, cfg)
+    return cfg, model, start_world(model, cfg)
+
+
+def test_sigterm_ends_the_loop_after_the_tick_in_hand(tmp_path):
+    """SIGTERM (as Ctrl-C) in the middle of a tick does not cut the tick: the loop ends after
+    it, with every tick counted and published, and the process's handlers back as they were
+    (a signal raised inside a link's poll used to leave recorded frames uncounted)."""
+    cfg, model, data = _small_world(tmp_path)
     seen = []
 
     def on_step(outcome) -> None:
@@ -147,12 +152,7 @@ def test_a_tick_over_two_periods_is_kept_with_where_its_time_went(tmp_path):
     """A listener that holds the tick three periods: the loop keeps that tick's record, with
     the time by phase (the orders, the world step, each listener) and the collector's, and
     no record of the ticks within their period."""
-    base = load_config()
-    cfg = base.model_copy(update={
-        "ice_field": base.ice_field.model_copy(update={"width": 400.0, "height": 400.0}),
-        "links": [], "paths": base.paths.model_copy(update={"cache_dir": str(tmp_path / "tiles")})})
-    model = build_world(cfg, None)
-    data = start_world(model, cfg)
+    cfg, model, data = _small_world(tmp_path)
     period = 1.0 / 30.0
 
     def stall(outcome) -> None:

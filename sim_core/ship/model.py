@@ -204,10 +204,12 @@ def mmg_forces(model: ShipModel, u: float, v: float, r: float, delta: float, n: 
     return X_H + X_P + X_R, Y_H + Y_R, N_H + N_R
 
 
-def state_derivatives(model: ShipModel, state: tuple, delta: float, n: float, ext: tuple, ice_x: float) -> tuple:
-    """Time derivative of (north, east, psi, u, v, r)."""
+def state_derivatives(model: ShipModel, state: tuple, delta: float, n: float, ext: tuple, ice_x: float,
+                      forces: tuple[float, float, float] | None = None) -> tuple:
+    """Time derivative of (north, east, psi, u, v, r); ``forces``: the MMG forces at this
+    state where already computed."""
     _, _, psi, u, v, r = state
-    X, Y, N = mmg_forces(model, u, v, r, delta, n)
+    X, Y, N = forces if forces is not None else mmg_forces(model, u, v, r, delta, n)
     X += ext[0] + ice_x
     Y += ext[1]
     N += ext[2]
@@ -303,8 +305,9 @@ def step(model: ShipModel, data: ShipData, dt: float) -> None:
         _engine(model, data, h)
         s0 = (eta[0], eta[1], eta[5], nu[0], nu[1], nu[5])
         ice_x, bow = _ice_force(model, data, s0[3])
-        heel = heeling_moment(model.motions, mmg_forces(model, s0[3], s0[4], s0[5], data.rudder, data.rps)[1], ext[1])
-        k1 = state_derivatives(model, s0, data.rudder, data.rps, ext, ice_x)
+        forces = mmg_forces(model, s0[3], s0[4], s0[5], data.rudder, data.rps)
+        heel = heeling_moment(model.motions, forces[1], ext[1])
+        k1 = state_derivatives(model, s0, data.rudder, data.rps, ext, ice_x, forces)
         k2 = state_derivatives(model, tuple(a + 0.5 * h * b for a, b in zip(s0, k1)), data.rudder, data.rps, ext, ice_x)
         k3 = state_derivatives(model, tuple(a + 0.5 * h * b for a, b in zip(s0, k2)), data.rudder, data.rps, ext, ice_x)
         k4 = state_derivatives(model, tuple(a + h * b for a, b in zip(s0, k3)), data.rudder, data.rps, ext, ice_x)
