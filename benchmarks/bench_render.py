@@ -111,12 +111,13 @@ def render_package(rev: str) -> types.ModuleType:
     name = "render_" + "".join(c if c.isalnum() else "_" for c in rev)
     folder = Path(tempfile.mkdtemp(prefix="bench_render_"))
     repo = Path(__file__).resolve().parents[1]
-    for path in subprocess.run(["git", "ls-tree", "--name-only", rev, "bridge_node/render/"], cwd=repo,
+    for path in subprocess.run(["git", "ls-tree", "-r", "--name-only", rev, "bridge_node/render/"], cwd=repo,
                                check=True, capture_output=True, text=True).stdout.split():
         source = subprocess.run(["git", "show", f"{rev}:{path}"], cwd=repo, check=True, capture_output=True,
                                 text=True).stdout
-        (folder / name).mkdir(exist_ok=True)
-        (folder / name / Path(path).name).write_text(source.replace("bridge_node.render", name))
+        target = folder / name / Path(path).relative_to("bridge_node/render")  # (the passes' GLSL beside them)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(source.replace("bridge_node.render", name) if path.endswith(".py") else source)
     sys.path.insert(0, str(folder))
     return importlib.import_module(name)
 

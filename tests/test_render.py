@@ -143,8 +143,8 @@ def test_a_tiles_floe_buffer_keeps_every_triangle_over_its_growth(ctx, exercise,
     model, _ = exercise
     renderer = SceneRenderer(ctx, model, RenderSettings(channels=[channel()]))
     mesh = renderer.meshes[0]
-    buf = FloeCopies(ctx, renderer.floe, mesh) if copies else \
-        FloeBuffer(ctx, renderer.floe, renderer.mesh_vbos[0], mesh.index.dtype)
+    buf = FloeCopies(ctx, renderer.floes.program, mesh) if copies else \
+        FloeBuffer(ctx, renderer.floes.program, renderer.mesh_vbos[0], mesh.index.dtype)
     cells = np.array_split(np.arange(len(mesh.start) - 1), 12)
     parts = [mesh.corners(c, sides=s) for _ in range(3) for c in cells for s in (False, True)]
     for part in parts:  # appended in parts, as cells break, over the storages' growth

@@ -57,15 +57,23 @@ def channel_camera(channel: ChannelSettings, eye: tuple[float, float, float], no
     heading psi (rad, from north), heaved up ``heave`` m, pitched bow up ``pitch`` rad and
     rolled starboard down ``roll`` rad: the eye and its view move with the ship, as a
     trainee's on its bridge."""
-    to_world = ship_matrix(north, east, psi, heave, pitch, roll)
-    eye = (to_world @ np.array([*eye, 1.0]))[:3]
+    return camera_on(channel, eye, ship_matrix(north, east, psi, heave, pitch, roll), far)
+
+
+def camera_on(channel: ChannelSettings, eye: tuple[float, float, float], to_world: np.ndarray, far: float) -> Camera:
+    """The channel's camera at `eye` (ship frame, m) on a ship placed by ``to_world`` (its
+    ``ship_matrix``, made once per frame for every channel). Plain floats where numpy's
+    per-call cost on 3-vectors would be most of the time (a frame makes one per channel)."""
+    rot = to_world[:3, :3]
+    eye = rot @ eye + to_world[:3, 3]
     yaw, el = math.radians(channel.yaw_deg), math.radians(channel.pitch_deg)
-    f = to_world[:3, :3] @ [math.cos(yaw) * math.cos(el), math.sin(yaw) * math.cos(el), math.sin(el)]
-    r = np.cross(f, to_world[:3, 2])
-    r /= np.linalg.norm(r)
-    u = np.cross(r, f)
-    view = np.eye(4)
-    view[0, :3], view[1, :3], view[2, :3] = r, u, -f
+    f = (rot @ (math.cos(yaw) * math.cos(el), math.sin(yaw) * math.cos(el), math.sin(el))).tolist()
+    up = rot[:, 2].tolist()
+    r = [f[1] * up[2] - f[2] * up[1], f[2] * up[0] - f[0] * up[2], f[0] * up[1] - f[1] * up[0]]
+    norm = math.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
+    r = [c / norm for c in r]
+    u = [r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2], r[0] * f[1] - r[1] * f[0]]
+    view = np.array([[*r, 0.0], [*u, 0.0], [-f[0], -f[1], -f[2], 0.0], [0.0, 0.0, 0.0, 1.0]])
     view[:3, 3] = -view[:3, :3] @ eye
     tx, ty = math.tan(math.radians(channel.hfov_deg) / 2), math.tan(channel.vfov() / 2)
     proj = np.array([[1 / tx, 0, 0, 0], [0, 1 / ty, 0, 0],
@@ -73,12 +81,24 @@ def channel_camera(channel: ChannelSettings, eye: tuple[float, float, float], no
     return Camera(eye, view, proj)
 
 
+_BOX_CORNERS = np.stack(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij"), -1).reshape(8, 3)
+
+
+def box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The eight corners of axis-aligned boxes (n, 3) lo..hi, world m, homogeneous: (n, 8, 4)."""
+    pts = lo[:, None, :] + _BOX_CORNERS[None] * (hi - lo)[:, None, :]
+    return np.concatenate([pts, np.ones(pts.shape[:2] + (1,))], axis=-1)
+
+
+def visible_corners(view_proj: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """Which boxes (their ``box_corners``, (n, 8, 4)) may be seen: False only when all eight
+    corners lie outside the same clip plane."""
+    clip = corners @ view_proj.T
+    xyz, w = clip[..., :3], clip[..., 3:]
+    return ~((xyz < -w).all(axis=1).any(axis=1) | (xyz > w).all(axis=1).any(axis=1))
+
+
 def visible_boxes(view_proj: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Which axis-aligned boxes (n, 3) corners lo..hi, world m, may be seen: False only when
     all eight corners lie outside the same clip plane."""
-    corners = np.stack(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij"), -1).reshape(8, 3)
-    pts = lo[:, None, :] + corners[None] * (hi - lo)[:, None, :]
-    clip = np.concatenate([pts, np.ones(pts.shape[:2] + (1,))], axis=-1) @ view_proj.T
-    x, y, z, w = clip[..., 0], clip[..., 1], clip[..., 2], clip[..., 3]
-    outside = [x < -w, x > w, y < -w, y > w, z < -w, z > w]
-    return ~np.any([o.all(axis=1) for o in outside], axis=0)
+    return visible_corners(view_proj, box_corners(lo, hi))

@@ -24,11 +24,11 @@ CLASSES: tuple[tuple[str, tuple[int, int, int]], ...] = (
 )
 CLASS_INDEX = {name: k for k, (name, _) in enumerate(CLASSES)}
 
-# GLSL: the class colours and indices, for the fragment shaders' class pass
+# GLSL: the class colours and indices, for the fragment shaders' class pass (whether a draw is one:
+# ``classes`` in the View block, passes/blocks.glsl)
 GLSL = (f"const vec4 CLASS_COLOUR[{len(CLASSES)}] = vec4[]("
         + ", ".join(f"vec4({r / 255:.6f}, {g / 255:.6f}, {b / 255:.6f}, 1.0)" for _, (r, g, b) in CLASSES) + ");\n"
-        + "".join(f"const int CLASS_{name.upper()} = {k};\n" for k, (name, _) in enumerate(CLASSES))
-        + "uniform bool classes;          // the class pass: flat class colours, no shading\n")
+        + "".join(f"const int CLASS_{name.upper()} = {k};\n" for k, (name, _) in enumerate(CLASSES)))
 
 
 def class_of_pixels(image: np.ndarray) -> np.ndarray:

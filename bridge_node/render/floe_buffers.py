@@ -11,7 +11,7 @@ import numpy as np
 
 from bridge_node.render.camera import Camera
 from bridge_node.render.meshes import TemplateMesh
-from bridge_node.render.shaders import POSE_WIDTH
+from bridge_node.render.passes.glsl import POSE_WIDTH
 
 
 def pose_textures(pose: np.ndarray) -> np.ndarray:
@@ -27,13 +27,16 @@ def pose_textures(pose: np.ndarray) -> np.ndarray:
 
 def clip_polygon(poly: np.ndarray, f: np.ndarray) -> np.ndarray:
     """The part of a convex polygon (n, k) where the linear function f (values at its
-    vertices) is <= 0, as a triangle fan's triangles (3 m, k)."""
-    out = []
-    for a, b, fa, fb in zip(poly, np.roll(poly, -1, 0), f, np.roll(f, -1)):
+    vertices) is <= 0, as a triangle fan's triangles (3 m, k). (Plain floats: a channel
+    clips a quad twice a frame, where numpy's per-call cost would be most of the time.)"""
+    pts, values, out = poly.tolist(), f.tolist(), []
+    for k, (a, fa) in enumerate(zip(pts, values)):
+        b, fb = pts[(k + 1) % len(pts)], values[(k + 1) % len(pts)]
         if fa <= 0:
             out.append(a)
         if (fa <= 0) != (fb <= 0):
-            out.append(a + (b - a) * (fa / (fa - fb)))
+            s = fa / (fa - fb)
+            out.append([p + (q - p) * s for p, q in zip(a, b)])
     if len(out) < 3:
         return np.zeros((0, poly.shape[1]))
     return np.array([v for k in range(1, len(out) - 1) for v in (out[0], out[k], out[k + 1])])
@@ -54,7 +57,7 @@ def horizon_split(cam: Camera, tx: float, ty: float, width: int, height: int) ->
 
 def write_entries(tex: moderngl.Texture, lines: int, first: int, values: np.ndarray) -> None:
     """Write values (n, ...) to a texture's frozen entries first .. first + n - 1, which run
-    along its lines from the last line down (``shaders.entry_texel``)."""
+    along its lines from the last line down (``entry_texel`` in ``passes/entries.glsl``)."""
     end = first + len(values)
     for line in range(first // POSE_WIDTH, (end - 1) // POSE_WIDTH + 1):
         a, b = max(first, line * POSE_WIDTH), min(end, (line + 1) * POSE_WIDTH)

@@ -24,25 +24,33 @@ the vertex work of thousands of intact cells would dominate the frame. Per frame
 poses of tiles placed or simulated since the last frame are uploaded; a frozen tile's
 once, when it freezes. Also static: the relief noise texture (mipmapped) and each tile's
 level-ice thickness (in the tile table); per frame, the sun and sky of the exercise's time
-and the ship's place.
+and the ship's place, written once for every channel into a uniform buffer. The drawing is
+the passes' (``bridge_node.render.passes``: one object per effect, its GLSL beside it), which
+``SceneRenderer.draw`` sequences for a channel.
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import moderngl
 import numpy as np
 
-from bridge_node.render import object_shaders, shaders
-from bridge_node.render.camera import Camera, channel_camera, outputs_matrix, set_matrix, ship_matrix, visible_boxes
+from bridge_node.render.camera import (Camera, box_corners, camera_on, outputs_matrix, ship_matrix, visible_boxes,
+                                      visible_corners)
 from bridge_node.render.classes import CLASS_INDEX, CLASSES
-from bridge_node.render.floe_buffers import FloeBuffer, horizon_split
+from bridge_node.render.floe_buffers import FloeBuffer
+from bridge_node.render.passes.blend_bands import BlendBandPass
+from bridge_node.render.passes.blocks import SharedBlocks
+from bridge_node.render.passes.environment import EnvironmentPass
+from bridge_node.render.passes.floes import SEEN_DEPTH, FloePass
+from bridge_node.render.passes.glsl import FROZEN_CRACKED, UNPLACED_FLOE_FIELD, scene_defines
+from bridge_node.render.passes.nav_lights import NavLightPass
+from bridge_node.render.passes.ship import ShipPass
 from bridge_node.render.meshes import cell_rasters, floe_field_layouts, rim_rasters, template_meshes
 from bridge_node.render.scene_uploads import POSE_NAMES, POSE_UNITS, SceneUploads
 from bridge_node.render.ridge_sails import SailMeshes
-from sim_core.regimes.rubble import RubbleModel
 from bridge_node.render.rubble_look import ridge_uniforms, rubble_tile_bits
-from bridge_node.render.shaders import FROZEN_CRACKED, UNPLACED_FLOE_FIELD
 from bridge_node.render.settings import ChannelSettings, RenderSettings, eye_point
 from bridge_node.render.ship_mesh import load_ship, nav_lights, ship_triangles
 from bridge_node.render.sky import Sky
@@ -51,7 +59,6 @@ from bridge_node.stream.world_view import WorldView
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.world import WorldModel
 
-GL_CLIP_DISTANCE0 = 0x3000
 FLOE_DRIFT_MARGIN = 30.0  # m: broken floes may drift this far out of their tile
 MAX_TILES = 4096 * 4096  # tile table of 8 bytes per tile: 134 MB of texture at most
 RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m tiles)
@@ -61,6 +68,7 @@ STATUS_UNIT = 7  # texture unit of the status texture
 NAV_LIGHT_LUX = 10.0  # lux: daylight below which navigation lights show at full strength (civil dusk)
 CRACK_REACH_PX = 4.0  # raster pixels from a cell edge within which a crack's line may be drawn (the distance)
 EYE_WHITE_LUX = 40.0  # lux a surface needs to look white to eyes adapted to the night
+TILE_INFO_UNIT, CELL_RASTER_UNIT = 0, 3  # texture units of the tile table and the cell rasters
 
 
 class SceneRenderer(SceneUploads):
@@ -70,7 +78,6 @@ class SceneRenderer(SceneUploads):
         self.ctx, self.model, self.settings = ctx, model, settings
         self._configured_aims = [light.mount().default for light in settings.searchlights]  # before any order
         scene = model.scene
-        self._make_programs(len(settings.searchlights), model.rubble)
         if max((t.n_cells for t in model.ice.templates), default=0) >= FROZEN_CRACKED:
             raise ValueError(f"the renderer draws tiles of fewer than {FROZEN_CRACKED} cells (a frozen tile's status "
                              "entries number them)")
@@ -86,13 +93,6 @@ class SceneRenderer(SceneUploads):
         self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST
         mesh = load_ship(model.ship.particulars, model.contour, settings.freeboard_m)
         self.ship_extent = mesh.bounds  # (2, 3): lower and upper corner, ship frame, m
-        hull = ship_triangles(mesh)
-        self.ship_vao = ctx.vertex_array(self.ship, [(ctx.buffer(hull.tobytes()), "3f 3f 3f", "in_pos", "in_normal",
-                                                      "in_colour")])
-        self.nav = ctx.program(vertex_shader=object_shaders.NAV_VS, fragment_shader=object_shaders.NAV_FS)
-        points = nav_lights(model.ship.particulars, mesh.bounds)
-        self.nav_vao = ctx.vertex_array(self.nav, [(ctx.buffer(points.tobytes()), "3f 3f 2f", "in_pos", "in_colour",
-                                                    "in_sector")])
         self.meshes = template_meshes(model)
         self.mesh_vbos = [ctx.buffer(m.vertices.tobytes()) for m in self.meshes]
         self.raster_size = RASTER_SIZE if len(model.ice.templates) <= 4 else RASTER_SIZE // 2
@@ -105,7 +105,6 @@ class SceneRenderer(SceneUploads):
         self.cell_raster = ctx.texture((self.raster_size, raster.shape[0]), 4, raster.tobytes(), dtype="u2")
         self.cell_raster.filter = moderngl.NEAREST, moderngl.NEAREST
         self.tile_floes: dict[int, tuple[FloeBuffer, FloeBuffer]] = {}  # placement -> (tops, sides)
-        self._tile_draw: dict[int, dict] = {}  # placement -> the floe program's uniforms for its tile
         self._sides_due: set[int] = set()  # frozen placements whose side faces are made when first needed
         self._drawn = np.zeros(0, dtype=bool)  # by row: its triangles are in its tile's buffers
         self.pose: list[moderngl.Texture] = []  # each floe row's (and frozen floe's) attitude and place
@@ -117,7 +116,8 @@ class SceneRenderer(SceneUploads):
         mat = model.ice.material
         self.slab_z = float(h * (1.0 - mat.density / mat.water_density))
         self.template_thickness = [t.thickness for t in model.ice.templates]
-        self.sails = SailMeshes(ctx, self.ship, model.rubble, self.slab_z, settings.sail_distance_m)
+        self._make_passes(ship_triangles(mesh), nav_lights(model.ship.particulars, mesh.bounds))
+        self.sails = SailMeshes(ctx, self.ships.program, model.rubble, self.slab_z, settings.sail_distance_m)
         noise = relief_noise()
         self.noise = ctx.texture(noise.shape[:2], 4, noise.tobytes())
         self.noise.build_mipmaps()
@@ -126,6 +126,9 @@ class SceneRenderer(SceneUploads):
         # the eye, below the wings), bilinear
         self.noise.filter = moderngl.NEAREST_MIPMAP_NEAREST, moderngl.LINEAR
         self.sky: Sky | None = None
+        self._ship_seen: ShipOutputs | None = None  # the ship published, whose matrix is _ship_to_world
+        self._ship_to_world = np.eye(4)
+        self._tile_boxes: tuple[list[int], np.ndarray, np.ndarray, np.ndarray] = ([], *np.zeros((3, 0, 2)))
 
     def _first_tile_table(self) -> np.ndarray:
         """The tile table before any tile is simulated: every tile's thickness, and a floe
@@ -137,51 +140,50 @@ class SceneRenderer(SceneUploads):
             info[tile, 1], info[tile, 3] = layout, UNPLACED_FLOE_FIELD | self.rubble_bits[tile]
         return info
 
-    def _make_programs(self, lights: int, rubble: RubbleModel) -> None:
-        """The shader programs (with ``lights`` searchlights, and the environment pass with
-        brash and ridges where the field has them, its ridge uniforms set once) and the
-        screen-space buffers of the environment, sky and blend band."""
-        ctx = self.ctx
-        env = shaders.with_rubble(shaders.with_lights(shaders.ENV_FS, lights), rubble.has_brash, bool(rubble.ridges))
-        self.env = ctx.program(vertex_shader=shaders.ENV_VS, fragment_shader=env)
-        self._set(self.env, **ridge_uniforms(rubble))
-        self.floe = ctx.program(vertex_shader=object_shaders.FLOE_VS,
-                                fragment_shader=shaders.with_lights(object_shaders.FLOE_FS, lights))
-        self.ship = ctx.program(vertex_shader=object_shaders.SHIP_VS,
-                                fragment_shader=shaders.with_lights(object_shaders.SHIP_FS, lights))
-        self.band = ctx.program(vertex_shader=object_shaders.BAND_VS, fragment_shader=object_shaders.BAND_FS)
-        self.band_buf = ctx.buffer(reserve=2 * 6 * 2 * 4)
-        self.band_vao = ctx.vertex_array(self.band, [(self.band_buf, "2f", "in_ndc")])
-        self.sky_prog = ctx.program(vertex_shader=shaders.ENV_VS,
-                                    fragment_shader=shaders.with_lights(shaders.SKY_FS, lights))
-        self.env_buf = ctx.buffer(reserve=2 * 9 * 5 * 4)  # ground, then sky: 3 triangles each at most
-        self.env_vao = ctx.vertex_array(self.env, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
-        self.sky_vao = ctx.vertex_array(self.sky_prog, [(self.env_buf, "2f 3f", "in_ndc", "in_ray")])
+    def _make_passes(self, hull: np.ndarray, lights: np.ndarray) -> None:
+        """The passes, their programs compiled with the field's searchlights and rubble, and
+        their constants set; the uniform buffers they share."""
+        ctx, rubble, scene = self.ctx, self.model.rubble, self.model.scene
+        defines = scene_defines(len(self.settings.searchlights), rubble.has_brash, bool(rubble.ridges))
+        units = {"noise": NOISE_UNIT, "status": STATUS_UNIT, **dict(zip(POSE_NAMES, POSE_UNITS))}
+        self.ships = ShipPass(ctx, defines, units, hull)
+        self.floes = FloePass(ctx, defines, units)
+        self.environment = EnvironmentPass(ctx, defines, {
+            **units, **ridge_uniforms(rubble), "tile_info": TILE_INFO_UNIT, "cell_raster": CELL_RASTER_UNIT,
+            "slab_z": self.slab_z, "far": self.settings.far_m, "raster_size": self.raster_size, "rim_px": self.rim_px,
+            "field_size": (scene.nx * scene.side, scene.ny * scene.side), "tile_side": scene.side})
+        self.nav_lights = NavLightPass(ctx, defines, lights)
+        self.blend_bands = BlendBandPass(ctx)
+        self.blocks = SharedBlocks(ctx, defines["LIGHT_SLOTS"])
+        self.blocks.attach(self.ships.program, self.floes.program, self.environment.ground, self.environment.sky,
+                           self.nav_lights.program)
 
-    # -- per frame uploads ----------------------------------------------------------------
+    def update(self, view: WorldView) -> None:
+        """Upload what changed in the view (``SceneUploads.update``) and write the frame's
+        ``Scene`` block: the sky, the visibility, the clock and the searchlights."""
+        super().update(view)
+        self._tile_boxes = self._floe_tile_boxes(view)
+        sky = self.sky
+        self.blocks.write_scene(sun=sky.sun, visibility=view.environment.visibility, direct=sky.direct,
+                                relief_reach=self.settings.relief_reach_m, ambient=sky.ambient, time=view.time,
+                                zenith_colour=sky.zenith, horizon_colour=sky.horizon, water_colour=WATER,
+                                **self._searchlights(view.ship))
 
     def draw(self, view: WorldView, channel: ChannelSettings, blend: moderngl.Texture,
              classes: bool = False) -> Camera:
         """Draw the scene for one channel into the bound framebuffer, its columns scaled by
         the blend texture (width x 1 float: the channel's edge-blend factors); with
         ``classes``, its class mask instead (flat class colours: no reflections, lights or
-        blending)."""
+        blending). ``update`` has taken the view's frame."""
         ctx, s = self.ctx, self.settings
-        north, east, psi = view.ship.north, view.ship.east, view.ship.heading
         p = self.model.ship.particulars
-        cam = channel_camera(channel, eye_point(channel.eye, p.look.bridge_eye, p.beam), north, east, psi, s.far_m,
-                             view.ship.heave, view.ship.pitch, view.ship.roll)
-        vp = cam.view_proj
-        sky = self.sky
-        common = {"eye": tuple(cam.eye), "visibility": view.environment.visibility, "sun": sky.sun,
-                  "direct": sky.direct, "ambient": sky.ambient, "zenith_colour": sky.zenith,
-                  "horizon_colour": sky.horizon,
-                  "noise": NOISE_UNIT, "water_colour": WATER,
-                  "relief_reach": s.relief_reach_m, "time": view.time, "classes": classes,
-                  **self._searchlights(view.ship)}
-        ctx.clear(*(np.divide(CLASSES[CLASS_INDEX["sky"]][1], 255.0) if classes else sky.horizon), depth=1.0)
-        self.tile_info.use(0)
-        self.cell_raster.use(3)
+        if view.ship is not self._ship_seen:  # the ship's matrix, once per frame for every channel
+            self._ship_seen, self._ship_to_world = view.ship, outputs_matrix(view.ship)
+        cam = camera_on(channel, eye_point(channel.eye, p.look.bridge_eye, p.beam), self._ship_to_world, s.far_m)
+        self.blocks.write_view(cam.view_proj, cam.eye, classes)
+        ctx.clear(*(np.divide(CLASSES[CLASS_INDEX["sky"]][1], 255.0) if classes else self.sky.horizon), depth=1.0)
+        self.tile_info.use(TILE_INFO_UNIT)
+        self.cell_raster.use(CELL_RASTER_UNIT)
         self.noise.use(NOISE_UNIT)
         for tex, unit in zip(self.pose, POSE_UNITS):
             tex.use(unit)
@@ -191,29 +193,18 @@ class SceneRenderer(SceneUploads):
         # spares the full-screen pass every pixel already covered
         ctx.enable(moderngl.DEPTH_TEST)
         ships = self._ship_matrices(view, cam)
-        self._set(self.ship, view_proj=vp, **common)
-        for k, m in enumerate(ships):  # the own ship first
-            self._set(self.ship, ship_class=CLASS_INDEX["own_ship" if k == 0 else "other_vessel"])
-            set_matrix(self.ship["ship_to_world"], m)
-            self.ship_vao.render()
+        self.ships.draw(ships)
         if self.model.rubble.ridges:
-            self._draw_sails(cam)
-        tiles = self._floe_tiles(view, cam) if self.tile_floes else None
-        if tiles:
-            ctx.enable_direct(GL_CLIP_DISTANCE0)
-            ctx.enable(moderngl.CULL_FACE)  # not for the ship: its matrix mirrors (starboard-handed frame)
-            self._set(self.floe, view_proj=vp, **dict(zip(POSE_NAMES, POSE_UNITS)), status=STATUS_UNIT, reflected=False,
-                      **common)
-            self._draw_floes(view, tiles)
-            ctx.disable(moderngl.CULL_FACE)
-            ctx.disable_direct(GL_CLIP_DISTANCE0)
-        self._draw_environment(cam, channel, common)
+            self.ships.draw_sails(self.sails, cam.eye)
+        tiles = self._floe_tiles(cam)
+        sides = functools.partial(self._sides, view)
+        self.floes.draw(tiles, self.tile_floes, sides, s.lod_distance_m)
+        self.environment.draw(cam, channel)
         if classes:
             return cam
-        if tiles:
-            self._draw_reflections(view, tiles)
-        self._draw_nav_lights(ships, cam, channel.height, view.environment.visibility)
-        self._blend_bands(channel, blend)
+        self.floes.reflections(tiles, sides, s.reflection_distance_m)
+        self.nav_lights.draw(ships, channel.height, min(NAV_LIGHT_LUX / max(self.sky.illuminance, 1e-6), 1.0))
+        self.blend_bands.draw(channel, blend)
         return cam
 
     def build_all(self, view: WorldView) -> None:
@@ -221,123 +212,51 @@ class SceneRenderer(SceneUploads):
         sails near the ship): for a single frame that should show everything (a snapshot)."""
         self.sails.update(np.array([view.ship.east, view.ship.north]), budget_s=math.inf)
 
-    def _draw_sails(self, cam: Camera) -> None:
-        """The ridges' sails near the eye, with the ship program (its uniforms set)."""
-        self.sails.update(cam.eye)
-        self._set(self.ship, ship_class=CLASS_INDEX["level_ice"])
-        set_matrix(self.ship["ship_to_world"], np.eye(4))
-        self.sails.render()
-
-    def _draw_environment(self, cam: Camera, channel: ChannelSettings, common: dict) -> None:
-        """The environment pass below the horizon (sea and level ice, per pixel) and the sky
-        pass above it."""
-        half = math.radians(channel.hfov_deg) / 2
-        ground, above = horizon_split(cam, math.tan(half), math.tan(channel.vfov() / 2), channel.width,
-                                      channel.height)
-        self.env_buf.write(np.vstack([ground, above]).astype("f4").tobytes())
-        scene = self.model.scene
-        if len(ground):
-            self._set(self.env, slab_z=self.slab_z, far=self.settings.far_m, tile_info=0,
-                      cell_raster=3, raster_size=self.raster_size, rim_px=self.rim_px, status=STATUS_UNIT,
-                      field_size=(scene.nx * scene.side, scene.ny * scene.side), tile_side=scene.side,
-                      **common)
-            self.env_vao.render(vertices=len(ground))
-        if len(above):
-            self._set(self.sky_prog, **common)
-            self.sky_vao.render(vertices=len(above), first=len(ground))
-
     def _searchlights(self, ship: ShipOutputs) -> dict:
-        """The searchlights' uniforms for the published ship: world positions, beam axes, the
-        cosines of half their beams, and their intensities over the illuminance the eye
-        sees as white (the daylight's, or EYE_WHITE_LUX at night); 0 for a light switched
-        off. Each is aimed as published (the console's orders), else as configured."""
-        n = max(len(self.settings.searchlights), 1)  # the shaders' arrays (see shaders.with_lights), filled whole
-        pos, axis, cos, power = np.zeros((n, 3)), np.zeros((n, 3)), np.ones(n), np.zeros(n)
+        """The searchlights' entries of the ``Scene`` block for the published ship: world
+        positions, beam axes, and per beam the cosine of half its width and its intensity
+        over the illuminance the eye sees as white (the daylight's, or EYE_WHITE_LUX at
+        night); 0 for a light switched off. Each is aimed as published (the console's
+        orders), else as configured."""
+        n = max(len(self.settings.searchlights), 1)  # the blocks' arrays (LIGHT_SLOTS), filled whole
+        pos, axis, beam = np.zeros((n, 4)), np.zeros((n, 4)), np.zeros((n, 4))
+        beam[:, 0] = 1.0
         to_world = outputs_matrix(ship)
         for k, light in enumerate(self.settings.searchlights):
             aim = ship.searchlights[k] if k < len(ship.searchlights) else self._configured_aims[k]
             az, el = ship.heading + aim.bearing, aim.elevation
-            pos[k] = (to_world @ np.array([*light.position, 1.0]))[:3]
-            axis[k] = math.sin(az) * math.cos(el), math.cos(az) * math.cos(el), math.sin(el)
-            cos[k] = math.cos(math.radians(light.beam_deg) / 2)
-            power[k] = light.intensity_cd / max(self.sky.illuminance, EYE_WHITE_LUX) if aim.on else 0.0
-        return {"light_pos": pos, "light_axis": axis, "light_cos": cos, "light_power": power}
+            pos[k, :3] = (to_world @ np.array([*light.position, 1.0]))[:3]
+            axis[k, :3] = math.sin(az) * math.cos(el), math.cos(az) * math.cos(el), math.sin(el)
+            beam[k, 0] = math.cos(math.radians(light.beam_deg) / 2)
+            beam[k, 1] = light.intensity_cd / max(self.sky.illuminance, EYE_WHITE_LUX) if aim.on else 0.0
+        return {"light_pos": pos, "light_axis": axis, "light_beam": beam}
 
-    def _blend_bands(self, channel: ChannelSettings, blend: moderngl.Texture) -> None:
-        """Multiply the columns of the blend bands by their factors (a pass over the bands
-        only, not the whole image)."""
-        t = math.tan(math.radians(channel.hfov_deg) / 2)
-        spans = []
-        if channel.blend_left_deg > 0:
-            spans.append((-1.0, math.tan(math.radians(channel.blend_left_deg - channel.hfov_deg / 2)) / t))
-        if channel.blend_right_deg > 0:
-            spans.append((math.tan(math.radians(channel.hfov_deg / 2 - channel.blend_right_deg)) / t, 1.0))
-        if not spans:
-            return
-        quads = np.array([[[a, -1], [b, -1], [b, 1], [a, -1], [b, 1], [a, 1]] for a, b in spans], dtype="f4")
-        self.band_buf.orphan(quads.nbytes)
-        self.band_buf.write(quads.tobytes())
-        ctx = self.ctx
-        ctx.disable(moderngl.DEPTH_TEST)
-        ctx.enable(moderngl.BLEND)
-        ctx.blend_func = moderngl.ZERO, moderngl.SRC_COLOR
-        blend.use(6)
-        self.band["blend_ramp"].value = 6
-        self.band_vao.render(vertices=6 * len(spans))
-        ctx.disable(moderngl.BLEND)
-
-    def _floe_tiles(self, view: WorldView, cam: Camera) -> list[tuple[int, float]]:
-        """The tiles with broken floes whose box (with a margin for drift, and its mirror
-        image in the water) is in view: (placement, distance from the eye across the
-        water to the box, m)."""
+    def _floe_tile_boxes(self, view: WorldView) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray]:
+        """The tiles with broken floes and their boxes, once per frame: (placements, the
+        boxes' corners (n, 8, 4), with a margin for drift and their mirror images in the water;
+        the boxes' lower and upper corners across the water (n, 2), m)."""
         keys = list(self.tile_floes)
-        corner = np.array([view.placements[k].corner for k in keys], dtype=float)
-        side = self.model.scene.side
-        lo = np.column_stack([corner - FLOE_DRIFT_MARGIN, np.full(len(keys), -object_shaders.SEEN_DEPTH)])
-        hi = np.column_stack([corner + side + FLOE_DRIFT_MARGIN, np.full(len(keys), object_shaders.SEEN_DEPTH)])
-        seen = visible_boxes(cam.view_proj, lo, hi)
-        gap = np.maximum(np.maximum(lo[:, :2] - cam.eye[:2], cam.eye[:2] - hi[:, :2]), 0.0)
+        corner = np.array([view.placements[k].corner for k in keys], dtype=float).reshape(-1, 2)
+        lo, hi = corner - FLOE_DRIFT_MARGIN, corner + self.model.scene.side + FLOE_DRIFT_MARGIN
+        depth = np.full((len(keys), 1), SEEN_DEPTH)
+        return keys, box_corners(np.hstack([lo, -depth]), np.hstack([hi, depth])), lo, hi
+
+    def _floe_tiles(self, cam: Camera) -> list[tuple[int, float]]:
+        """The tiles with broken floes whose box is in view: (placement, distance from the
+        eye across the water to the box, m)."""
+        keys, corners, lo, hi = self._tile_boxes
+        if not keys:
+            return []
+        seen = visible_corners(cam.view_proj, corners)
+        gap = np.maximum(np.maximum(lo - cam.eye[:2], cam.eye[:2] - hi), 0.0)
         dist = np.hypot(gap[:, 0], gap[:, 1])
-        return [(k, float(d)) for k, show, d in zip(keys, seen, dist) if show]
-
-    def _draw_floes(self, view: WorldView, tiles: list[tuple[int, float]]) -> None:
-        """The tiles' broken floes; their side faces only within the level-of-detail distance."""
-        for k, dist in tiles:
-            self._set(self.floe, **self._tile_draw[k])
-            self.tile_floes[k][0].render()
-            if dist < self.settings.lod_distance_m:
-                self._sides(view, k).render()
-
-    def _draw_reflections(self, view: WorldView, tiles: list[tuple[int, float]]) -> None:
-        """The floes' reflections in the sea, within the reflection distance: their side
-        faces above the water, mirrored in the water plane and blended over the sea by its
-        Fresnel share (tops, seen from below the water, are culled). Polygon offset puts a
-        mirrored freeboard before the submerged part of the same side, in whose plane it lies."""
-        near = [(k, d) for k, d in tiles if d < self.settings.reflection_distance_m]
-        if not near:
-            return
-        ctx = self.ctx
-        ctx.enable_direct(GL_CLIP_DISTANCE0)
-        ctx.enable(moderngl.CULL_FACE | moderngl.BLEND)
-        ctx.front_face = "cw"  # the mirror turns the winding
-        ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
-        ctx.polygon_offset = -1.0, -1.0
-        self.floe["reflected"].value = True
-        for k, _ in near:
-            self._set(self.floe, **self._tile_draw[k])
-            self._sides(view, k).render()
-        self.floe["reflected"].value = False
-        ctx.polygon_offset = 0.0, 0.0
-        ctx.front_face = "ccw"
-        ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
-        ctx.disable_direct(GL_CLIP_DISTANCE0)
+        return [(k, d) for k, show, d in zip(keys, seen.tolist(), dist.tolist()) if show]
 
     def _ship_matrices(self, view: WorldView, cam: Camera) -> list[np.ndarray]:
         """Ship frame to world of the own ship and of each other vessel in view and within the
         far distance, scaled to its length and beam (the own ship's where unknown, 0) and in
         height as in beam."""
-        ship = view.ship
-        out = [outputs_matrix(ship)]
+        out = [self._ship_to_world]
         traffic = getattr(view, "traffic", None)
         if traffic is None or len(traffic) == 0:
             return out
@@ -353,33 +272,3 @@ class SceneRenderer(SceneUploads):
             scale = np.diag([length[k] / p.length, beam[k] / p.beam, beam[k] / p.beam, 1.0])
             out.append(ship_matrix(traffic["y"][k], traffic["x"][k], traffic["heading"][k]) @ scale)
         return out
-
-    def _draw_nav_lights(self, matrices: list[np.ndarray], cam: Camera, height: int, visibility: float) -> None:
-        """The ships' navigation lights, added where their sectors face the eye, as strong
-        as the daylight leaves them (full below NAV_LIGHT_LUX), fogged by the visibility (m)."""
-        strength = min(NAV_LIGHT_LUX / max(self.sky.illuminance, 1e-6), 1.0)
-        if strength < 0.01:
-            return
-        ctx = self.ctx
-        ctx.enable(moderngl.PROGRAM_POINT_SIZE | moderngl.BLEND)
-        ctx.blend_func = moderngl.ONE, moderngl.ONE
-        ctx.depth_mask = False
-        self._set(self.nav, view_proj=cam.view_proj, eye=tuple(cam.eye), visibility=visibility,
-                  point_px=max(3.0, 6.0 * height / 720), strength=strength)
-        for m in matrices:
-            set_matrix(self.nav["ship_to_world"], m)
-            self.nav_vao.render(moderngl.POINTS)
-        ctx.depth_mask = True
-        ctx.disable(moderngl.PROGRAM_POINT_SIZE | moderngl.BLEND)
-
-    @staticmethod
-    def _set(prog: moderngl.Program, **uniforms) -> None:
-        for name, value in uniforms.items():
-            if name not in prog:
-                continue
-            if isinstance(value, np.ndarray) and value.shape == (4, 4):
-                set_matrix(prog[name], value)
-            elif isinstance(value, np.ndarray):  # a uniform array, written whole
-                prog[name].write(value.astype("f4").tobytes())
-            else:
-                prog[name].value = value

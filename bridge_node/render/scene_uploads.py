@@ -12,7 +12,7 @@ import moderngl
 import numpy as np
 
 from bridge_node.render.floe_buffers import FloeBuffer, FloeCopies, pose_textures, write_entries
-from bridge_node.render.shaders import FROZEN_CRACKED, POSE_WIDTH, UNPLACED_FLOE_FIELD
+from bridge_node.render.passes.glsl import FROZEN_CRACKED, POSE_WIDTH, UNPLACED_FLOE_FIELD
 from bridge_node.render.sky import sky_for
 from bridge_node.stream.world_view import Placement, WorldView
 from sim_core.frames.geodesy import local_to_geodetic
@@ -60,7 +60,7 @@ class SceneUploads:
     def _drop_floes(self, k: int) -> None:
         for buf in self.tile_floes.pop(k, ()):
             buf.release()
-        self._tile_draw.pop(k, None)
+        self.floes.tiles.drop(k)
         self._sides_due.discard(k)
 
     def _new_floes(self, k: int, p: Placement, first: int) -> None:
@@ -69,12 +69,14 @@ class SceneUploads:
         its own, by field tile and cell) and its ice thickness."""
         mesh = self.meshes[p.template]
         if first < 0:  # frozen: indices into the template's vertices, written once
-            self.tile_floes[k] = (FloeBuffer(self.ctx, self.floe, self.mesh_vbos[p.template], mesh.index.dtype, 0),
-                                  FloeBuffer(self.ctx, self.floe, self.mesh_vbos[p.template], mesh.index.dtype, 0))
+            prog, vbo = self.floes.program, self.mesh_vbos[p.template]
+            self.tile_floes[k] = (FloeBuffer(self.ctx, prog, vbo, mesh.index.dtype, 0),
+                                  FloeBuffer(self.ctx, prog, vbo, mesh.index.dtype, 0))
         else:
-            self.tile_floes[k] = (FloeCopies(self.ctx, self.floe, mesh), FloeCopies(self.ctx, self.floe, mesh))
-        self._tile_draw[k] = {"first": first, "first_floe": 0, "frozen": first < 0,
-                              "patch_base": p.tile * 7919 % PATCHES, "thickness": self.template_thickness[p.template]}
+            self.tile_floes[k] = (FloeCopies(self.ctx, self.floes.program, mesh),
+                                  FloeCopies(self.ctx, self.floes.program, mesh))
+        self.floes.tiles.write(k, first=first, first_floe=0, frozen=first < 0, patch_base=p.tile * 7919 % PATCHES,
+                               thickness=self.template_thickness[p.template])
 
     def _place(self, view: WorldView, k: int) -> None:
         """A tile given rows (laid, or thawed): its cells by row; its floes drawn anew as
@@ -122,8 +124,8 @@ class SceneUploads:
         p = view.placements[k]
         self._frozen[k] = self._frozen_floes, self._frozen_cells
         self._write_tile_info(p, -1 - self._frozen_cells, True)
-        if k in self._tile_draw:  # (a tile frozen with cracks only has no floes to draw)
-            self._tile_draw[k].update(first=-1 - self._frozen_cells, first_floe=self._frozen_floes)
+        if k in self.tile_floes:  # (a tile frozen with cracks only has no floes to draw)
+            self.floes.tiles.write(k, first=-1 - self._frozen_cells, first_floe=self._frozen_floes)
         self._frozen_floes += len(self._frozen_records(view, k)[0])
         self._frozen_cells += self.model.ice.templates[p.template].n_cells
 

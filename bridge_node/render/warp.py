@@ -20,7 +20,7 @@ import numpy as np
 from bridge_node.common.errors import UserError
 from bridge_node.common.input_files import read_input
 from bridge_node.common.output_files import write_output
-from bridge_node.render import object_shaders
+from bridge_node.render.passes import glsl
 
 MAX_NODES = 4096  # grid nodes a side, at most
 MAX_PFM_BYTES = 64 + MAX_NODES * MAX_NODES * 12  # the header, and three float32 a node
@@ -71,7 +71,7 @@ class WarpMesh:
         k = np.arange(rows * cols).reshape(rows, cols)
         a, b, c, d = k[:-1, :-1], k[:-1, 1:], k[1:, :-1], k[1:, 1:]
         index = np.stack([a, b, d, a, d, c], axis=-1).astype("i4").ravel()
-        self.program = ctx.program(vertex_shader=object_shaders.WARP_VS, fragment_shader=object_shaders.WARP_FS)
+        self.program = glsl.program(ctx, "warp.vert", "warp.frag")
         self.vao = ctx.vertex_array(self.program, [(ctx.buffer(vertices.tobytes()), "2f 2f", "in_ndc", "in_uv")],
                                     index_buffer=ctx.buffer(index.tobytes()))
 
