@@ -15,7 +15,8 @@ keeps the per-status counts. Positions are world metres (x east, y north, z up; 
 centre of mass height above the water plane); yaw is counter-clockwise from the template's
 frame. ``home`` is where the cell sat in the level ice (its placed centroid), kept for
 channel measurements. ``cause`` says what broke a cell. ``submerged`` marks free floes
-pushed under the hull: they collide with nothing until the hull has passed over them.
+pushed under the hull: they collide with nothing until the hull has passed over them; a
+piece the bow strikes first turns against it (``turn``, ``turn_dir``: ``sim_core.ice.turning``).
 ``resting`` marks free floes that came to rest far from the hull: the engine holds them as
 static bodies (they cost no solver work) until the hull comes near or a moving floe pushes
 them; their pose and velocity stay as they were when they came to rest.
@@ -112,6 +113,8 @@ class FloeState(_Table):
     cause = _Column(np.uint8)  # BreakCause
     crack = _Column(np.uint8)  # bending-crack label of a cell (sim_core.ice.bending); 0: none
     submerged = _Column(np.bool_)  # under the hull, out of planar contact
+    turn = _Column(np.float32)  # a submerged piece still turning: the hull's advance left (m; sim_core.ice.turning)
+    turn_dir = _Column(np.float32)  # a turning piece's direction to the hull, rad CCW from east
     resting = _Column(np.bool_)  # a free floe at rest far from the hull, out of the dynamic set
     calm = _Column(np.uint16)  # steps in a row a free floe has been at rest (saturates at 65535)
     home = _Column(np.float32, 2)  # placed centroid in the level ice, world m

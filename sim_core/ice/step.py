@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from sim_core.ice import contact_kernels, resting
+from sim_core.ice import contact_kernels, resting, turning
 from sim_core.ice.bending import crack_ahead
 from sim_core.ice import vertical
 from sim_core.ice.breaking import pushed_hard
@@ -34,7 +34,6 @@ from sim_core.ice.model import IceModel, vertical_substeps
 from sim_core.ice.tiles import IceData, break_cells
 from sim_core.ice.vertical import settled, vertical_step
 
-_PUSHED_DOWN_TILT = 0.25  # rad: roll of a floe the bow has turned under
 _CLEAR_AHEAD = 10.0  # m ahead of the stem: a submerged floe there is no longer held down
 _BESIDE = 5.0  # m beyond the beam lines: a submerged floe there is no longer pressed by the hull
 _NO_ROWS = np.zeros(0, dtype=np.int64)
@@ -48,6 +47,8 @@ class HullMotion:
     angle: float  # rad, CCW from east
     velocity: np.ndarray  # m/s
     angular_velocity: float  # rad/s, CCW
+    surface_angle: float = 0.0  # rad: the bow's normal angle psi, against which struck pieces turn before they
+    # go under (sim_core.ice.turning); 0: they go under at once
 
 
 @dataclass
@@ -193,11 +194,12 @@ def _unsettled(rows, submerged, gcell, z_equilibrium, heave, roll, pitch, heave_
 def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck: np.ndarray,
                        jammed: np.ndarray = _NO_ROWS) -> None:
     """Struck floes with their centre inside the beam, and floes jammed against an edge
-    they cannot break, go under, held a thickness down and tilted; a submerged floe
-    surfaces once the hull no longer covers or presses it (its centre outside the
-    waterline, and aft of midship, more than _BESIDE beyond the beam lines, or clear ahead
-    of the stem because the ship stopped or backed), and buoyancy brings it back up and
-    rights it."""
+    they cannot break, go under: struck ones first turn against the bow (``turning``, where
+    the hull has a surface angle), the others are at once held a thickness down and tilted;
+    a submerged floe surfaces once the hull no longer covers or presses it (its centre
+    outside the waterline, and aft of midship, more than _BESIDE beyond the beam lines, or
+    clear ahead of the stem because the ship stopped or backed), and buoyancy brings it back
+    up and rights it."""
     st, space = data.state, data.contacts
     c, s = math.cos(hull.angle), math.sin(hull.angle)
     under = _going_under(struck, jammed, st.status, st.submerged, st.xy, hull.xy, c, s, space.hull_half_beam) \
@@ -206,18 +208,34 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
         data.went_under = np.concatenate([data.went_under[st.submerged[data.went_under]], under])
         st.submerged[under] = True
         space.set_submerged(st, under, True)
-        g = st.gcell[under]
-        st.heave[under] = model.z_equilibrium[g] - model.thickness[g]
-        st.roll[under] = _PUSHED_DOWN_TILT
         st.heave_rate[under] = st.roll_rate[under] = st.pitch_rate[under] = 0.0
         st.vel[under] = 0.0
         st.yaw_rate[under] = 0.0
+        turns = under[np.isin(under, struck)] if hull.surface_angle > 0.0 else _NO_ROWS
+        turning.start_turns(turns, st.xy, st.turn, st.turn_dir, model.plan_area, st.gcell, hull.xy, c, s,
+                            space.hull_stem)
+        at_once = under[st.turn[under] <= 0.0]
+        g = st.gcell[at_once]
+        st.heave[at_once] = model.z_equilibrium[g] - model.thickness[g]
+        st.roll[at_once] = turning.PUSHED_DOWN_TILT
     up = _surfacing(data.went_under, st.submerged, st.xy, hull.xy, c, s, space.hull_outline,
                     space.hull_half_beam + _BESIDE, space.hull_stem, _CLEAR_AHEAD)
     if len(up):
         st.submerged[up] = False
+        st.turn[up] = 0.0
         data.went_under = data.went_under[st.submerged[data.went_under]]
         space.set_submerged(st, up, False)
+
+
+def _advance_turns(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> None:
+    """Turn the pieces turning against the bow by the hull's advance over the step."""
+    if hull.surface_angle <= 0.0 or not len(data.went_under):
+        return
+    st = data.state
+    advance = max(0.0, float(hull.velocity[0] * math.cos(hull.angle) + hull.velocity[1] * math.sin(hull.angle))) * dt
+    turning.advance_turns(data.went_under, st.submerged, st.turn, st.turn_dir, model.plan_area, st.gcell,
+                          model.z_equilibrium, model.thickness, st.yaw, st.heave, st.roll, st.pitch, advance,
+                          hull.surface_angle)
 
 
 WASH_SHARES = 6  # the wash drags a sixth of the floes in it each step, each by six steps' drag
@@ -264,6 +282,7 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float, water:
     if len(data.under_hull):  # floes a tile switch laid under the hull go under it, as if pushed down
         _update_submersion(model, data, hull, _NO_ROWS, data.under_hull)
         data.under_hull = _NO_ROWS
+    _advance_turns(model, data, hull, dt)
     space.step(dt)
     con = space.read_contacts(st)
     by_contact, jammed = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
@@ -305,4 +324,5 @@ def warm_up(model: IceModel, data: IceData) -> None:
                  1.0)
     _unsettled(none, none.astype(np.bool_), none.astype(np.int32), model.z_equilibrium, f32, f32, f32, f32, f32, f32)
     vertical.warm_up(model.tris, model.tri_start, model.mass, model.inertia, model.damping)
+    turning.warm_up()
 

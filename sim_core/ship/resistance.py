@@ -35,6 +35,13 @@ class LindqvistTerms:
     submersion: float
 
 
+def bow_normal_angle(stem_angle: float, waterline_angle: float) -> float:
+    """psi (rad): the inclination to the horizontal of the bow's surface normal plane at the
+    waterline, tan psi = tan phi / sin alpha (Lindqvist 1989), from the stem angle phi and
+    the waterline's entrance half-angle alpha (rad)."""
+    return math.atan(math.tan(stem_angle) / math.sin(waterline_angle))
+
+
 def lindqvist_terms(
     h: float, beam: float, length: float, draught: float, stem_angle: float, waterline_angle: float,
     flexural_strength: float, youngs_modulus: float, poisson_ratio: float, ice_density: float,
@@ -42,7 +49,7 @@ def lindqvist_terms(
 ) -> LindqvistTerms:
     """Static crushing, bending and submersion resistance (N). Angles in radians, SI units."""
     phi, alpha, mu = stem_angle, waterline_angle, friction
-    psi = math.atan(math.tan(phi) / math.sin(alpha))
+    psi = bow_normal_angle(phi, alpha)
     cphi, sphi, cpsi = math.cos(phi), math.sin(phi), math.cos(psi)
     crushing = 0.5 * flexural_strength * h * h * (math.tan(phi) + mu * cphi / cpsi) / (1.0 - mu * sphi / cpsi)
     stiffness = math.sqrt(youngs_modulus / (12.0 * (1.0 - poisson_ratio**2) * g * water_density))

@@ -1,0 +1,80 @@
+"""Pieces turning against the bow (issue 28, item 1): a piece the bow strikes turns about its
+far edge until it lies parallel to the hull's surface, over the hull's advance of its own
+length (``sim_core.ice.turning``), before it takes the submerged pose; the planar physics is
+the same as when pieces go under at once."""
+import math
+
+import numpy as np
+import pytest
+from conftest import exercise_config
+
+import sim_core.world as world_module
+from bridge_node.node.world_setup import build_world, start_world
+from sim_core.ice.floes import FloeStatus
+from sim_core.ice.turning import PUSHED_DOWN_TILT, turn_angle
+from sim_core.ship.resistance import bow_normal_angle
+from sim_core.world import step
+
+DT = 1.0 / 30.0
+STEPS = 600  # 20 s
+
+
+@pytest.mark.parametrize("psi", [0.4, 0.75, 1.2])
+def test_the_turn_is_the_inverse_of_the_hulls_advance(psi):
+    theta = np.linspace(0.0, psi, 25)
+    advanced = np.sin(theta) / math.tan(psi) + 1.0 - np.cos(theta)  # x / d with the near edge on the hull
+    assert [turn_angle(float(a), psi) for a in advanced] == pytest.approx(theta, abs=1e-6)
+    assert turn_angle(1.0, psi) == psi and turn_angle(1.5, psi) == psi and turn_angle(-0.1, psi) == 0.0
+    assert advanced[-1] == pytest.approx(1.0)  # parallel to the hull after one piece length
+
+
+def _run(tmp_path_factory, name: str):
+    """A 400 m x 600 m field of 0.5 m ice, the ship steaming into it for 20 s; per step the
+    rows turning and their (tilt, depth of the centre below its draft, length, roll)."""
+    cfg = exercise_config(tmp_path_factory.mktemp(name) / "tiles", 400.0, 600.0, 50.0, start_north=-60.0)
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    seen, done = [], {}
+    for _ in range(STEPS):
+        step(model, data, DT)
+        st = data.ice.state
+        turning = np.flatnonzero((st.turn > 0.0) & st.submerged & (st.status == FloeStatus.FREE))
+        g = st.gcell[turning]
+        seen.append((turning, np.hypot(st.roll[turning], st.pitch[turning]),
+                     model.ice.z_equilibrium[g] - st.heave[turning], np.sqrt(model.ice.plan_area[g])))
+        for row in turning.tolist():
+            done[row] = None
+        for row in [r for r in done if st.turn[r] == 0.0 and st.submerged[r]]:
+            done[row] = float(st.roll[row])
+    return model, data, seen, done
+
+
+@pytest.fixture(scope="module")
+def turned(tmp_path_factory):
+    return _run(tmp_path_factory, "turning")
+
+
+def test_struck_pieces_turn_towards_the_hulls_surface_angle(turned):
+    model, _, seen, done = turned
+    psi = bow_normal_angle(model.ship.stem_angle, model.ship.waterline_angle)
+    rows = np.unique(np.concatenate([s[0] for s in seen]))
+    tilt = np.concatenate([s[1] for s in seen])
+    depth = np.concatenate([s[2] for s in seen])
+    length = np.concatenate([s[3] for s in seen])
+    assert len(rows) > 20  # the bow turns pieces as it breaks them
+    assert tilt.max() <= psi + 1e-5 and tilt.max() > 0.8 * psi  # up to parallel with the hull, no farther
+    assert (tilt > 0.3 * psi).mean() > 0.3  # seen turned, not only starting
+    # the far edge stays at the waterline: the centre is half the length's rise below its draft
+    assert depth == pytest.approx(0.5 * length * np.sin(tilt), abs=2e-3)
+    finished = [roll for roll in done.values() if roll is not None]
+    assert len(finished) > 10 and finished == pytest.approx([PUSHED_DOWN_TILT] * len(finished))
+
+
+def test_the_turn_changes_no_planar_physics(turned, tmp_path_factory, monkeypatch):
+    _, data, _, _ = turned
+    monkeypatch.setattr(world_module, "bow_normal_angle", lambda *_: 0.0)  # pieces go under at once
+    _, at_once, seen, _ = _run(tmp_path_factory, "at-once")
+    assert not any(len(s[0]) for s in seen)
+    a, b = data.ice.state, at_once.ice.state
+    assert a.n == b.n and np.array_equal(a.status, b.status) and np.array_equal(a.xy, b.xy)
+    assert np.array_equal(data.ship.eta, at_once.ship.eta)
