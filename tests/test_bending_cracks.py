@@ -210,3 +210,56 @@ def test_a_tiles_cracks_survive_its_freeze_and_thaw(exercise):
     rows = tiles.rows(k)
     assert np.array_equal(st.crack[rows][cells], labels)  # the thawed rows cracked as they froze
     assert k not in data.ice.frozen
+
+
+def _crack_ahead_reference(model, st, tiles, loaded, hull_xy, angle, outline):
+    """``crack_ahead`` as first written: for each load, every row of the live tiles whose box
+    is within its reach (the reference the faster gathering must agree with)."""
+    from sim_core.ice.bending import _pattern, breaking_length
+    stern, stem = float(outline[:, 0].min()), float(outline[:, 0].max())
+    half_beam = float(np.abs(outline[:, 1]).max())
+    sides = np.array([t.side for t in model.templates])
+    cracked = []
+    for r in loaded.tolist():
+        if st.crack[r] != 0:
+            continue
+        h = float(model.thickness[st.gcell[r]])
+        reach = RADIAL_REACH * characteristic_length(h, model.material)
+        point = st.home[r].astype(float)
+        live = np.flatnonzero(tiles.row_count > 0)
+        lo = tiles.corner[live]
+        gap = np.maximum(np.maximum(lo - point, point - (lo + sides[tiles.template[live]][:, None])), 0.0)
+        rows = np.concatenate([np.zeros(0, np.int64)] + [tiles.rows(k) for k in live[np.hypot(*gap.T) <= reach]])
+        rows = rows[(st.status[rows] == FloeStatus.INTACT) & (st.crack[rows] == 0)]
+        if not len(rows):
+            continue
+        n = outward(point, hull_xy, angle, stern, stem, half_beam)
+        d = st.home[rows].astype(float) - point
+        offset = np.column_stack([d @ n, d @ np.array([-n[1], n[0]])])
+        wedges, turn, base = _pattern(r)
+        labels = crack_labels(offset, np.sqrt(model.plan_area[st.gcell[rows]]), wedges, turn, base,
+                              float(breaking_length(h)), reach)
+        st.crack[rows[labels != 0]] = labels[labels != 0]
+        cracked.append(rows[labels != 0])
+    return np.unique(np.concatenate([np.zeros(0, np.int64), *cracked]))
+
+
+def test_many_fresh_loads_in_one_step_crack_as_one_load_at_a_time_did(exercise):
+    from sim_core.ice.bending import crack_ahead
+    model, data = exercise
+    st, tiles = data.ice.state, data.ice.tiles
+    s = data.ship
+    hull_xy, angle = np.array([s.eta[1], s.eta[0]]), math.pi / 2 - s.eta[5]
+    outline = data.ice.contacts.hull_outline
+    fresh = np.flatnonzero((st.status[:st.n] == FloeStatus.INTACT) & (st.crack[:st.n] == 0))
+    stem = hull_xy + model.ship.particulars.length / 2 * np.array([math.cos(angle), math.sin(angle)])
+    loaded = fresh[np.argsort(np.hypot(*(st.home[fresh] - stem).T))[:60]]  # a turn: many fresh loads at once
+    before = st.crack.copy()
+    got = crack_ahead(model.ice, st, tiles, loaded, hull_xy, angle, outline)
+    labels = st.crack.copy()
+    st.crack[:] = before
+    want = _crack_ahead_reference(model.ice, st, tiles, loaded, hull_xy, angle, outline)
+    try:
+        assert len(want) > 100 and np.array_equal(got, want) and np.array_equal(labels, st.crack)
+    finally:
+        st.crack[:] = before
