@@ -167,3 +167,18 @@ def test_a_tick_over_two_periods_is_kept_with_where_its_time_went(tmp_path):
     assert {"orders", "world", "gc_ms"} <= set(slow[0])
     assert all(t["tick_ms"] > 2e3 * period for t in stats.slow_ticks)  # only ticks over two periods
     assert stats.summary()["slow_ticks"] == stats.slow_ticks
+
+
+def test_the_loop_thread_runs_in_the_real_time_class_where_allowed_and_says_what_it_got():
+    from bridge_node.node.realtime_loop import thread_scheduling
+    with thread_scheduling("normal", 10) as got:
+        assert got == "normal" and os.sched_getscheduler(0) == os.SCHED_OTHER
+    with thread_scheduling("fifo", 10) as got:  # a refusal is reported, not raised
+        inside = os.sched_getscheduler(0), os.sched_getparam(0).sched_priority
+    if got == "fifo 10":
+        assert inside == (os.SCHED_FIFO, 10)
+    else:  # a machine that does not allow it (no root, no CAP_SYS_NICE): the loop says why and runs normal
+        assert got.startswith("normal (fifo refused: ") and inside[0] == os.SCHED_OTHER
+    assert os.sched_getscheduler(0) == os.SCHED_OTHER  # back to normal after the loop
+    with thread_scheduling("fifo", 0) as got:  # a priority the class refuses
+        assert got.startswith("normal (fifo refused: ") and os.sched_getscheduler(0) == os.SCHED_OTHER

@@ -118,7 +118,8 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
         with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last, data, hub),
                              [link.name for link in hub.links], record) as control, station:
             stats = run_realtime(model, data, hub, rate, args.duration,
-                                 [StreamOutput(publisher, traffic, model.origin), status], commands=queue)
+                                 [StreamOutput(publisher, traffic, model.origin), status], commands=queue,
+                                 scheduler=(cfg.realtime.scheduler, cfg.realtime.priority))
         return (stats, status.last, [link.health().as_dict() for link in hub.links],
                 [a.text for a in hub.active_alarms.values()],
                 {"endpoint": cfg.control.endpoint, "requests": dict(control.counts)},

@@ -89,6 +89,10 @@ class RealtimeSettings(Params):
     """The real-time loop."""
 
     rate_hz: float = Field(30.0, ge=5.0, le=120.0, description="world steps per second")
+    scheduler: Literal["normal", "fifo"] = Field(
+        "fifo", description="the loop thread's CPU scheduling: fifo (Linux's real-time class) puts it before every "
+        "normal process; it needs root or CAP_SYS_NICE, and where refused the loop runs normal and says why")
+    priority: int = Field(10, ge=1, le=99, description="the loop thread's real-time priority under fifo")
 
 
 class RunConsoleSettings(Params):

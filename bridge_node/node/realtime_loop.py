@@ -69,6 +69,30 @@ class GcClock:
 
     def __exit__(self, *exc) -> None:
         gc.callbacks.remove(self._callback)
+
+
+@contextmanager
+def thread_scheduling(scheduler: str, priority: int) -> Iterator[str]:
+    """Run the calling thread in the given CPU scheduling class while in the block, then
+    back in the normal one: ``fifo`` is Linux's SCHED_FIFO real-time class at ``priority``,
+    before every normal process (render processes, the console, other jobs on the machine),
+    so that the tick is not descheduled in the middle of its step. Gives what it got:
+    ``normal``, ``fifo N``, or the refusal (no permission, not Linux); a refusal leaves the
+    thread normal."""
+    if scheduler != "fifo":
+        yield "normal"
+        return
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))  # 0: the calling thread
+    except (AttributeError, OSError) as exc:
+        yield f"normal (fifo refused: {getattr(exc, 'strerror', None) or exc})"
+        return
+    try:
+        yield f"fifo {priority}"
+    finally:
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+
+
 # the memory records' measured columns: (summary key, column in LoopStats.memory, label)
 MEMORY_SERIES = (("rss", 2, "resident"), ("heap_in_use", 3, "C heap in use"))
 
@@ -91,6 +115,7 @@ class LoopStats:
     refusals: OrderRefusals = field(default_factory=OrderRefusals)
     input_to_outputs_ms: array = field(default_factory=lambda: array("f"))
     slow_ticks: list = field(default_factory=list)  # the first SLOW_TICKS_KEPT ticks over two periods: where time went
+    scheduling: str = "normal"  # the loop thread's CPU scheduling, as it got it (``thread_scheduling``)
 
     def summary(self) -> dict:
         ms = np.array(self.step_ms, dtype=float) if self.step_ms else np.zeros(1)
@@ -99,7 +124,7 @@ class LoopStats:
                 "tick_ms_median": round(float(np.median(ms)), 2), "tick_ms_p99": round(float(np.percentile(ms, 99)), 2),
                 "tick_ms_max": round(float(ms.max()), 2), "orders_rejected": dict(self.refusals.counts),
                 "input_to_outputs_ms": distribution(self.input_to_outputs_ms), "memory": self.memory_summary(),
-                "slow_ticks": self.slow_ticks}
+                "slow_ticks": self.slow_ticks, "scheduling": self.scheduling}
 
     def memory_summary(self) -> dict:
         """Resident memory and the C heap's bytes in use at the start and end (MiB), and
@@ -185,11 +210,12 @@ def live_tick(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float,
 def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float, duration: float | None,
                  listeners: Sequence[StepListener | Callable[[TickOutcome], None]] = (),
                  should_stop: Callable[[], bool] = lambda: False,
-                 commands: CommandSource | None = None) -> LoopStats:
+                 commands: CommandSource | None = None, scheduler: tuple[str, int] = ("normal", 0)) -> LoopStats:
     """Run the live tick (``live_tick``) at ``rate_hz`` until ``duration`` wall seconds
     have passed (None: until should_stop(), Ctrl-C or SIGTERM, which end the loop after
     the tick in hand); ``listeners`` get every tick's outcome; ``commands`` are the
-    instructor's."""
+    instructor's; ``scheduler``: the loop thread's CPU scheduling and real-time priority
+    (``thread_scheduling``)."""
     period = 1.0 / rate_hz
     tick = live_tick(model, data, hub, rate_hz, listeners, commands)
     stats = LoopStats(refusals=tick.refusals)
@@ -200,7 +226,7 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
     gc.freeze()
     pacer = Pacer(period)
     start = last_trim = time.monotonic()
-    with _stop_between_ticks() as stop, GcClock() as gc_clock:
+    with _stop_between_ticks() as stop, GcClock() as gc_clock, thread_scheduling(*scheduler) as stats.scheduling:
         while (duration is None or time.monotonic() - start < duration) and not should_stop() and not stop.requested:
             t0 = time.monotonic()
             outcome = tick(period, t0)
