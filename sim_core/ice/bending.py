@@ -101,7 +101,8 @@ class _Candidates:
         self.rows = rows[st.status[rows] == FloeStatus.INTACT]
         self.home = st.home[self.rows].astype(float)
         self.size = np.sqrt(model.plan_area[st.gcell[self.rows]])
-        self.tile_near = np.zeros(len(tiles.row_count), dtype=bool)  # by placement, refilled per load
+        self._band = _CRACK_BAND * (float(self.size.max()) if len(self.size) else 0.0)  # the widest crack band, m
+        self._tile_near = np.zeros(len(tiles.row_count), dtype=bool)  # by placement, refilled per load
         self._tile = st.tile[self.rows]
         self._live, self._lo, self._hi = live, lo, hi
 
@@ -109,12 +110,11 @@ class _Candidates:
         """The uncracked candidates of the live tiles whose box is within ``reach`` of the
         point (as the load's pattern takes them), less those too far for any label (beyond
         reach plus the widest crack band): (rows, index into the candidates)."""
-        self.tile_near[:] = False
-        self.tile_near[self._live[_box_gap(self._lo, self._hi, point) <= reach]] = True
+        self._tile_near[:] = False
+        self._tile_near[self._live[_box_gap(self._lo, self._hi, point) <= reach]] = True
         d = self.home - point
-        band = _CRACK_BAND * (float(self.size.max()) if len(self.size) else 0.0)
-        at = np.flatnonzero(self.tile_near[self._tile] & (st.crack[self.rows] == 0)
-                            & (d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] <= (reach + band) ** 2))
+        at = np.flatnonzero(self._tile_near[self._tile] & (st.crack[self.rows] == 0)
+                            & (d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] <= (reach + self._band) ** 2))
         return self.rows[at], at
 
 

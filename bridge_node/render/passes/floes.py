@@ -16,7 +16,6 @@ from bridge_node.render.passes.blocks import TILE_BINDING, check_size
 
 SEEN_DEPTH = 4.0  # m: floes are drawn down to this depth (deeper ice is lost in the sea)
 GL_CLIP_DISTANCE0 = 0x3000
-GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT = "GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT"
 TILE = np.dtype({"names": ["first", "first_floe", "frozen", "patch_base", "thickness"],
                  "formats": ["i4", "i4", "i4", "i4", "f4"], "offsets": [0, 4, 8, 12, 16], "itemsize": 20})
 
@@ -69,7 +68,7 @@ class FloePass:
         self.program = glsl.program(ctx, "floes.vert", "floes.frag", SEEN_DEPTH=SEEN_DEPTH, **defines)
         glsl.set_present(self.program, **samplers)
         self.program["Tile"].binding = TILE_BINDING
-        self.tiles = TileSlots(ctx, int(ctx.info[GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT]))
+        self.tiles = TileSlots(ctx, int(ctx.info["GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT"]))
         check_size(self.program, "Tile", TILE)
         self._reflected = self.program["reflected"]
 
