@@ -113,13 +113,23 @@ def test_a_medium_floe_splits_along_its_cells_when_rammed(tmp_path_factory):
     assert split and all(np.any(st.status[data.ice.tiles.rows(k)] == FloeStatus.INTACT) for k in split)
 
 
-def test_floes_laid_under_the_hull_go_under_it(tmp_path_factory):
+def test_floes_and_cells_laid_under_the_hull_go_under_it(tmp_path_factory):
+    """The ship starts in the pack: the free floes and the small floes' intact cells the
+    tiles lay under its hull go under it in the first step. The cells break by no load of
+    the bow: no crack patterns about them, no hull breaks counted."""
     model, data = _pack_world(tmp_path_factory, 60.0)  # starts in the pack
-    step(model, data, 0.1)
+    events = step(model, data, 0.1)
     st = data.ice.state
     free = np.nonzero(st.status[:st.n] == FloeStatus.FREE)[0]
     assert st.submerged[free].sum() >= 3
     assert np.hypot(*st.vel[free].T).max() < 1.0  # none thrown out of the hull
+    laid_cells = free[~model.ice.starts_free[st.gcell[free]]]  # broken small floes' cells
+    assert len(laid_cells) > 20 and np.all(st.cause[laid_cells] == BreakCause.NONE)
+    assert st.submerged[laid_cells].mean() > 0.9
+    assert broken_counts(data.ice)[BreakCause.HULL] == 0 and len(events.cracked) == 0
+    for _ in range(100):  # the bow then breaks and cracks the ice ahead as in any start
+        events = step(model, data, 0.1)
+    assert broken_counts(data.ice)[BreakCause.HULL] > 0
 
 
 def test_the_channels_draw_floes_and_the_water_between(pack, ctx):

@@ -40,7 +40,7 @@ class IceData:
     # rows sent under the hull, each once: a superset of the submerged rows (a row surfaces,
     # or is vacated or thawed, without leaving it), so that surfacing need not scan every row
     went_under: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    # free rows a tile switch laid under the hull, to go under it in the next ice step
+    # free and intact rows a tile switch laid under the hull, to go under it in the next ice step
     under_hull: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     rest_water: tuple[float, float] = (0.0, 0.0)  # the drift (m/s, east, north) the resting floes came to rest in
     wash_turn: int = 0  # the share of the floes the propeller's wash drags this step (``step._wash``)

@@ -84,9 +84,9 @@ def placed_tiles(tiles: TilePlacement, field_tiles: list[int], placements: list[
 
 def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate,
                 contour: np.ndarray | None = None) -> tuple[PlacedTiles, np.ndarray, np.ndarray]:
-    """Carry out a scene update in the ice world: place, thaw and freeze tiles. Floes that a
-    tile placed or thawed lays under the hull (its contour points (n, 2), m, where given)
-    go under it in the next ice step. Returns the tiles given rows (placed, and thawed with
+    """Carry out a scene update in the ice world: place, thaw and freeze tiles. Floes and
+    cells that a tile placed or thawed lays under the hull (its contour points (n, 2), m,
+    where given) go under it in the next ice step, the cells broken (not by the bow). Returns the tiles given rows (placed, and thawed with
     their new rows) and the placement indices thawed and frozen."""
     scene, placement = model.scene, data.scene.placement
     reclaim_rows(data.ice)
@@ -105,18 +105,18 @@ def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate,
     if new or thawed or frozen:
         data.live_rows = _tile_rows(data.ice.tiles, [placement[t] for t in data.scene.live.tolist()])
     if (new or thawed) and contour is not None:
-        data.ice.under_hull = np.union1d(data.ice.under_hull, _floes_under(model, data, new + thawed, contour))
+        data.ice.under_hull = np.union1d(data.ice.under_hull, _cells_under(model, data, new + thawed, contour))
     return (placed_tiles(data.ice.tiles, update.place.tolist() + update.thaw.tolist(), new + thawed),
             np.array(thawed, dtype=np.int64), np.array(frozen, dtype=np.int64))
 
 
-def _floes_under(model: WorldModel, data: WorldData, placements: list[int], contour: np.ndarray) -> np.ndarray:
-    """Free floes of the placements whose outline the hull's waterline (contour points
-    (n, 2), m; their convex hull) overlaps: a floe field laid, or a frozen tile thawed,
-    under the hull where an exercise starts or the ship is moved."""
+def _cells_under(model: WorldModel, data: WorldData, placements: list[int], contour: np.ndarray) -> np.ndarray:
+    """Free floes and intact cells of the placements whose outline the hull's waterline
+    (contour points (n, 2), m; their convex hull) overlaps: a tile laid, or a frozen tile
+    thawed, under the hull where an exercise starts or the ship is moved."""
     st = data.ice.state
     rows = _tile_rows(data.ice.tiles, placements)
-    rows = rows[st.status[rows] == FloeStatus.FREE]
+    rows = rows[(st.status[rows] == FloeStatus.FREE) | (st.status[rows] == FloeStatus.INTACT)]
     reach = model.ice.radius[st.gcell[rows]][:, None]
     rows = rows[np.all((st.xy[rows] + reach >= contour.min(axis=0)) & (st.xy[rows] - reach <= contour.max(axis=0)),
                        axis=1)]
