@@ -33,6 +33,7 @@ from bridge_node.links.can.settings import CanLinkSettings
 from bridge_node.links.nmea0183.settings import NmeaLinkSettings
 from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, load_config, load_ship
 from bridge_node.common.network import free_port
+from sim_core import kernel_sources_digest
 
 CONSOLE = DEFAULT_CONFIG.parent / "bridge_console.toml"
 BASE = '[ship]\nname = "polar_cargo"\n[ice_field]\nthickness = 0.5\n'
@@ -246,9 +247,23 @@ def test_numba_caches_outside_the_source_tree(tmp_path):
                        env={k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
                        | {"XDG_CACHE_HOME": str(tmp_path)})
     assert r.returncode == 0, r.stderr
-    assert r.stdout.strip() == str(tmp_path / "icebridge" / "numba")
+    assert r.stdout.strip() == str(tmp_path / "icebridge" / "numba" / kernel_sources_digest())
     assert list((tmp_path / "icebridge" / "numba").rglob("*.nbi"))
     assert not list((REPO / "sim_core").rglob("*.nbi"))
+
+
+def test_a_changed_kernel_source_gets_a_cache_folder_of_its_own(tmp_path):
+    """numba keys a cached kernel by its own file alone, so a kernel that compiles in
+    another module's kept that module's old code; the cache folder follows the sources of
+    every kernel instead. A file without kernels does not move it."""
+    core = tmp_path / "sim_core"
+    shutil.copytree(REPO / "sim_core", core, ignore=shutil.ignore_patterns("__pycache__"))
+    before = kernel_sources_digest(core)
+    (core / "world.py").write_text((core / "world.py").read_text() + "\n# a comment\n")
+    assert kernel_sources_digest(core) == before  # no kernel there
+    vertical = core / "ice" / "vertical.py"
+    vertical.write_text(vertical.read_text().replace("SETTLED = 1e-5", "SETTLED = 2e-5"))
+    assert kernel_sources_digest(core) != before
 
 
 def test_a_ship_name_on_the_command_line_is_checked_too():
