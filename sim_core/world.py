@@ -237,7 +237,8 @@ def hull_world(model: WorldModel, ship: ShipData) -> tuple[np.ndarray, HullMotio
     velocity = np.array(ship_vector_to_world((ship.nu[0], ship.nu[1]), psi)) + ship.current[::-1]  # over ground
     return (ship_to_world(model.contour, north, east, psi),
             HullMotion(np.array([east, north]), world_heading(psi), velocity, -ship.nu[5],
-                       bow_normal_angle(model.ship.stem_angle, model.ship.waterline_angle)))
+                       bow_normal_angle(model.ship.stem_angle, model.ship.waterline_angle),
+                       math.sin(model.ship.waterline_angle)))
 
 
 def _ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple[float, int]:

@@ -1,7 +1,7 @@
 """Pieces turning against the bow (issue 28, item 1): a piece the bow strikes turns about its
-far edge until it lies parallel to the hull's surface, over the hull's advance of its own
-length (``sim_core.ice.turning``), before it takes the submerged pose; the planar physics is
-the same as when pieces go under at once."""
+far edge until it lies parallel to the hull's surface, over its own length of the surface's
+advance across the waterline, sin(alpha) of the ship's (``sim_core.ice.turning``), before it
+takes the submerged pose; the planar physics is the same as when pieces go under at once."""
 import math
 
 import numpy as np
@@ -36,6 +36,7 @@ def _run(tmp_path_factory, name: str):
     data = start_world(model, cfg)
     seen, done = [], {}
     for _ in range(STEPS):
+        before = float(data.ship.eta[0])  # north, m: the ship heads north
         step(model, data, DT)
         st = data.ice.state
         turning = np.flatnonzero((st.turn > 0.0) & st.submerged & (st.status == FloeStatus.FREE))
@@ -43,9 +44,9 @@ def _run(tmp_path_factory, name: str):
         seen.append((turning, np.hypot(st.roll[turning], st.pitch[turning]),
                      model.ice.z_equilibrium[g] - st.heave[turning], np.sqrt(model.ice.plan_area[g])))
         for row in turning.tolist():
-            done[row] = None
-        for row in [r for r in done if st.turn[r] == 0.0 and st.submerged[r]]:
-            done[row] = float(st.roll[row])
+            done.setdefault(row, [None, before, None])  # roll once done, the ship's north at the start and end
+        for row in [r for r in done if done[r][0] is None and st.turn[r] == 0.0 and st.submerged[r]]:
+            done[row][0], done[row][2] = float(st.roll[row]), float(data.ship.eta[0])
     return model, data, seen, done
 
 
@@ -66,8 +67,23 @@ def test_struck_pieces_turn_towards_the_hulls_surface_angle(turned):
     assert (tilt > 0.3 * psi).mean() > 0.3  # seen turned, not only starting
     # the far edge stays at the waterline: the centre is half the length's rise below its draft
     assert depth == pytest.approx(0.5 * length * np.sin(tilt), abs=2e-3)
-    finished = [roll for roll in done.values() if roll is not None]
+    finished = [roll for roll, _, _ in done.values() if roll is not None]
     assert len(finished) > 10 and finished == pytest.approx([PUSHED_DOWN_TILT] * len(finished))
+
+
+def test_a_piece_turns_over_its_length_of_the_surfaces_advance(turned):
+    """The hull's surface at the bow crosses the waterline by sin(alpha) of the ship's
+    advance, so a piece lies parallel to it after the ship has advanced d / sin(alpha)."""
+    model, data, _, done = turned
+    rows = [r for r, (roll, _, end) in done.items() if roll is not None]
+    length = np.sqrt(model.ice.plan_area[data.ice.state.gcell[rows]])
+    advance = np.array([done[r][2] - done[r][1] for r in rows])
+    expected = length / math.sin(model.ship.waterline_angle)
+    step_advance = 4.0 * DT  # m: a step's advance at most (the ship makes under 4 m/s)
+    assert np.all(advance >= expected - 1e-6)  # never done sooner
+    assert np.mean(advance <= expected + step_advance) > 0.95  # done within the step it is due
+    assert np.median(advance / expected) == pytest.approx(1.0, abs=0.02)
+    assert np.all(advance > 1.5 * length)  # not the ship's own advance (the default ship: alpha 30 deg)
 
 
 def test_the_turn_changes_no_planar_physics(turned, tmp_path_factory, monkeypatch):

@@ -49,6 +49,8 @@ class HullMotion:
     angular_velocity: float  # rad/s, CCW
     surface_angle: float = 0.0  # rad: the bow's normal angle psi, against which struck pieces turn before they
     # go under (sim_core.ice.turning); 0: they go under at once
+    surface_advance: float = 1.0  # the hull's surface at the bow moves across the waterline, towards a piece,
+    # by this share of the ship's advance: sin of the waterline angle alpha
 
 
 @dataclass
@@ -232,7 +234,8 @@ def _advance_turns(model: IceModel, data: IceData, hull: HullMotion, dt: float) 
     if hull.surface_angle <= 0.0 or not len(data.went_under):
         return
     st = data.state
-    advance = max(0.0, float(hull.velocity[0] * math.cos(hull.angle) + hull.velocity[1] * math.sin(hull.angle))) * dt
+    ahead = float(hull.velocity[0] * math.cos(hull.angle) + hull.velocity[1] * math.sin(hull.angle))
+    advance = max(0.0, ahead) * hull.surface_advance * dt  # the surface's, across the waterline
     turning.advance_turns(data.went_under, st.submerged, st.turn, st.turn_dir, model.plan_area, st.gcell,
                           model.z_equilibrium, model.thickness, st.yaw, st.heave, st.roll, st.pitch, advance,
                           hull.surface_angle)

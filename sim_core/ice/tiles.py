@@ -192,6 +192,7 @@ def freeze_tile(data: IceData, placement: int) -> None:
     data.contacts.drop_tile(placement)
     st.set_status(free, FloeStatus.FROZEN)
     st.submerged[rows] = st.resting[rows] = False  # a frozen floe thaws afloat, in the dynamic set
+    st.turn[rows] = 0.0  # and not turning against the bow
     st.calm[rows] = 0
     data.leaving_rows[placement] = slice(int(rows[0]), int(rows[-1]) + 1)
     tiles.row_start[placement], tiles.row_count[placement] = 0, 0

@@ -13,16 +13,19 @@ Geometry, in the vertical plane through the piece towards the hull: a piece of l
 turns about its far edge, which stays at the waterline, while the hull's surface, inclined
 at psi to the horizontal, pushes its near edge down. psi is the bow's normal angle,
 tan psi = tan phi / sin alpha (stem angle phi, waterline angle alpha; Lindqvist 1989, as in
-``sim_core.ship.resistance``). With its near edge on the hull's surface once the hull has
-advanced x since the turn began (derived here from that picture, not a published model):
+``sim_core.ship.resistance``). With its near edge on the hull's surface once that surface
+has advanced x across the waterline, towards the piece, since the turn began (derived here
+from that picture, not a published model):
 
     x / d = sin(theta) / tan(psi) + 1 - cos(theta),
 
-so the piece lies parallel to the hull (theta = psi) after the hull has advanced exactly its
-length d; it then takes the submerged pose of ``step``. The turn is kinematic: it follows
-the hull's advance, not a dynamic model of the piece, and the piece's plan position stays
-where the contact model pins it (its centre, not its far edge, is the turn's plan point).
-Its length is the side of a square of its plan area (our choice).
+so the piece lies parallel to the hull (theta = psi) after the surface has advanced exactly
+its length d; it then takes the submerged pose of ``step``. The surface at the bow advances
+across its waterline by sin(alpha) of the ship's advance (``HullMotion.surface_advance``):
+for the default ship, twice the piece's length of ship's advance. The turn is kinematic:
+it follows the hull's advance, not a dynamic model of the piece, and the piece's plan
+position stays where the contact model pins it (its centre, not its far edge, is the
+turn's plan point). Its length is the side of a square of its plan area (our choice).
 """
 from __future__ import annotations
 
@@ -36,8 +39,8 @@ PUSHED_DOWN_TILT = 0.25  # rad: roll of a floe the bow has turned under (its pos
 
 @numba.njit(cache=True)
 def turn_angle(advanced: float, psi: float) -> float:
-    """The piece's turn theta (rad, 0..psi) once the hull has advanced ``advanced`` piece
-    lengths (x / d) since the turn began, on a hull surface at psi (rad) to the horizontal."""
+    """The piece's turn theta (rad, 0..psi) once the hull's surface has advanced ``advanced``
+    piece lengths (x / d) since the turn began, on a hull surface at psi (rad) to the horizontal."""
     if advanced <= 0.0:
         return 0.0
     if advanced >= 1.0:
