@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Set up IceBridge on a fresh Debian machine with Python >= 3.11: the system packages the node
+# Set up IceBridge on a fresh Debian machine with Python 3.11 or 3.12: the system packages the node
 # and its tests need (installed with apt-get only when missing), a virtual environment in
 # .venv, and the project with its dev extras. Safe to run again: it only adds what is missing.
 set -euo pipefail

@@ -174,9 +174,14 @@ def test_the_loop_thread_runs_in_the_real_time_class_where_allowed_and_says_what
     with thread_scheduling("normal", 10) as got:
         assert got == "normal" and os.sched_getscheduler(0) == os.SCHED_OTHER
     with thread_scheduling("fifo", 10) as got:  # a refusal is reported, not raised
-        inside = os.sched_getscheduler(0), os.sched_getparam(0).sched_priority
+        inside = os.sched_getscheduler(0) & ~os.SCHED_RESET_ON_FORK, os.sched_getparam(0).sched_priority
+        started = []
+        worker = threading.Thread(target=lambda: started.append(os.sched_getscheduler(0)))
+        worker.start()
+        worker.join()
     if got == "fifo 10":
         assert inside == (os.SCHED_FIFO, 10)
+        assert started == [os.SCHED_OTHER]  # a thread the loop starts runs in the normal class
     else:  # a machine that does not allow it (no root, no CAP_SYS_NICE): the loop says why and runs normal
         assert got.startswith("normal (fifo refused: ") and inside[0] == os.SCHED_OTHER
     assert os.sched_getscheduler(0) == os.SCHED_OTHER  # back to normal after the loop

@@ -76,21 +76,25 @@ def thread_scheduling(scheduler: str, priority: int) -> Iterator[str]:
     """Run the calling thread in the given CPU scheduling class while in the block, then
     back in the normal one: ``fifo`` is Linux's SCHED_FIFO real-time class at ``priority``,
     before every normal process (render processes, the console, other jobs on the machine),
-    so that the tick is not descheduled in the middle of its step. Gives what it got:
-    ``normal``, ``fifo N``, or the refusal (no permission, not Linux); a refusal leaves the
-    thread normal."""
+    so that the tick is not descheduled in the middle of its step. Threads it starts (a save
+    point's writer, a link's reopening) do not inherit the class (``SCHED_RESET_ON_FORK``):
+    they would otherwise run before the render processes, and hold the core against the loop
+    itself until they block. Gives what it got: ``normal``, ``fifo N``, or the refusal (no
+    permission, not Linux); a refusal leaves the thread as it was. After the block the thread
+    has its class and priority of before."""
     if scheduler != "fifo":
         yield "normal"
         return
     try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))  # 0: the calling thread
+        before = os.sched_getscheduler(0), os.sched_getparam(0)  # 0: the calling thread
+        os.sched_setscheduler(0, os.SCHED_FIFO | os.SCHED_RESET_ON_FORK, os.sched_param(priority))
     except (AttributeError, OSError) as exc:
         yield f"normal (fifo refused: {getattr(exc, 'strerror', None) or exc})"
         return
     try:
         yield f"fifo {priority}"
     finally:
-        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+        os.sched_setscheduler(0, *before)
 
 
 # the memory records' measured columns: (summary key, column in LoopStats.memory, label)

@@ -45,8 +45,10 @@ class SharedBlocks:
     def __init__(self, ctx: moderngl.Context, light_slots: int) -> None:
         self.scene = np.zeros((), scene_dtype(light_slots))
         self.view = np.zeros((), VIEW)
-        self.scene_buffer = ctx.buffer(reserve=self.scene.dtype.itemsize)
-        self.view_buffer = ctx.buffer(reserve=VIEW.itemsize)
+        # whole vec4s: a driver may lay a block out rounded up so (``check_size``), and a
+        # buffer bound smaller than its block leaves the draw undefined
+        self.scene_buffer = ctx.buffer(reserve=-(-self.scene.dtype.itemsize // 16) * 16)
+        self.view_buffer = ctx.buffer(reserve=-(-VIEW.itemsize // 16) * 16)
 
     def attach(self, *programs: moderngl.Program) -> None:
         """Point the programs' blocks at the shared binding points."""

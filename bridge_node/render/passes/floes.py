@@ -22,11 +22,13 @@ TILE = np.dtype({"names": ["first", "first_floe", "frozen", "patch_base", "thick
 
 class TileSlots:
     """One ``Tile`` block per placement in one uniform buffer, each at the driver's offset
-    alignment; the buffer doubles when full."""
+    alignment; the buffer doubles when full. A draw binds its slot's range at the block's
+    size as the driver reports it (``block_size``, bytes: std140 may round it up past the
+    values' 20 bytes; a smaller range leaves the draw undefined)."""
 
-    def __init__(self, ctx: moderngl.Context, alignment: int) -> None:
-        self.ctx = ctx
-        self.stride = -(-TILE.itemsize // alignment) * alignment
+    def __init__(self, ctx: moderngl.Context, alignment: int, block_size: int) -> None:
+        self.ctx, self.block_size = ctx, block_size
+        self.stride = -(-block_size // alignment) * alignment
         self.slot: dict[int, int] = {}  # placement -> its slot
         self.values: dict[int, np.ndarray] = {}  # placement -> its block's values
         self._free: list[int] = []
@@ -49,7 +51,7 @@ class TileSlots:
             del self.values[k]
 
     def bind(self, k: int) -> None:
-        self.buffer.bind_to_uniform_block(TILE_BINDING, offset=self.slot[k] * self.stride, size=TILE.itemsize)
+        self.buffer.bind_to_uniform_block(TILE_BINDING, offset=self.slot[k] * self.stride, size=self.block_size)
 
     def _grow(self) -> None:
         needed = (max(self.slot.values()) + 1) * self.stride
@@ -68,8 +70,8 @@ class FloePass:
         self.program = glsl.program(ctx, "floes.vert", "floes.frag", SEEN_DEPTH=SEEN_DEPTH, **defines)
         glsl.set_present(self.program, **samplers)
         self.program["Tile"].binding = TILE_BINDING
-        self.tiles = TileSlots(ctx, int(ctx.info["GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT"]))
         check_size(self.program, "Tile", TILE)
+        self.tiles = TileSlots(ctx, int(ctx.info["GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT"]), self.program["Tile"].size)
         self._reflected = self.program["reflected"]
 
     def draw(self, tiles: list[tuple[int, float]], buffers: dict, sides, lod_distance: float) -> None:
