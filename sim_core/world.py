@@ -59,7 +59,7 @@ from sim_core.ship.model import OrderRejection, ShipData, ShipModel, propeller_t
 from sim_core.ship.outputs import ShipOutputs, ship_outputs
 from sim_core.ship.propeller_jet import jet_velocity, propeller_jet
 from sim_core.regimes.rubble import RubbleModel, compile_rubble, rubble_at
-from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER, bow_normal_angle
+from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
 from sim_core.ship.rubble_resistance import brash_channel_resistance, keel_resistance
 from sim_core.ship.searchlights import SearchlightMount, SearchlightOrder, SearchlightState, order_searchlight
 from sim_core.ship.sensors import SensorFaults, sensor_readings
@@ -236,9 +236,7 @@ def hull_world(model: WorldModel, ship: ShipData) -> tuple[np.ndarray, HullMotio
     north, east, psi = ship.eta[0], ship.eta[1], ship.eta[5]
     velocity = np.array(ship_vector_to_world((ship.nu[0], ship.nu[1]), psi)) + ship.current[::-1]  # over ground
     return (ship_to_world(model.contour, north, east, psi),
-            HullMotion(np.array([east, north]), world_heading(psi), velocity, -ship.nu[5],
-                       bow_normal_angle(model.ship.stem_angle, model.ship.waterline_angle),
-                       math.sin(model.ship.waterline_angle)))
+            HullMotion(np.array([east, north]), world_heading(psi), velocity, -ship.nu[5], *model.ship.bow_surface))
 
 
 def _ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple[float, int]:

@@ -2,13 +2,13 @@
 far edge until it lies parallel to the hull's surface, over its own length of the surface's
 advance across the waterline, sin(alpha) of the ship's (``sim_core.ice.turning``), before it
 takes the submerged pose; the planar physics is the same as when pieces go under at once."""
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 from conftest import exercise_config
 
-import sim_core.world as world_module
 from bridge_node.node.world_setup import build_world, start_world
 from sim_core.ice.floes import FloeStatus
 from sim_core.ice.turning import PUSHED_DOWN_TILT, turn_angle
@@ -28,11 +28,14 @@ def test_the_turn_is_the_inverse_of_the_hulls_advance(psi):
     assert advanced[-1] == pytest.approx(1.0)  # parallel to the hull after one piece length
 
 
-def _run(tmp_path_factory, name: str):
-    """A 400 m x 600 m field of 0.5 m ice, the ship steaming into it for 20 s; per step the
-    rows turning and their (tilt, depth of the centre below its draft, length, roll)."""
+def _run(tmp_path_factory, name: str, at_once: bool = False):
+    """A 400 m x 600 m field of 0.5 m ice, the ship steaming into it for 20 s (``at_once``:
+    its bow's surface angle 0, so that pieces go under at once); per step the rows turning
+    and their (tilt, depth of the centre below its draft, length, roll)."""
     cfg = exercise_config(tmp_path_factory.mktemp(name) / "tiles", 400.0, 600.0, 50.0, start_north=-60.0)
     model = build_world(cfg, None)
+    if at_once:
+        model = dataclasses.replace(model, ship=dataclasses.replace(model.ship, bow_surface=(0.0, 1.0)))
     data = start_world(model, cfg)
     seen, done = [], {}
     for _ in range(STEPS):
@@ -86,10 +89,9 @@ def test_a_piece_turns_over_its_length_of_the_surfaces_advance(turned):
     assert np.all(advance > 1.5 * length)  # not the ship's own advance (the default ship: alpha 30 deg)
 
 
-def test_the_turn_changes_no_planar_physics(turned, tmp_path_factory, monkeypatch):
+def test_the_turn_changes_no_planar_physics(turned, tmp_path_factory):
     _, data, _, _ = turned
-    monkeypatch.setattr(world_module, "bow_normal_angle", lambda *_: 0.0)  # pieces go under at once
-    _, at_once, seen, _ = _run(tmp_path_factory, "at-once")
+    _, at_once, seen, _ = _run(tmp_path_factory, "at-once", at_once=True)
     assert not any(len(s[0]) for s in seen)
     a, b = data.ice.state, at_once.ice.state
     assert a.n == b.n and np.array_equal(a.status, b.status) and np.array_equal(a.xy, b.xy)

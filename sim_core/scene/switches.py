@@ -86,8 +86,9 @@ def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate,
                 contour: np.ndarray | None = None) -> tuple[PlacedTiles, np.ndarray, np.ndarray]:
     """Carry out a scene update in the ice world: place, thaw and freeze tiles. Floes and
     cells that a tile placed or thawed lays under the hull (its contour points (n, 2), m,
-    where given) go under it in the next ice step, the cells broken (not by the bow). Returns the tiles given rows (placed, and thawed with
-    their new rows) and the placement indices thawed and frozen."""
+    where given) go under it in the next ice step, the cells broken (not by the bow).
+    Returns the tiles given rows (placed, and thawed with their new rows) and the placement
+    indices thawed and frozen."""
     scene, placement = model.scene, data.scene.placement
     reclaim_rows(data.ice)
     new = []

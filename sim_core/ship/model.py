@@ -25,8 +25,8 @@ import numpy as np
 from sim_core.frames.hull_contour import BOW_FRACTION, STERN_FRACTION
 from sim_core.material import IceMaterial
 from sim_core.ship.particulars import TELEGRAPH_POSITIONS, ShipParticulars
-from sim_core.ship.resistance import LEVEL_ICE, OPEN_WATER, LindqvistTerms, breaking_resistance, ice_resistance, \
-    lindqvist_terms
+from sim_core.ship.resistance import LEVEL_ICE, OPEN_WATER, LindqvistTerms, bow_normal_angle, breaking_resistance, \
+    ice_resistance, lindqvist_terms
 from sim_core.ship.rubble_resistance import BowForm, channel_speed_factor
 from sim_core.ship.motions import MotionsModel, compile_motions, heeling_moment, step_motions
 
@@ -65,6 +65,7 @@ class ShipModel:
     rps_astern_max: float  # negative
     stem_angle: float
     waterline_angle: float
+    bow_surface: tuple  # the bow's normal angle psi (rad) and sin(alpha): how pieces turn against it
     bow: BowForm  # for the brash channel's resistance
     motions: MotionsModel  # heave, roll and pitch
 
@@ -119,7 +120,8 @@ def compile_ship(p: ShipParticulars, material: IceMaterial | None = None) -> Shi
         telegraph_rps={k: v / 60.0 for k, v in rpm.items()},
         rps_ahead_max=rpm["navigation_full_ahead"] / 60.0, rps_astern_max=rpm["crash_astern"] / 60.0,
         stem_angle=math.radians(p.ice.stem_angle_deg), waterline_angle=math.radians(p.ice.waterline_angle_deg),
-        bow=bow_form(p),
+        bow_surface=(bow_normal_angle(math.radians(p.ice.stem_angle_deg), math.radians(p.ice.waterline_angle_deg)),
+                     math.sin(math.radians(p.ice.waterline_angle_deg))), bow=bow_form(p),
         motions=compile_motions(L, p.beam, d, p.displacement, rho, material.gravity, math.radians(p.ice.stem_angle_deg),
                                 material.hull_friction, p.motions),
     )

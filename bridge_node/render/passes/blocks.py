@@ -31,10 +31,15 @@ VIEW = np.dtype({"names": ["view_proj", "eye", "classes"], "formats": [("f4", (4
                  "offsets": [0, 64, 76], "itemsize": 80})
 
 
+def vec4_bytes(layout: np.dtype) -> int:
+    """A layout's size rounded up to whole vec4s (16 bytes), as drivers may lay its block out."""
+    return -(-layout.itemsize // 16) * 16
+
+
 def check_size(program: moderngl.Program, name: str, layout: np.dtype) -> None:
     """Refuse a program whose block differs in size from its layout here (or from that
     rounded up to a vec4, as drivers may report it)."""
-    if program[name].size not in (layout.itemsize, -(-layout.itemsize // 16) * 16):
+    if program[name].size not in (layout.itemsize, vec4_bytes(layout)):
         raise RuntimeError(f"uniform block {name}: the driver lays out {program[name].size} bytes, "
                            f"the renderer {layout.itemsize}")
 
@@ -47,8 +52,8 @@ class SharedBlocks:
         self.view = np.zeros((), VIEW)
         # whole vec4s: a driver may lay a block out rounded up so (``check_size``), and a
         # buffer bound smaller than its block leaves the draw undefined
-        self.scene_buffer = ctx.buffer(reserve=-(-self.scene.dtype.itemsize // 16) * 16)
-        self.view_buffer = ctx.buffer(reserve=-(-VIEW.itemsize // 16) * 16)
+        self.scene_buffer = ctx.buffer(reserve=vec4_bytes(self.scene.dtype))
+        self.view_buffer = ctx.buffer(reserve=vec4_bytes(VIEW))
 
     def attach(self, *programs: moderngl.Program) -> None:
         """Point the programs' blocks at the shared binding points."""
