@@ -64,7 +64,7 @@ def main() -> None:
     cls = class_of_pixels(mask)
     s = data.ship
     heading = np.array([math.sin(s.eta[5]), math.cos(s.eta[5])])
-    stem = np.array([s.eta[1], s.eta[0]]) + heading * model.ship.particulars.length / 2
+    stem = np.array([s.eta[1], s.eta[0]]) + heading * model.ship.particulars.length / 2 - data.ice_frame.offset
     ground = ground_points(cam.view_proj, cam.eye, centre.width, centre.height, cs.renderer.slab_z) - stem
     along = ground @ heading
     zone = (along >= 0) & (np.hypot(ground[..., 0], ground[..., 1]) <= AHEAD_M)

@@ -17,7 +17,7 @@ import time
 import numpy as np
 from rich.progress import Progress
 
-from bridge_node.node.config import load_config
+from bridge_node.node.config import NodeConfig, load_config
 from bridge_node.node.world_setup import build_world, start_world
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.tiles import broken_counts
@@ -26,13 +26,13 @@ from sim_core.world import step
 DT = 1 / 60
 
 
-class _Timed:
-    """One world of the comparison, with its step and engine-step times (ms)."""
+class TimedWorld:
+    """One world of a comparison, with its step and engine-step times (ms): the config's
+    with these ``ice_dynamics`` settings changed."""
 
-    def __init__(self, rest: bool) -> None:
-        cfg = load_config()
-        cfg = cfg.model_copy(update={"ice_dynamics": cfg.ice_dynamics.model_copy(update={"rest_far_floes": rest})})
-        self.rest, self.model = rest, build_world(cfg, None)
+    def __init__(self, cfg: NodeConfig, **dynamics) -> None:
+        cfg = cfg.model_copy(update={"ice_dynamics": cfg.ice_dynamics.model_copy(update=dynamics)})
+        self.model = build_world(cfg, None)
         self.data = start_world(self.model, cfg)
         self.start = self.data.ship.eta[:2].copy()
         self.step_ms, self.engine_ms = [], []
@@ -54,7 +54,8 @@ class _Timed:
         return float(np.hypot(*(self.data.ship.eta[:2] - self.start)))
 
 
-def _figures(ms: list[float]) -> str:
+def figures(ms: list[float]) -> str:
+    """Median, p99 and max of step times (ms), as text."""
     a = np.array(ms)
     return f"median {np.median(a):6.2f} ms, p99 {np.percentile(a, 99):6.2f} ms, max {a.max():6.1f} ms"
 
@@ -63,7 +64,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--distance", type=float, default=1500.0, help="transit distance, m")
     args = ap.parse_args()
-    before, after = _Timed(False), _Timed(True)
+    before, after = TimedWorld(load_config(), rest_far_floes=False), TimedWorld(load_config())
     with Progress(transient=True) as progress:
         task = progress.add_task("transit, resting off and on, steps alternating", total=args.distance)
         made = 0.0
@@ -74,7 +75,8 @@ def main() -> None:
     print(f"default exercise, {args.distance:.0f} m at 60 Hz, {os.cpu_count()} cores, steps alternating:")
     for w in (before, after):
         st = w.data.ice.state
-        print(f"  resting {'on ' if w.rest else 'off'}: world step {_figures(w.step_ms)}; engine {_figures(w.engine_ms)}")
+        on = w.model.ice.settings.rest_far_floes
+        print(f"  resting {'on ' if on else 'off'}: world step {figures(w.step_ms)}; engine {figures(w.engine_ms)}")
         print(f"              live {st.count(FloeStatus.FREE)}, resting {int(st.resting.sum())}, frozen "
               f"{w.data.ice.frozen.count}; broken by hull {broken_counts(w.data.ice)[BreakCause.HULL]}, "
               f"by contact {broken_counts(w.data.ice)[BreakCause.CONTACT]}")

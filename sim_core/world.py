@@ -13,33 +13,33 @@ east. The ice's contact load on the hull (from the last ice step) enters the shi
 external load, and the ship's Lindqvist resistance is set from where the bow is: level ice
 while the hull is breaking cells, a broken channel in breakable or frozen tiles, open water
 off the field; the brash and a ridge keel at the stem add theirs (``sim_core.regimes.rubble``).
-The instructor's environment (``sim_core.environment``) lives in the data and
-is published with every step: the wind loads the ship (``sim_core.ship.wind``), the current
-carries the ship and the floes with the water, and a frozen exercise takes its orders but
-moves nothing and stops its clock, while every tick still publishes a step.
+The ship meets the ice world in the ice's own frame (``sim_core.ship_in_ice``), which
+drifts where the whole field does. The instructor's environment (``sim_core.environment``)
+lives in the data and is published with every step: the wind loads the ship
+(``sim_core.ship.wind``) and drifts the ice, the current carries the ship and the ice, and
+a frozen exercise takes its orders but moves nothing and stops its clock, while every tick
+still publishes a step.
 """
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from sim_core.environment import Environment
 from sim_core.frames.hull_contour import waterline_contour
-from sim_core.frames.ship_frame import ship_to_world, ship_vector_to_world, world_heading, world_vector_to_ship
+from sim_core.frames.ship_frame import world_vector_to_ship
 from sim_core.ice.floes import FROZEN_CRACK, BreakCause, FloeStatus
 from sim_core.ice.model import IceModel
 from sim_core.ice.bending import CRACK_EVENT, crack_events
-from sim_core.ice.drift import free_drift
-from sim_core.ice.step import HullMotion, ice_step
+from sim_core.ice.drift import IceFrame
+from sim_core.ice.step import ice_step
 from sim_core.instructor import Command, OtherVessel, Reposition, apply_command, move_vessels
 from sim_core.ice.step import warm_up as warm_up_ice
 from sim_core.ice.tiles import IceData, PreparedTile, advance, new_ice_data
-from sim_core.scene.quadtree import tile_under, tiles_near
+from sim_core.scene.quadtree import tiles_near
 from sim_core.scene.scene import SceneData, SceneModel, TileState, new_scene_data, update_scene, with_ice
 from sim_core.scene.switches import (
     NO_FROZEN_FLOES,
@@ -55,17 +55,14 @@ from sim_core.scene.switches import (
     prepare_switch,
 )
 from sim_core.ship import model as ship_model
-from sim_core.ship.model import OrderRejection, ShipData, ShipModel, propeller_thrust
+from sim_core.ship.model import OrderRejection, ShipData, ShipModel
 from sim_core.ship.outputs import ShipOutputs, ship_outputs
-from sim_core.ship.propeller_jet import jet_velocity, propeller_jet
-from sim_core.regimes.rubble import RubbleModel, compile_rubble, rubble_at
-from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER
-from sim_core.ship.rubble_resistance import brash_channel_resistance, keel_resistance
+from sim_core.regimes.rubble import RubbleModel, compile_rubble
 from sim_core.ship.searchlights import SearchlightMount, SearchlightOrder, SearchlightState, order_searchlight
 from sim_core.ship.sensors import SensorFaults, sensor_readings
 from sim_core.ship.wind import wind_load
+from sim_core.ship_in_ice import contour_in_ice, drift_ice, hull_in_ice, ice_condition, rubble_loads, wash
 
-BREAKING_MEMORY = 2.0  # s: the bow counts as in level ice this long after it last broke a cell
 @dataclass(frozen=True)
 class WorldModel:
     """Static half of the world."""
@@ -98,6 +95,7 @@ class WorldData:
     moving_to: Reposition | None = None  # a move of the ship waiting for its tiles
     vessels: dict[int, OtherVessel] = field(default_factory=dict)  # other vessels the instructor steers, by MMSI
     sensors: SensorFaults = field(default_factory=SensorFaults)  # the instructor's sensor failures
+    ice_frame: IceFrame = field(default_factory=IceFrame)  # where the drifting field has gone
 
 
 @dataclass(frozen=True)
@@ -144,7 +142,9 @@ class WorldEvents:
     cracked cell of the live tiles; and every cracked cell of a tile placed or thawed) with
     their crack labels (``sim_core.ice.bending``); ``frozen_cracks`` the cracked intact cells
     of the tiles frozen (in a snapshot, of every frozen tile). Poses
-    are (x, y, heave, yaw, roll, pitch) in world m and rad.
+    are (x, y, heave, yaw, roll, pitch) in m and rad, and they, the tiles' corners and the
+    frozen floes lie in the ice's frame: a point (x, y) of it is at (x, y) + ``ice_offset``
+    in the world (``sim_core.ice.drift.IceFrame``; zero unless the field drifts).
     """
 
     seq: int
@@ -170,6 +170,7 @@ class WorldEvents:
     commands: tuple[Command, ...] = ()  # the instructor's commands applied at the step's start
     vessels: tuple[tuple[int, OtherVessel], ...] = ()  # the instructor's other vessels (MMSI, copy) at its end
     instruments: ShipOutputs | None = None  # what the sensors read (their failures applied); None: ``ship``
+    ice_offset: tuple[float, float] = (0.0, 0.0)  # m, x east, y north: the ice's frame in the world
 
     @property
     def readings(self) -> ShipOutputs:
@@ -208,7 +209,7 @@ def warm_up(model: WorldModel, data: WorldData) -> None:
     kernels, and build the tiles around the start position (and the ring beyond) in full,
     so that the first step only switches them in."""
     warm_up_ice(model.ice, data.ice)
-    contour, _ = hull_world(model, data.ship)
+    contour, _ = hull_in_ice(model, data)
     start = with_ice(model.scene, tiles_near(contour, model.scene.radius, model.scene.nx, model.scene.ny,
                                              model.scene.side))
     for tile in start.tolist():
@@ -231,64 +232,6 @@ def apply_controls(ship: ShipModel, data: ShipData, controls: Controls) -> list[
     return [r for r in out if r]
 
 
-def hull_world(model: WorldModel, ship: ShipData) -> tuple[np.ndarray, HullMotion]:
-    """The hull's contour points (34, 2) and motion in the ice world."""
-    north, east, psi = ship.eta[0], ship.eta[1], ship.eta[5]
-    velocity = np.array(ship_vector_to_world((ship.nu[0], ship.nu[1]), psi)) + ship.current[::-1]  # over ground
-    return (ship_to_world(model.contour, north, east, psi),
-            HullMotion(np.array([east, north]), world_heading(psi), velocity, -ship.nu[5], *model.ship.bow_surface))
-
-
-def _ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple[float, int]:
-    scene = model.scene
-    tile = tile_under(bow, scene.nx, scene.ny, scene.side)
-    if tile < 0:
-        return 0.0, OPEN_WATER
-    h = scene.thickness_at(bow)
-    if h <= 0.0:  # an open-water tile (a lead, an ice-free region)
-        return 0.0, OPEN_WATER
-    breaking = data.time - data.last_hull_break < BREAKING_MEMORY
-    if breaking or data.scene.tile_state[tile] not in (TileState.BREAKABLE, TileState.FROZEN):
-        return h, LEVEL_ICE
-    return h, BROKEN_CHANNEL
-
-
-def _rubble_loads(model: WorldModel, ship: ShipData, stem: np.ndarray) -> None:
-    """Set the ship's brash resistance (at 5 knots) and ridge-keel load from the rubble at
-    its stem (``sim_core.ship.rubble_resistance``): the brash's channel resistance times the
-    share of the tile it covers, and the keel's down to the ship's draught."""
-    if model.rubble.empty:
-        return
-    share, thickness, ridges, depth = rubble_at(model.rubble, float(stem[0]), float(stem[1]))
-    ship.brash_resistance = share * brash_channel_resistance(thickness, model.ship.bow)
-    m = model.ice.material
-    ship.keel_load = 0.0 if ridges is None else keel_resistance(
-        min(depth, model.ship.d), model.ship.B, ridges.friction_angle, ridges.cohesion, ridges.porosity,
-        m.water_density, m.density, m.gravity)
-
-
-def _ice_drift(model: WorldModel, data: WorldData) -> np.ndarray:
-    """The velocity (world x east, y north, m/s) the broken ice drifts at: the current plus
-    its free drift in the wind (``sim_core.ice.drift``)."""
-    s = model.ice.settings
-    north, east = free_drift(*data.environment.wind_north_east(), model.origin[0], s.wind_drift_factor,
-                             math.radians(s.wind_drift_angle_deg))
-    return np.array([data.ship.current[1] + east, data.ship.current[0] + north])
-
-
-def _wash(model: WorldModel, ship: ShipData) -> Callable[[np.ndarray], np.ndarray] | None:
-    """The propeller's jet as a water velocity field over world points, or None (no
-    thrust, or the wash switched off): ``sim_core.ship.propeller_jet``."""
-    m = model.ship
-    if not model.ice.settings.propeller_wash:
-        return None
-    thrust, _, inflow = propeller_thrust(m, ship.nu[0], ship.nu[1], ship.nu[5], ship.rps)
-    north, east, psi = ship.eta[0], ship.eta[1], ship.eta[5]
-    origin = ship_to_world(np.array([[m.x_p * m.L, 0.0]]), north, east, psi)[0]
-    jet = propeller_jet(origin, np.array(ship_vector_to_world((1.0, 0.0), psi)), thrust, inflow, m.d_p, m.d, m.rho)
-    return None if jet is None else functools.partial(jet_velocity, jet)
-
-
 def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> WorldEvents:
     """Events with the ship's outputs, the given rows' poses and statuses, and counts."""
     st = data.ice.state
@@ -298,7 +241,7 @@ def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> 
     return WorldEvents(seq=data.seq, time=data.time, ship=ship, instruments=None if readings is ship else readings,
                        floe_rows=rows, floe_pose=pose, floe_status=st.status[rows].copy(),
                        floes_free=st.count(FloeStatus.FREE), floes_frozen=data.ice.frozen.count,
-                       environment=data.environment,
+                       environment=data.environment, ice_offset=tuple(data.ice_frame.offset.tolist()),
                        vessels=tuple((m, dataclasses.replace(v)) for m, v in data.vessels.items()), **fields)
 
 
@@ -308,7 +251,7 @@ def _apply_commands(model: WorldModel, data: WorldData, commands: tuple[Command,
     applied = [done for c in commands if (done := apply_command(model, data, c)) is not None]
     to = data.moving_to
     if to is not None:
-        contour = ship_to_world(model.contour, to.north, to.east, to.heading)
+        contour = contour_in_ice(model, data, to.north, to.east, to.heading)
         if prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3):
             applied.append(apply_command(model, data, dataclasses.replace(to, at_once=True)))
     return tuple(applied)
@@ -348,18 +291,19 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
         return dataclasses.replace(_held(model, data, rejected), commands=applied)
     ship = data.ship
     wind = _environment_loads(model, data)
-    contour, _ = hull_world(model, ship)
-    ship.ice_h, ship.ice_condition = _ice_condition(model, data, contour[0])  # contour[0] is the stem
-    _rubble_loads(model, ship, contour[0])
+    contour, _ = hull_in_ice(model, data)
+    ship.ice_h, ship.ice_condition = ice_condition(model, data, contour[0])  # contour[0] is the stem
+    rubble_loads(model, ship, contour[0])
     if controls is not None and controls.kinematic is not None:
         k = controls.kinematic
         ship.eta[0], ship.eta[1], ship.eta[5] = k.north, k.east, k.heading
         ship.nu[0], ship.nu[1], ship.nu[5] = k.surge, k.sway, k.yaw_rate
     else:
         ship_model.step(model.ship, ship, dt)
-    contour, hull = hull_world(model, ship)
+    water = drift_ice(model, data, dt)
+    contour, hull = hull_in_ice(model, data)
     placed, thawed, frozen = apply_swaps(model, data, update_scene(model.scene, data.scene, contour, hull.xy), contour)
-    report = ice_step(model.ice, data.ice, hull, dt, _ice_drift(model, data), _wash(model, ship))
+    report = ice_step(model.ice, data.ice, hull, dt, water, wash(model, data))
     if data.moving_to is None:  # (a move's tiles are prepared first)
         prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3)
     load = np.array([*world_vector_to_ship(report.hull_force, ship.eta[5]), -report.hull_moment])

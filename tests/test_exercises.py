@@ -1,5 +1,6 @@
 """The ready exercises of ``config/exercises/`` (issue 26, item 6): each one loads, and runs
-with ``icebridge run --config`` as its header says, its console's expectations met."""
+with ``icebridge run --config`` as its header says, its console's expectations met; the
+pack exercise's field drifts in its wind."""
 import json
 
 import pytest
@@ -23,3 +24,8 @@ def test_an_exercise_runs(path, tmp_path):
     assert done.returncode == 0, done.stderr[-2000:]
     summary = json.loads(done.stdout)
     assert summary["ticks"] > 0 and summary["console"]["passed"], summary["console"]
+    east, north = summary["ice_drift_m"]
+    if cfg.ice_dynamics.field_drift and cfg.exercise.wind_speed_kn > 0.0:  # the pack: a west wind drives it
+        assert east > 0.5 and north < 0.0
+    else:
+        assert east == north == 0.0

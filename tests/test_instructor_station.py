@@ -173,6 +173,18 @@ def test_the_map_shows_the_regions_and_their_open_water(exercise, browser):
     image = screenshot(browser)
     assert near(around(640.0, 30.0), BRASH_RGB, 6).mean() > 0.9  # brash alone: not open water (its label mid-way)
     assert near(around(550.0, 150.0), LEVEL_ICE_RGB, 6).mean() > 0.9  # the level ice beside it
+    # a field that has drifted 150 m east: its ice, the lake and the outlines are drawn there
+    browser.execute_script("window.applyFrame = map.applyFrame;"
+                           "map.applyFrame = (h, a) => window.applyFrame.call(map, {...h, ice_offset: [150, 0]}, a);")
+    try:
+        view(browser, 200.0, 600.0, 1.0)
+        image = screenshot(browser)
+        assert near(around(250.0, 660.0), WATER_RGB, 6).mean() > 0.9  # the lake, moved on
+        assert near(around(450.0, 700.0), LEVEL_ICE_RGB, 6).mean() > 0.9
+        assert np.mean([near(around(350.0, north), REGION_RGB, 40).any() for north in (620.0, 650.0, 680.0, 710.0,
+                                                                                     740.0)]) >= 0.6
+    finally:
+        browser.execute_script("map.applyFrame = window.applyFrame;")
 
 
 def test_freeze_and_resume_from_the_page(exercise, browser):

@@ -1,6 +1,7 @@
 """The state stream on loopback: messages round-trip exactly, late joiners and lossy
 subscribers end up with the published state, render processes (separate processes) draw
 what a single process draws, and a slow renderer never holds the physics back."""
+import dataclasses
 import json
 import math
 import socket
@@ -63,6 +64,8 @@ def test_messages_round_trip(exercise):
     assert input_time == 12.5 and back.seq == events.seq and back.ship == events.ship
     np.testing.assert_array_equal(back_traffic, traffic)
     assert decode(encode(events))[2].shape == (0,)
+    drifted = dataclasses.replace(events, ice_offset=(12.25, -3.5))  # where a drifting field's frame lies
+    assert decode(encode(drifted))[0].ice_offset == (12.25, -3.5)
     assert back.rejected == events.rejected and len(back.placed.tile) == len(events.placed.tile)
     np.testing.assert_array_equal(back.floe_rows, events.floe_rows)
     np.testing.assert_allclose(back.floe_pose, events.floe_pose, atol=2e-4)

@@ -67,6 +67,8 @@ def test_messages_out_of_a_views_bounds_are_codec_errors(world):
                    _with_header(good, arrays=[["<i8", [2 ** 40]]] * (len(good) - 3)),
                    _with_header(good, arrays=[["<M8[s]" if k == 14 else d, shape]  # a date array (fuzz found it)
                                               for k, (d, shape) in enumerate(json.loads(good[1])["arrays"])]),
+                   _with_header(good, ice_offset=[1.0]), _with_header(good, ice_offset=[1.0, float("inf")]),
+                   _with_header(good, ice_offset=[True, 0.0]),
                    _with_header(good, ship=json.loads(good[1])["ship"] | {"north": ""})):  # text for a number
         with pytest.raises(CodecError):
             decode(frames)

@@ -1,6 +1,7 @@
 """The world's published contract: events and snapshots agree, live rows keep their numbers
 and a frozen tile's rows go to the next tile, a thawed tile's floes come back where they
 froze, and refused orders are counted and raise an alarm."""
+import dataclasses
 import math
 
 import numpy as np
@@ -157,15 +158,17 @@ def test_view_blends_between_the_two_latest_states(small_world):
         view.apply(step(model, data, 0.1))
     before_ship, before = view.ship, view.pose.copy()
     events = step(model, data, 0.5, Controls(rudder=math.radians(35.0)))
+    events = dataclasses.replace(events, ice_offset=(2.0, -1.0))  # as if the field had drifted that far
     view.apply(events)
     after = view.pose.copy()
     rows = events.floe_rows
     view.blend(0.5)
     assert view.ship.north == pytest.approx(0.5 * (before_ship.north + events.ship.north))
+    np.testing.assert_allclose(view.ice_offset, [1.0, -0.5])  # the field's frame in between too
     np.testing.assert_allclose(view.pose[rows, :3], 0.5 * (before[rows, :3] + after[rows, :3]))
     assert np.abs(after[rows, :2] - before[rows, :2]).max() > 0.01  # something did move
     view.blend(1.0)
-    assert view.ship == events.ship
+    assert view.ship == events.ship and tuple(view.ice_offset) == events.ice_offset
     np.testing.assert_array_equal(view.pose, after)
     view.blend(0.25)
     nxt = step(model, data, 0.1)

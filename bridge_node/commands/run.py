@@ -77,7 +77,8 @@ def _end_state(events: WorldEvents) -> dict:
     """The summary's picture of the last published state."""
     s = events.ship
     return {"live_floes": events.floes_free, "frozen_floes": events.floes_frozen, "north_m": round(s.north, 1),
-            "east_m": round(s.east, 1), "speed_kn": round(s.speed_longitudinal / KNOT, 2)}
+            "east_m": round(s.east, 1), "speed_kn": round(s.speed_longitudinal / KNOT, 2),
+            "ice_drift_m": [round(v, 1) for v in events.ice_offset]}  # how far the field has drifted, east, north
 
 
 def _check(args: argparse.Namespace, rate: float) -> None:

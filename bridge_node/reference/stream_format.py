@@ -53,5 +53,7 @@ def stream_reference() -> str:
     lines += [f"| `{key}` | {type(value).__name__} | `{json.dumps(value)[:80]}` |" for key, value in header.items()]
     lines += ["", "`ship` keys (SI: m, m/s, rad, rad/s, rev/s, N; `utc` unix s): "
               + ", ".join(f"`{k}`" for k in header["ship"]) + ".",
-              "`environment` keys: " + ", ".join(f"`{k}`" for k in header["environment"]) + "."]
+              "`environment` keys: " + ", ".join(f"`{k}`" for k in header["environment"]) + ".",
+              "`ice_offset`: where the ice's own frame lies in the world (m, x east, y north; it moves where "
+              "the whole field drifts): floe poses, tile corners and frozen floes are in that frame."]
     return "\n".join(lines) + "\n"

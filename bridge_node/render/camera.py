@@ -35,9 +35,11 @@ def ship_matrix(north: float, east: float, psi: float, heave: float = 0.0, pitch
     return m
 
 
-def outputs_matrix(ship: ShipOutputs) -> np.ndarray:
-    """``ship_matrix`` of a ship's published outputs: its place, heading, heave, pitch and roll."""
-    return ship_matrix(ship.north, ship.east, ship.heading, ship.heave, ship.pitch, ship.roll)
+def outputs_matrix(ship: ShipOutputs, ice_offset: np.ndarray | tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
+    """``ship_matrix`` of a ship's published outputs (its place, heading, heave, pitch and
+    roll), into the ice's frame that lies at ice_offset (m, x east, y north) in the world."""
+    return ship_matrix(ship.north - ice_offset[1], ship.east - ice_offset[0], ship.heading, ship.heave, ship.pitch,
+                       ship.roll)
 
 
 @dataclass(frozen=True)

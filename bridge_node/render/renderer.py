@@ -26,7 +26,10 @@ once, when it freezes. Also static: the relief noise texture (mipmapped) and eac
 level-ice thickness (in the tile table); per frame, the sun and sky of the exercise's time
 and the ship's place, written once for every channel into a uniform buffer. The drawing is
 the passes' (``bridge_node.render.passes``: one object per effect, its GLSL beside it), which
-``SceneRenderer.draw`` sequences for a channel.
+``SceneRenderer.draw`` sequences for a channel. The scene is drawn in the ice's own frame
+(``WorldView.ice_offset``; ``sim_core.ice.drift.IceFrame``), where the tiles, floes and
+rasters lie: the ship, its eye and searchlights and the other vessels are moved into it, so
+a drifting field needs no upload.
 """
 from __future__ import annotations
 
@@ -167,7 +170,7 @@ class SceneRenderer(SceneUploads):
         self.blocks.write_scene(sun=sky.sun, visibility=view.environment.visibility, direct=sky.direct,
                                 relief_reach=self.settings.relief_reach_m, ambient=sky.ambient, time=view.time,
                                 zenith_colour=sky.zenith, horizon_colour=sky.horizon, water_colour=WATER,
-                                **self._searchlights(view.ship))
+                                **self._searchlights(view.ship, view.ice_offset))
 
     def draw(self, view: WorldView, channel: ChannelSettings, blend: moderngl.Texture,
              classes: bool = False) -> Camera:
@@ -178,7 +181,7 @@ class SceneRenderer(SceneUploads):
         ctx, s = self.ctx, self.settings
         p = self.model.ship.particulars
         if view.ship is not self._ship_seen:  # the ship's matrix, once per frame for every channel
-            self._ship_seen, self._ship_to_world = view.ship, outputs_matrix(view.ship)
+            self._ship_seen, self._ship_to_world = view.ship, outputs_matrix(view.ship, view.ice_offset)
         cam = camera_on(channel, eye_point(channel.eye, p.look.bridge_eye, p.beam), self._ship_to_world, s.far_m)
         self.blocks.write_view(cam.view_proj, cam.eye, classes)
         ctx.clear(*(np.divide(CLASSES[CLASS_INDEX["sky"]][1], 255.0) if classes else self.sky.horizon), depth=1.0)
@@ -210,18 +213,18 @@ class SceneRenderer(SceneUploads):
     def build_all(self, view: WorldView) -> None:
         """Build now what the renderer otherwise builds a little each frame (the ridges'
         sails near the ship): for a single frame that should show everything (a snapshot)."""
-        self.sails.update(np.array([view.ship.east, view.ship.north]), budget_s=math.inf)
+        self.sails.update(np.array([view.ship.east, view.ship.north]) - view.ice_offset, budget_s=math.inf)
 
-    def _searchlights(self, ship: ShipOutputs) -> dict:
-        """The searchlights' entries of the ``Scene`` block for the published ship: world
-        positions, beam axes, and per beam the cosine of half its width and its intensity
+    def _searchlights(self, ship: ShipOutputs, ice_offset: np.ndarray) -> dict:
+        """The searchlights' entries of the ``Scene`` block for the published ship: positions
+        in the ice's frame (the world's less ice_offset, m), beam axes, and per beam the cosine of half its width and its intensity
         over the illuminance the eye sees as white (the daylight's, or EYE_WHITE_LUX at
         night); 0 for a light switched off. Each is aimed as published (the console's
         orders), else as configured."""
         n = max(len(self.settings.searchlights), 1)  # the blocks' arrays (LIGHT_SLOTS), filled whole
         pos, axis, beam = np.zeros((n, 4)), np.zeros((n, 4)), np.zeros((n, 4))
         beam[:, 0] = 1.0
-        to_world = outputs_matrix(ship)
+        to_world = outputs_matrix(ship, ice_offset)
         for k, light in enumerate(self.settings.searchlights):
             aim = ship.searchlights[k] if k < len(ship.searchlights) else self._configured_aims[k]
             az, el = ship.heading + aim.bearing, aim.elevation
@@ -265,10 +268,11 @@ class SceneRenderer(SceneUploads):
         beam = np.where(traffic["beam"] > 0, traffic["beam"], p.beam)
         lo, hi = self.ship_extent
         reach = np.hypot(lo[:2], hi[:2]).max() * np.maximum(length / p.length, beam / p.beam)
-        centre = np.column_stack([traffic["x"], traffic["y"], np.zeros(len(traffic))])
+        x, y = traffic["x"] - view.ice_offset[0], traffic["y"] - view.ice_offset[1]  # into the ice's frame
+        centre = np.column_stack([x, y, np.zeros(len(traffic))])
         pad = np.column_stack([reach, reach, np.full(len(traffic), hi[2] * (beam / p.beam).max())])
-        near = np.hypot(traffic["x"] - cam.eye[0], traffic["y"] - cam.eye[1]) < self.settings.far_m
+        near = np.hypot(x - cam.eye[0], y - cam.eye[1]) < self.settings.far_m
         for k in np.flatnonzero(visible_boxes(cam.view_proj, centre - pad, centre + pad) & near):
             scale = np.diag([length[k] / p.length, beam[k] / p.beam, beam[k] / p.beam, 1.0])
-            out.append(ship_matrix(traffic["y"][k], traffic["x"][k], traffic["heading"][k]) @ scale)
+            out.append(ship_matrix(y[k], x[k], traffic["heading"][k]) @ scale)
         return out

@@ -183,6 +183,7 @@ class Picture:
         self._number += 1
         header = {"type": "frame", "seq": view.seq, "time": view.time, "ship": ship_panel(view), "floe_tiles": floe_tiles,
                   "environment": environment_panel(view), "traffic": traffic_list(view),
+                  "ice_offset": [round(float(v), 3) for v in view.ice_offset],
                   "counts": {"free": len(floe_cell), "frozen_floes": int(sum(len(t.cells) for t in self.tiles.values()
                                                                              if t.meta["frozen"])),
                              "tiles_live": sum(not t.meta["frozen"] for t in self.tiles.values()),

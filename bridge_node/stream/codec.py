@@ -56,7 +56,7 @@ def encode(events: WorldEvents, input_time: float | None = None, traffic: np.nda
         "seq": events.seq, "time": events.time, "snapshot": events.snapshot, "input_time": input_time,
         "ship": dataclasses.asdict(events.ship), "floes_free": events.floes_free,
         "floes_frozen": events.floes_frozen, "rejected": [dataclasses.asdict(r) for r in events.rejected],
-        "environment": dataclasses.asdict(events.environment),
+        "environment": dataclasses.asdict(events.environment), "ice_offset": list(events.ice_offset),
         "commands": [command_record(c) for c in events.commands],
         "arrays": [[a.dtype.str, list(a.shape)] for a in arrays],
     }
@@ -74,6 +74,14 @@ def _environment(fields: dict) -> Environment:
             environment.wind_speed < 0.0 or environment.current_speed < 0.0:
         raise CodecError(f"malformed state message: environment {fields}")
     return environment
+
+
+def _ice_offset(value: object) -> tuple[float, float]:
+    """The ice frame's offset a header carries: two finite numbers (m); CodecError else."""
+    if not (isinstance(value, list) and len(value) == 2 and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)):
+        raise CodecError(f"malformed state message: ice offset {value!r}")
+    return float(value[0]), float(value[1])
 
 
 def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
@@ -101,6 +109,7 @@ def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
             floes_free=int(header["floes_free"]), floes_frozen=int(header["floes_frozen"]),
             rejected=tuple(OrderRejection(**r) for r in header["rejected"]), snapshot=bool(header["snapshot"]),
             environment=_environment(header["environment"]),
+            ice_offset=_ice_offset(header.get("ice_offset", [0.0, 0.0])),  # none in recordings before the drift
             commands=tuple(command_from_record(c) for c in header["commands"]),
             **{k: (v.astype(np.int64) if k in _WIRE and v.dtype.kind == "i" else v) for k, v in named.items()})
         input_time = header["input_time"]

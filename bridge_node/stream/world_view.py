@@ -55,9 +55,11 @@ class ViewChanges:
 
 class WorldView:
     """The last published state. ``pose`` is (rows, 6): x, y, heave, yaw, roll, pitch in
-    world m and rad; ``status`` the FloeStatus of each row; ``frozen_floes`` each frozen
+    m and rad; ``status`` the FloeStatus of each row; ``frozen_floes`` each frozen
     placement's floes (``FROZEN_FLOE_EVENT`` records); ``traffic`` the other vessels as
-    last published (``TRAFFIC_DTYPE`` rows, shape (0,) when there are none); ``environment``
+    last published (``TRAFFIC_DTYPE`` rows, shape (0,) when there are none); ``ice_offset``
+    where the ice's frame lies in the world (m, x east, y north: the poses, corners and frozen
+    floes are in that frame, ``WorldEvents.ice_offset``); ``environment``
     the instructor's (``sim_core.environment``) and ``ship.utc`` the exercise clock, as
     last published."""
 
@@ -74,9 +76,10 @@ class WorldView:
         self.cause = np.zeros(0, dtype=np.uint8)
         self.crack = np.zeros(0, dtype=np.uint8)  # each row's bending-crack label (sim_core.ice.bending)
         self.ice_load = np.zeros(3)
+        self.ice_offset = np.zeros(2)
         self.environment = Environment()  # visibility, wind, current, freeze: as last published
         self.traffic = np.zeros(0, dtype=TRAFFIC_DTYPE)
-        self._blend: tuple | None = None  # (rows, pose before, pose after, ship before, ship after)
+        self._blend: tuple | None = None  # (rows, pose before, after, ship before, after, ice offset before, after)
         self._new: list[int] = []
         self._frozen_new: list[int] = []
         self._span = [np.iinfo(np.int64).max, 0]
@@ -103,7 +106,8 @@ class WorldView:
     def apply(self, events: WorldEvents) -> None:
         """Bring the view up to the state after these events."""
         self._unblend()
-        before_ship, known_rows = self.ship, self.rows
+        before_ship, known_rows, before_offset = self.ship, self.rows, self.ice_offset
+        self.ice_offset = np.array(events.ice_offset, dtype=float)
         self.seq, self.time, self.ship, self.ice_load = events.seq, events.time, events.ship, events.ice_load
         self.environment = events.environment
         frozen = set(events.frozen.tolist())
@@ -126,18 +130,7 @@ class WorldView:
                                  or not np.array_equal(held_cracks.get(k, NO_FROZEN_CRACKS),
                                                        self.frozen_cracks.get(k, NO_FROZEN_CRACKS))]
         p = events.placed
-        for i in range(len(p.placement)):
-            k = int(p.placement[i])
-            placement = Placement(int(p.tile[i]), int(p.template[i]), int(p.quarter_turns[i]),
-                                  (float(p.corner[i, 0]), float(p.corner[i, 1])),
-                                  int(p.row_start[i]), int(p.row_count[i]))
-            if k not in self.frozen and self.placements.get(k) != placement:
-                self._new.append(k)
-            self.placements[k] = placement
-        if len(p.placement):
-            self._ensure_rows(int((p.row_start + p.row_count).max()))
-            for a, n in zip(p.row_start.tolist(), p.row_count.tolist()):
-                self.crack[a:a + n] = 0  # rows given to a tile start uncracked
+        self._take_placements(p)
         for k in events.thawed.tolist():
             self._thaw(k)
         rows = events.floe_rows
@@ -151,7 +144,8 @@ class WorldView:
                 new |= (rows >= a) & (rows < a + n)
             before[new] = self.pose[rows[new]]
             if not events.snapshot:
-                self._blend = (rows, before, self.pose[rows], before_ship or events.ship, events.ship)
+                self._blend = (rows, before, self.pose[rows], before_ship or events.ship, events.ship,
+                               before_offset if before_ship else self.ice_offset, self.ice_offset)
             self.status[rows] = events.floe_status
             self._span = [min(self._span[0], int(rows.min())), max(self._span[1], int(rows.max()) + 1)]
         self._apply_cracks(events.cracked)
@@ -159,6 +153,22 @@ class WorldView:
         self.cause[events.broken_by_hull] = BreakCause.HULL
         self.cause[events.broken_by_contact] = BreakCause.CONTACT
         self._broken += [events.broken_by_hull, events.broken_by_contact]
+
+    def _take_placements(self, p: PlacedTiles) -> None:
+        """Keep the tiles placed (those new or changed, and not frozen, noted for the
+        renderers), and give each its rows, uncracked."""
+        for i in range(len(p.placement)):
+            k = int(p.placement[i])
+            placement = Placement(int(p.tile[i]), int(p.template[i]), int(p.quarter_turns[i]),
+                                  (float(p.corner[i, 0]), float(p.corner[i, 1])),
+                                  int(p.row_start[i]), int(p.row_count[i]))
+            if k not in self.frozen and self.placements.get(k) != placement:
+                self._new.append(k)
+            self.placements[k] = placement
+        if len(p.placement):
+            self._ensure_rows(int((p.row_start + p.row_count).max()))
+            for a, n in zip(p.row_start.tolist(), p.row_count.tolist()):
+                self.crack[a:a + n] = 0  # rows given to a tile start uncracked
 
     def _take_frozen_records(self, events: WorldEvents) -> None:
         """Keep the frozen tiles' floes and cracked cells the events carry, by placement."""
@@ -233,7 +243,7 @@ class WorldView:
             cracked=crack_events(self.crack, rows),
             frozen_cracks=frozen_crack_records(self.frozen_cracks[k] for k in frozen if k in self.frozen_cracks),
             floes_free=len(broken), floes_frozen=sum(len(f) for f in floes),
-            ice_load=self.ice_load.copy(), rejected=(), snapshot=True)
+            ice_load=self.ice_load.copy(), rejected=(), snapshot=True, ice_offset=tuple(self.ice_offset.tolist()))
 
     def blend(self, alpha: float) -> None:
         """Show the state ``alpha`` (0..1) of the way from before the last applied step to
@@ -241,7 +251,7 @@ class WorldView:
         The next ``apply`` starts from the true state again."""
         if self._blend is None:
             return
-        rows, a, b, ship_a, ship_b = self._blend
+        rows, a, b, ship_a, ship_b, offset_a, offset_b = self._blend
         alpha = min(max(alpha, 0.0), 1.0)
         d = b - a
         d[:, 3:] = (d[:, 3:] + math.pi) % (2.0 * math.pi) - math.pi
@@ -250,11 +260,12 @@ class WorldView:
         self.ship = dataclasses.replace(ship_b, north=ship_b.north - (1.0 - alpha) * (ship_b.north - ship_a.north),
                                         east=ship_b.east - (1.0 - alpha) * (ship_b.east - ship_a.east),
                                         heading=(ship_b.heading - (1.0 - alpha) * turn) % (2.0 * math.pi))
+        self.ice_offset = offset_b - (1.0 - alpha) * (offset_b - offset_a)
         self._span = [min(self._span[0], int(rows.min())), max(self._span[1], int(rows.max()) + 1)]
 
     def _unblend(self) -> None:
         if self._blend is not None:
-            rows, _, b, _, ship_b = self._blend
+            rows, _, b, _, ship_b, _, offset_b = self._blend
             self.pose[rows] = b
-            self.ship = ship_b
+            self.ship, self.ice_offset = ship_b, offset_b
             self._blend = None

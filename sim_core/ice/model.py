@@ -29,6 +29,9 @@ class IceDynamicsSettings(Params):
     wind_drift_angle_deg: float = Field(DEVIATION_DEG, ge=0.0, le=60.0,
                                         description="free drift: degrees to the right of the wind (left in the "
                                                     "southern hemisphere)")
+    field_drift: bool = Field(False, description="the whole ice field drifts with the current and the wind's free "
+                              "drift, as one body of ice (pack: its floes, channels, frozen tiles and regions go "
+                              "with it); off: the level ice is fast and only the broken floes drift")
     propeller_wash: bool = Field(False, description="the propeller's jet drags the floes in it "
                                  "(``sim_core.ship.propeller_jet``); off by default: the floes it keeps "
                                  "moving cost the world step 40-70 % more over a long run")

@@ -21,6 +21,7 @@ class MapView {
     this.floeCount = 0;
     this.track = [];            // [x, y] pairs, NaN breaks the line
     this.frame = null;          // the last frame's header
+    this.iceOffset = [0, 0];    // m: where the drifting ice field's frame lies in the world
     this.scale = 1.0;           // px per m
     this.cx = 0; this.cy = 0;   // world point in the middle
     this.follow = true;
@@ -115,6 +116,7 @@ class MapView {
     const tr = arrays.track;
     for (let i = 0; i + 1 < tr.length; i += 2) this.track.push([tr[i], tr[i + 1]]);
     this.frame = header;
+    this.iceOffset = header.ice_offset || [0, 0];
     if (this.follow) { this.cx = header.ship.east; this.cy = header.ship.north; }
     this.stats.frames++; this.stats.floes = this.floeCount; this.stats.applyMs = performance.now() - t0;
     this.dirty = true;
@@ -202,8 +204,10 @@ class MapView {
     const s = this.scale;
     const world = () => ctx.setTransform(dpr * s, 0, 0, -dpr * s, dpr * (w / 2 - this.cx * s), dpr * (h / 2 + this.cy * s));
     world();
+    ctx.save(); ctx.translate(this.iceOffset[0], this.iceOffset[1]);  // the ice and its regions drift as one
     this._drawIce(ctx, s);
     this._drawRegions(ctx, s);
+    ctx.restore();
     this._drawTrack(ctx, s);
     if (this.frame) {
       this._drawTraffic(ctx, s);
@@ -264,7 +268,8 @@ class MapView {
     ctx.font = "12px system-ui, sans-serif";
     for (const r of this.geo.regions || []) {
       if (!r.label) continue;
-      const px = w / 2 + (r.label[0] - this.cx) * this.scale, py = h / 2 - (r.label[1] - this.cy) * this.scale;
+      const [x, y] = [r.label[0] + this.iceOffset[0], r.label[1] + this.iceOffset[1]];
+      const px = w / 2 + (x - this.cx) * this.scale, py = h / 2 - (y - this.cy) * this.scale;
       if (px < -200 || py < -40 || px > w + 200 || py > h + 40) continue;
       const lines = [r.name, r.regime], width = Math.max(...lines.map((t) => ctx.measureText(t).width));
       ctx.fillStyle = "rgba(13, 24, 33, 0.7)"; ctx.fillRect(px - width / 2 - 4, py - 16, width + 8, 34);
