@@ -1,7 +1,7 @@
 """Benchmark: the pack drifting as a whole against a fast field, same run.
 
 Two worlds of the pack-ice exercise (``config/exercises/pack_ice.toml``: 7/10 pack, a 20 kn
-west wind) steam north at half ahead at 60 Hz, one with ``ice_dynamics.field_drift`` on (as
+east wind) steam north at half ahead at 60 Hz, one with ``ice_dynamics.field_drift`` on (as
 the exercise has it: the whole field drifts, the floes at rest far from the hull with it)
 and one with it off (the level ice and unsimulated tiles fast, every free floe drifting
 through them as a body). Their steps alternate, so both see the same machine load.
@@ -34,7 +34,7 @@ def main() -> None:
     fast, drifting = TimedWorld(cfg, field_drift=False), TimedWorld(cfg, field_drift=True)
     steps = round(args.seconds / DT)
     with Progress(transient=True) as progress:
-        task = progress.add_task("pack in a west wind, fast field and drifting field, steps alternating", total=steps)
+        task = progress.add_task("pack in its wind, fast field and drifting field, steps alternating", total=steps)
         for k in range(steps):
             fast.step()
             drifting.step()

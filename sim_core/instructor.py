@@ -29,8 +29,9 @@ class Freeze:
 
 @dataclass(frozen=True)
 class Reposition:
-    """The own ship to (north, east) m from the field's corner, heading rad clockwise from
-    north, speed m/s ahead through the water, engine turning to hold it, rudder midships.
+    """The own ship to (north, east) m from the exercise origin (the field's corner as
+    laid), heading rad clockwise from north, speed m/s ahead through the water, engine
+    turning to hold it, rudder midships.
     Not ``at_once``: the ship moves at the first step by which the tiles around the new
     place have been prepared ahead (within the steps' budget, so that no step stalls);
     the step that moves it publishes the move ``at_once``, as a replay gives it."""
@@ -73,9 +74,9 @@ class EngineFailure:
 
 @dataclass
 class OtherVessel:
-    """A vessel the instructor steers: north, east m from the field's corner, course rad
-    clockwise from north, speed m/s over ground (straight on), name (AIS 6-bit text),
-    length and beam m."""
+    """A vessel the instructor steers: north, east m from the exercise origin (the field's
+    corner as laid), course rad clockwise from north, speed m/s over ground (straight on),
+    name (AIS 6-bit text), length and beam m."""
 
     name: str
     north: float

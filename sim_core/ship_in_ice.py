@@ -1,14 +1,15 @@
 """Where the ship (in the world: north/east, heading clockwise from north) meets the ice
 world (x east, y north, angles counter-clockwise from east, in the ice's own frame,
 ``sim_core.ice.drift.IceFrame``): the hull's contour and motion in the ice, the ice
-condition and rubble at the bow that set the ship's resistance, the water the floes drift
-in, and the propeller's wash over them.
+condition and rubble at the bow that set the ship's resistance, the velocity the floes
+drift towards, and the propeller's wash over them.
 
 With ``[ice_dynamics] field_drift`` the whole field drifts with the current and the wind's
-free drift; the ice world then steps in its drifting frame, where the water the floes feel
-is still (they drift with the frame) and the hull moves at its velocity over the ice.
-Without it the frame stays at the world's origin and the floes drift in the water's
-velocity through the fast level ice.
+free drift; the ice world then steps in its drifting frame, where the floes' drift target
+is rest (they drift with the frame) and the hull moves at its velocity over the ice. The
+field starts drifting steadily (``start_drifting``). Without it the frame stays at the
+world's origin and the floes drift through the fast level ice towards the current plus
+their free drift.
 """
 from __future__ import annotations
 
@@ -90,15 +91,32 @@ def rubble_loads(model: WorldModel, ship: ShipData, stem: np.ndarray) -> None:
 def ice_drift(model: WorldModel, data: WorldData) -> np.ndarray:
     """The velocity (world x east, y north, m/s) the ice drifts at: the current plus its
     free drift in the wind (``sim_core.ice.drift``)."""
-    s = model.ice.settings
-    north, east = free_drift(*data.environment.wind_north_east(), model.origin[0], s.wind_drift_factor,
+    s, env = model.ice.settings, data.environment
+    north, east = free_drift(*env.wind_north_east(), model.origin[0], s.wind_drift_factor,
                              math.radians(s.wind_drift_angle_deg))
-    return np.array([data.ship.current[1] + east, data.ship.current[0] + north])
+    current_north, current_east = env.current_north_east()
+    return np.array([current_east + east, current_north + north])
+
+
+def ice_through_water(model: WorldModel, data: WorldData) -> np.ndarray:
+    """The velocity of the ice the ship is in through the water (north, east m/s), whose
+    ice resistance takes the ship's surge over the ice: the drifting field's velocity less
+    the current's; the current reversed where the level ice is fast."""
+    frame = data.ice_frame.velocity  # east, north; zero for a fast field
+    current_north, current_east = data.environment.current_north_east()
+    return np.array([frame[1] - current_north, frame[0] - current_east])
+
+
+def start_drifting(model: WorldModel, data: WorldData) -> None:
+    """Where the whole field drifts, set it drifting steadily at the exercise's start (its
+    wind and current have blown long before): the frame at the ice's drift velocity."""
+    if model.ice.settings.field_drift:
+        data.ice_frame.velocity[:] = ice_drift(model, data)
 
 
 def drift_ice(model: WorldModel, data: WorldData, dt: float) -> np.ndarray:
-    """Move the ice's frame by dt s where the whole field drifts, and return the water's
-    velocity the floes feel in the ice world (m/s, x east, y north): still where the field
+    """Move the ice's frame by dt s where the whole field drifts, and return the velocity
+    the floes drift towards in the ice world (m/s, x east, y north): rest where the field
     drifts (they drift with it), else the ice's drift velocity."""
     s = model.ice.settings
     if not s.field_drift:

@@ -61,7 +61,8 @@ from sim_core.regimes.rubble import RubbleModel, compile_rubble
 from sim_core.ship.searchlights import SearchlightMount, SearchlightOrder, SearchlightState, order_searchlight
 from sim_core.ship.sensors import SensorFaults, sensor_readings
 from sim_core.ship.wind import wind_load
-from sim_core.ship_in_ice import contour_in_ice, drift_ice, hull_in_ice, ice_condition, rubble_loads, wash
+from sim_core.ship_in_ice import (contour_in_ice, drift_ice, hull_in_ice, ice_condition, ice_through_water,
+                                  rubble_loads, wash)
 
 @dataclass(frozen=True)
 class WorldModel:
@@ -101,8 +102,8 @@ class WorldData:
 @dataclass(frozen=True)
 class KinematicPose:
     """Where a logged track puts the ship at the end of a step, instead of its manoeuvring
-    model (replay): north, east m from the field's corner, heading rad clockwise from north,
-    surge and sway m/s, yaw rate rad/s (+ to starboard)."""
+    model (replay): north, east m from the exercise origin (the field's corner as laid),
+    heading rad clockwise from north, surge and sway m/s, yaw rate rad/s (+ to starboard)."""
 
     north: float
     east: float
@@ -190,8 +191,9 @@ def compile_world(ship: ShipModel, ice: IceModel, scene: SceneModel, origin: tup
 
 def new_world_data(model: WorldModel, north: float, east: float, heading: float, speed: float,
                    telegraph: str | None = None) -> WorldData:
-    """The ship at (north, east) m from the field's south-west corner, heading rad
-    (clockwise from north), steaming at speed m/s; optionally with a telegraph order."""
+    """The ship at (north, east) m from the exercise origin (the field's south-west corner
+    as laid), heading rad (clockwise from north), steaming at speed m/s; optionally with a
+    telegraph order."""
     ship = ship_model.new_ship_data(model.ship, speed, heading=heading)
     ship.eta[0], ship.eta[1] = north, east
     if telegraph is not None:
@@ -294,6 +296,7 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
     contour, _ = hull_in_ice(model, data)
     ship.ice_h, ship.ice_condition = ice_condition(model, data, contour[0])  # contour[0] is the stem
     rubble_loads(model, ship, contour[0])
+    ship.ice_drift[:] = ice_through_water(model, data)
     if controls is not None and controls.kinematic is not None:
         k = controls.kinematic
         ship.eta[0], ship.eta[1], ship.eta[5] = k.north, k.east, k.heading

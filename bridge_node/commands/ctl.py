@@ -81,8 +81,8 @@ def _placed(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """A position's options: --lat and --lon, or --north and --east."""
     p.add_argument("--lat", type=float, help="latitude, deg")
     p.add_argument("--lon", type=float, help="longitude, deg")
-    p.add_argument("--north", type=float, help="m from the field's south-west corner")
-    p.add_argument("--east", type=float, help="m from the field's south-west corner")
+    p.add_argument("--north", type=float, help="m from the exercise origin (the field's south-west corner as laid)")
+    p.add_argument("--east", type=float, help="m from the exercise origin (the field's south-west corner as laid)")
     return p
 
 

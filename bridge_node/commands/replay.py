@@ -144,7 +144,7 @@ def _track_replay(cfg: NodeConfig, args: argparse.Namespace, log: TrackLog, orig
     source = TrackSource(path, t0, t1, r.step_s)
     pose = path.pose(t0, r.step_s)
     data = new_world_data(model, pose.north, pose.east, pose.heading, pose.surge)
-    start_exercise(data, cfg)
+    start_exercise(model, data, cfg)
     if log.absolute:  # the outputs and the sky carry the logged UTC where the log has it
         data.epoch = t0
     info = {"kind": "track", "files": log.files, "vessel": log.vessel, "heading_from": track.heading_source,

@@ -7,7 +7,8 @@ units of the bridge (degrees, knots, metres, UTC):
 ========================  =========================================================
 ``freeze``, ``resume``    physics held (the clock stops) / running again
 ``reposition``            ``latitude_deg`` and ``longitude_deg``, or ``north_m`` and
-                          ``east_m`` (from the field's south-west corner);
+                          ``east_m`` (from the exercise origin: the field's
+                          south-west corner as laid);
                           ``heading_deg``; ``speed_kn`` (default 0)
 ``visibility``            ``visibility_m``
 ``clock``                 ``utc`` (ISO 8601), or ``time_of_day`` (HH:MM[:SS], UTC, the
@@ -89,7 +90,7 @@ class FreezeCommand(_Command):
 
 class _Placed(_Command):
     """A command with a position: latitude and longitude (deg), or north and east (m from
-    the field's south-west corner)."""
+    the exercise origin: the field's south-west corner as laid; a drifting field moves on)."""
 
     latitude_deg: float | None = Field(None, ge=-89.0, le=89.0)
     longitude_deg: float | None = Field(None, ge=-180.0, le=180.0)

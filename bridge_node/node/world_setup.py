@@ -27,6 +27,7 @@ from sim_core.regimes.rubble import compile_rubble
 from sim_core.scene.field import tile_classes
 from sim_core.scene.scene import compile_scene, open_water
 from sim_core.ship.model import compile_ship
+from sim_core.ship_in_ice import start_drifting
 from sim_core.world import WorldData, WorldModel, compile_world, new_world_data, step
 
 
@@ -113,19 +114,21 @@ def open_water_world(cfg: NodeConfig, config_path: str | None) -> tuple[WorldMod
     model = build_world(cfg, config_path)
     model = dataclasses.replace(model, scene=open_water(model.scene))
     data = new_world_data(model, 0.0, 0.0, 0.0, 0.0)
-    start_exercise(data, cfg)
+    start_exercise(model, data, cfg)
     return model, data
 
 
-def start_exercise(data: WorldData, cfg: NodeConfig) -> None:
+def start_exercise(model: WorldModel, data: WorldData, cfg: NodeConfig) -> None:
     """Set the exercise clock (time 0 at ``render.start_utc``) and the environment at the
-    start (``render.visibility_m``; the wind and current of ``[exercise]``)."""
+    start (``render.visibility_m``; the wind and current of ``[exercise]``), and a field
+    that drifts as a whole drifting steadily in them."""
     ex = cfg.exercise
     data.epoch = cfg.render.start_utc.timestamp()
     data.environment = Environment(
         visibility=cfg.render.visibility_m, wind_speed=ex.wind_speed_kn * KNOT,
         wind_from=math.radians(ex.wind_from_deg), current_speed=ex.current_speed_kn * KNOT,
         current_to=math.radians(ex.current_to_deg))
+    start_drifting(model, data)
 
 
 def start_world(model: WorldModel, cfg: NodeConfig) -> WorldData:
@@ -134,5 +137,5 @@ def start_world(model: WorldModel, cfg: NodeConfig) -> WorldData:
     ex = cfg.exercise
     data = new_world_data(model, *start_position(model, cfg), math.radians(ex.start_heading_deg),
                           ex.start_speed_kn * KNOT, ex.start_telegraph)
-    start_exercise(data, cfg)
+    start_exercise(model, data, cfg)
     return data

@@ -165,7 +165,8 @@ def _note(stats: ReplayStats, model: WorldModel, data: WorldData, events: WorldE
         stats.distance += math.hypot(s.north - stats.rows[-1][1], s.east - stats.rows[-1][2])
     stats.rows.append((logged, s.north, s.east, s.heading, s.speed_over_ground, data.ship.ice_condition))
     stats.time_in[CONDITIONS[data.ship.ice_condition]] += dt
-    off = not (0.0 <= s.north <= scene.ny * scene.side and 0.0 <= s.east <= scene.nx * scene.side)
+    east, north = s.east - events.ice_offset[0], s.north - events.ice_offset[1]  # on the field, where it has drifted
+    off = not (0.0 <= north <= scene.ny * scene.side and 0.0 <= east <= scene.nx * scene.side)
     if off and stats.off_field and stats.off_field[-1][1] >= logged - 1.5 * dt:
         stats.off_field[-1][1] = logged
     elif off:

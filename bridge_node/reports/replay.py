@@ -2,6 +2,8 @@
 ship's speed and heading against logged time; the held gaps for the summary."""
 from __future__ import annotations
 
+import dataclasses
+
 from pathlib import Path
 
 import numpy as np
@@ -53,19 +55,21 @@ def _held_in_plan(ax, track: Track, track_ne: np.ndarray) -> None:
 def _plan(ax, model: WorldModel, data: WorldData, xy: np.ndarray, track_ne: np.ndarray | None,
           track: Track | None) -> None:
     """Plan view (east right, north up, m): the field, the cells near the track coloured
-    by what broke them, the replayed track, the logged fixes and the held gaps."""
-    scene = model.scene
+    by what broke them (where the field lies at the end: a drifting field has moved on), the
+    replayed track, the logged fixes and the held gaps."""
+    scene, shift = model.scene, data.ice_frame.offset
     lo, hi = xy.min(axis=0) - MARGIN, xy.max(axis=0) + MARGIN
     span = hi - lo  # at most ASPECT times as tall as wide, or as wide as tall: a straight track stays readable
     grow = np.maximum(span.max() / ASPECT - span, 0.0)
     lo, hi = lo - 0.5 * grow, hi + 0.5 * grow
-    ax.add_patch(Rectangle((0.0, 0.0), scene.nx * scene.side, scene.ny * scene.side, facecolor="#e8eef3",
+    ax.add_patch(Rectangle(tuple(shift), scene.nx * scene.side, scene.ny * scene.side, facecolor="#e8eef3",
                            edgecolor="#7a8793", lw=0.8, zorder=0, label="ice field (level ice)"))
     cells = placed_cells(model.ice, data.ice)
+    cells = dataclasses.replace(cells, xy=cells.xy + shift)
     near = np.all((cells.xy >= lo) & (cells.xy <= hi), axis=1)
     if np.count_nonzero(near) > MAX_DRAWN_CELLS:
         for corner in data.ice.tiles.corner:
-            ax.add_patch(Rectangle(corner, scene.side, scene.side, facecolor="#f4f7fa", edgecolor="none", zorder=0))
+            ax.add_patch(Rectangle(tuple(corner + shift), scene.side, scene.side, facecolor="#f4f7fa", edgecolor="none", zorder=0))
         near &= cells.status != FloeStatus.INTACT
     if near.any():
         draw_cells(ax, model.ice, cells_where(cells, near))

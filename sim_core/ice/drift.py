@@ -58,7 +58,7 @@ class IceFrame:
     The frame relaxes towards the ice's drift velocity with the floes' drag time (their
     linear water drag), as each free floe would: for a floe moving at v_f relative to the
     frame, dv/dt = (target - v_frame - v_f) / tau - dv_frame/dt = -v_f / tau. In the frame
-    the water the floes feel is still, and a floe at rest stays at rest when the wind or
+    the floes' drift target is rest, and a floe at rest stays at rest when the wind or
     the current changes."""
 
     offset: np.ndarray = field(default_factory=lambda: np.zeros(2))  # m, world x east, y north

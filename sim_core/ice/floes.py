@@ -113,7 +113,7 @@ class FloeState(_Table):
     cause = _Column(np.uint8)  # BreakCause
     crack = _Column(np.uint8)  # bending-crack label of a cell (sim_core.ice.bending); 0: none
     submerged = _Column(np.bool_)  # under the hull, out of planar contact
-    turn = _Column(np.float32)  # a submerged piece still turning: the hull's advance left (m; sim_core.ice.turning)
+    turn = _Column(np.float32)  # a submerged piece turning or sliding under: the hull's advance left, m (ice.turning)
     turn_dir = _Column(np.float32)  # a turning piece's direction to the hull, rad CCW from east
     resting = _Column(np.bool_)  # a free floe at rest far from the hull, out of the dynamic set
     calm = _Column(np.uint16)  # steps in a row a free floe has been at rest (saturates at 65535)

@@ -20,7 +20,11 @@ from that picture, not a published model):
     x / d = sin(theta) / tan(psi) + 1 - cos(theta),
 
 so the piece lies parallel to the hull (theta = psi) after the surface has advanced exactly
-its length d; it then takes the submerged pose of ``step``. The surface at the bow advances
+its length d. Over the next d of the surface's advance it slides down and under the hull,
+from that pose to the submerged pose of ``step`` (held a thickness down, tilted by
+``PUSHED_DOWN_TILT``), its depth and tilt linear in the advance (our choice: a turned piece
+of 3 m lies 1.0 m deep and 0.75 rad tilted on the default ship's bow, and had jumped to the
+submerged pose in one step). The surface at the bow advances
 across its waterline by sin(alpha) of the ship's advance (``HullMotion.surface_advance``):
 for the default ship, twice the piece's length of ship's advance. The turn is kinematic:
 it follows the hull's advance, not a dynamic model of the piece, and the piece's plan
@@ -55,11 +59,11 @@ def turn_angle(advanced: float, psi: float) -> float:
 
 @numba.njit(cache=True)
 def start_turns(rows, xy, turn, turn_dir, plan_area, gcell, hull_xy, c, s, stem):
-    """Start the turn of pieces going under: each has its length still to go (``turn``, m)
-    and the direction (rad, CCW from east) from its centre to the nearest point of the
+    """Start the turn of pieces going under: each has twice its length still to go
+    (``turn``, m: its turn, then its slide under the hull) and the direction (rad, CCW from east) from its centre to the nearest point of the
     hull's centre line between midship and stem (heading c, s; stem m ahead of hull_xy)."""
     for i in rows:
-        turn[i] = math.sqrt(plan_area[gcell[i]])
+        turn[i] = 2.0 * math.sqrt(plan_area[gcell[i]])
         dx, dy = xy[i, 0] - hull_xy[0], xy[i, 1] - hull_xy[1]
         along = min(max(c * dx + s * dy, 0.0), stem)
         turn_dir[i] = math.atan2(hull_xy[1] + along * s - xy[i, 1], hull_xy[0] + along * c - xy[i, 0])
@@ -69,9 +73,10 @@ def start_turns(rows, xy, turn, turn_dir, plan_area, gcell, hull_xy, c, s, stem)
 def advance_turns(rows, submerged, turn, turn_dir, plan_area, gcell, z_equilibrium, thickness, yaw, heave, roll,
                   pitch, advance, psi):
     """Turn the submerged pieces of rows still turning by the hull's advance (m) this step:
-    their centre goes down with the turn and their tilt grows towards psi about the
-    horizontal axis across the direction to the hull (near edge down); one whose turn is
-    done takes the submerged pose. Returns how many are still turning."""
+    over the first length of it their centre goes down with the turn and their tilt grows
+    towards psi about the horizontal axis across the direction to the hull (near edge
+    down); over the second they slide from lying parallel to the hull to the submerged
+    pose; one whose turn is done keeps that pose. Returns how many are still turning."""
     left = 0
     for i in rows:
         if not submerged[i] or turn[i] <= 0.0:
@@ -85,14 +90,15 @@ def advance_turns(rows, submerged, turn, turn_dir, plan_area, gcell, z_equilibri
             roll[i], pitch[i] = PUSHED_DOWN_TILT, 0.0
             continue
         left += 1
-        theta = turn_angle((d - turn[i]) / d, psi)
-        heave[i] = z_equilibrium[g] - 0.5 * d * math.sin(theta)
+        theta = turn_angle((2.0 * d - turn[i]) / d, psi)
+        slid = max(0.0, 1.0 - turn[i] / d)  # share of the slide under the hull done
+        heave[i] = z_equilibrium[g] - ((1.0 - slid) * 0.5 * d * math.sin(theta) + slid * thickness[g])
         # rotation axis z x (towards the hull): a right-handed turn about it takes the near edge down;
         # roll and pitch as the components of the turn about the piece's own axes (small-angle form)
         ax, ay = -math.sin(turn_dir[i]), math.cos(turn_dir[i])
         cy, sy = math.cos(yaw[i]), math.sin(yaw[i])
-        roll[i] = theta * (cy * ax + sy * ay)
-        pitch[i] = theta * (-sy * ax + cy * ay)
+        roll[i] = (1.0 - slid) * theta * (cy * ax + sy * ay) + slid * PUSHED_DOWN_TILT
+        pitch[i] = (1.0 - slid) * theta * (-sy * ax + cy * ay)
     return left
 
 

@@ -86,6 +86,7 @@ class ShipData:
     reverse_wait: float = 0.0  # s spent at rest waiting to reverse
     external: np.ndarray = field(default_factory=lambda: np.zeros(3))  # X, Y N; N N m at midship
     current: np.ndarray = field(default_factory=lambda: np.zeros(2))  # the water's velocity, north, east m/s
+    ice_drift: np.ndarray = field(default_factory=lambda: np.zeros(2))  # the ice's through the water, north, east m/s
     steering_pumps: int = 2  # pumps of the steering gear working: 2 the design rate, 1 half, 0 the rudder stuck
     power_share: float = 1.0  # share of the engine's power available: 0 blackout, 1 all
     ice_h: float = 0.0  # local level-ice thickness, m
@@ -292,10 +293,11 @@ def _engine(model: ShipModel, data: ShipData, dt: float) -> None:
 
 def step(model: ShipModel, data: ShipData, dt: float) -> None:
     """Advance the ship by dt seconds (sub-stepped to <= MAX_SUBSTEP). Orders, the ice
-    condition, ``data.external`` and ``data.current`` are held constant over dt. ``nu`` is
-    the velocity through the water (the MMG model's); a uniform current carries the ship
-    with the water, so its position moves by the current on top (the relative-velocity
-    form of Fossen 2011, section 10.3, for an irrotational, constant current)."""
+    condition, ``data.external``, ``current`` and ``ice_drift`` are held constant over dt.
+    ``nu`` is the velocity through the water (the MMG model's); a uniform current carries
+    the ship with the water, so its position moves by the current on top (the relative-
+    velocity form of Fossen 2011, section 10.3, for an irrotational, constant current). The
+    ice resists the surge over the ice (less the ice's drift through the water)."""
     if not (dt > 0.0 and math.isfinite(dt)):
         raise ValueError(f"step dt must be a positive number of seconds, got {dt!r}")
     n_sub = max(1, math.ceil(dt / MAX_SUBSTEP - 1e-9))
@@ -306,7 +308,7 @@ def step(model: ShipModel, data: ShipData, dt: float) -> None:
         _steering_gear(model, data, h)
         _engine(model, data, h)
         s0 = (eta[0], eta[1], eta[5], nu[0], nu[1], nu[5])
-        ice_x, bow = _ice_force(model, data, s0[3])
+        ice_x, bow = _ice_force(model, data, s0[3] - data.ice_drift @ (math.cos(s0[2]), math.sin(s0[2])))
         forces = mmg_forces(model, s0[3], s0[4], s0[5], data.rudder, data.rps)
         heel = heeling_moment(model.motions, forces[1], ext[1])
         k1 = state_derivatives(model, s0, data.rudder, data.rps, ext, ice_x, forces)

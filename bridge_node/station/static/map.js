@@ -1,7 +1,8 @@
 // The instructor station's map: the ice field (its open water too), its tiles and broken channel, the live
 // floes (one path for all of them, built from typed arrays), the own ship with its track,
 // other vessels, searchlight beams, a latitude/longitude grid and a scale bar. World
-// coordinates: x east, y north, metres from the field's south-west corner; north up.
+// coordinates: x east, y north, metres from the field's south-west corner as it was laid
+// (a drifting field's ice is drawn moved by the frame header's ice_offset); north up.
 "use strict";
 
 const MAP_COLORS = {
@@ -122,9 +123,11 @@ class MapView {
     this.dirty = true;
   }
 
-  // a debrief's state: the ship as a frame header's ship, the track travelled so far
+  // a debrief's state: the ship as a frame header's ship, the track travelled so far; the
+  // field as it was laid (the record holds what the instruments got, not the ice's drift)
   showDebrief(ship, travelled) {
     this.frame = { ship, traffic: [] };
+    this.iceOffset = [0, 0];
     this.track = travelled;
     if (this.follow) { this.cx = ship.east; this.cy = ship.north; }
     this.stats.frames++;
@@ -150,7 +153,7 @@ class MapView {
     if (!this.geo) return;
     this.setFollow(false);
     const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
-    this.cx = this.width / 2; this.cy = this.height / 2;
+    this.cx = this.iceOffset[0] + this.width / 2; this.cy = this.iceOffset[1] + this.height / 2;
     this.scale = 0.9 * Math.min(w / this.width, h / this.height);
     this.dirty = true;
   }
