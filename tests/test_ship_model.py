@@ -165,6 +165,25 @@ def test_ice_never_drives_the_ship_astern():
     assert d.nu[0] < 0.01
 
 
+def test_the_ice_resists_the_surge_over_the_ice_not_through_the_water():
+    """Steaming at 3 m/s through the water against a 1 m/s current, in fast level ice (its
+    velocity through the water the current reversed), the ship meets the resistance of 2 m/s
+    over the ice; in ice drifting with the water, that of 3 m/s."""
+    m = ship("polar_cargo")
+
+    def resistance(current_north: float, ice_drift_north: float) -> float:
+        d = new_ship_data(m, 3.0 if current_north else 2.0)
+        d.ice_h, d.ice_condition = 0.5, LEVEL_ICE
+        d.current[:] = current_north, 0.0
+        d.ice_drift[:] = ice_drift_north, 0.0
+        step(m, d, 1e-4)
+        return d.ice_resistance
+
+    over_ice = resistance(0.0, 0.0)  # 2 m/s, still water
+    assert resistance(-1.0, 1.0) == pytest.approx(over_ice, rel=1e-3)
+    assert resistance(-1.0, 0.0) > 1.1 * over_ice  # ice carried by the current: 3 m/s through it
+
+
 def test_wake_fraction_term_is_the_published_form():
     m = ship("kvlcc2")
     pr = m.particulars.propeller
