@@ -91,6 +91,24 @@ vec3 sea(vec3 r, vec3 world, vec2 wave) {
     vec2 slope = WAVE_SLOPE / length(OCTAVE[0][0]) * ((wave - 0.5) * NOISE_RANGE.yz * OCTAVE[0]);
     return through_surface(r, normalize(vec3(-slope, 1.0)), water_body(world));
 }
+// the level ice at p (on the field) under its snow: wet along open water, a crack's slush,
+// and a ridge's sail where its meshes do not reach
+vec3 ice_ground(vec2 p, vec3 snow, ivec4 info, float rim, bool crack, float pixel_m) {
+    vec3 surface = ice_surface(snow, intBitsToFloat(info.z), vec3(p, slab_z));
+    vec3 ground = mix(surface, surface * WET, rim);   // wet, darker along open water
+    if (crack) ground = surface * CRACK;              // a crack: sea water welled up into the snow
+#if RIDGES
+    int ridge = (info.w >> 16) & 0xFF;
+    vec3 block_n;
+    float gap, fresh;
+    float sail = ridge > 0 ? sail_at(p, ridge - 1, pixel_m, block_n, gap, fresh) : 0.0;
+    if (sail > 0.0) {                                 // a ridge's sail beyond the meshes: tumbled blocks
+        vec3 albedo = mix(ice_albedo(intBitsToFloat(info.z)), FRESH_ICE, fresh);
+        ground = lit(albedo, block_n, vec3(p, slab_z)) * (1.0 - 0.7 * gap);
+    }
+#endif
+    return ground;
+}
 void main() {
     vec3 r = normalize(ray);
     // the horizon is anti-aliased: the share of the pixel below it shows the ground seen
@@ -131,19 +149,7 @@ void main() {
     vec3 snow = snow_under(p, t, finest);
     vec3 ground;
     if (ice) {
-        vec3 surface = ice_surface(snow, intBitsToFloat(info.z), vec3(p, slab_z));
-        ground = mix(surface, surface * WET, rim);   // wet, darker along open water
-        if (crack) ground = surface * CRACK;         // a crack: sea water welled up into the snow
-#if RIDGES
-        int ridge = on_field ? (info.w >> 16) & 0xFF : 0;
-        vec3 block_n;
-        float gap, fresh;
-        float sail = ridge > 0 ? sail_at(p, ridge - 1, pixel_m, block_n, gap, fresh) : 0.0;
-        if (sail > 0.0) {                            // a ridge's sail beyond the meshes: tumbled blocks
-            vec3 albedo = mix(ice_albedo(intBitsToFloat(info.z)), FRESH_ICE, fresh);
-            ground = lit(albedo, block_n, vec3(p, slab_z)) * (1.0 - 0.7 * gap);
-        }
-#endif
+        ground = ice_ground(p, snow, info, rim, crack, pixel_m);
     } else {  // the sea, out to the horizon; brash on it
         ground = sea(g, at, finest.yz);
 #if BRASH
