@@ -76,7 +76,7 @@ function onFrame(h, arrays) {
   badge("link-stream", h.stream.age_s < 2, h.stream.age_s < 2 ? "stream" : `stream silent ${h.stream.age_s.toFixed(0)} s`);
   badge("link-control", !h.control.error, h.control.error ? `control: ${h.control.error}` : "control");
   shipPanel(h);
-  envPanel(e);
+  envPanel(e, h.ice_offset || [0, 0]);
   alarms(h.alarms);
   failuresNow(h.failures);
   linksPanel(h.links);
@@ -115,11 +115,14 @@ function shipPanel(h) {
   ]);
 }
 
-function envPanel(e) {
+function envPanel(e, drift) {
+  const drifted = Math.hypot(drift[0], drift[1]);
   rows($("env-values"), [
     ["Visibility", e.visibility_m >= 1000 ? `${fix(e.visibility_m / 1000, 1)} km` : `${fix(e.visibility_m, 0)} m`],
     ["Wind", `${fix(e.wind_kn, 1)} kn from ${deg(e.wind_from_deg)}`],
     ["Current", `${fix(e.current_kn, 1)} kn to ${deg(e.current_to_deg)}`],
+    ["Ice field", drifted >= 0.5 ? `drifted ${fix(drifted, 0)} m to ${deg(Math.atan2(drift[0], drift[1]) * 180 / Math.PI)}`
+                                 : "as laid"],
     ["Physics", e.frozen ? "frozen" : "running"],
   ]);
 }
