@@ -45,8 +45,9 @@ def main() -> None:
     for name, w in (("fast field    ", fast), ("drifting field", drifting)):
         st = w.data.ice.state
         print(f"  {name}: world step {figures(w.step_ms)}; engine {figures(w.engine_ms)}")
+        drifted = np.round(w.data.ice_frame.offset, 1).tolist()
         print(f"                  live {st.count(FloeStatus.FREE)}, resting {int(st.resting.sum())}, frozen "
-              f"{w.data.ice.frozen.count}; field drifted {np.round(w.data.ice_frame.offset, 1).tolist()} m (east, north)")
+              f"{w.data.ice.frozen.count}; field drifted {drifted} m (east, north)")
     print(f"  ratio drifting/fast (same run): world step median "
           f"{np.median(drifting.step_ms) / np.median(fast.step_ms):.2f}, p99 "
           f"{np.percentile(drifting.step_ms, 99) / np.percentile(fast.step_ms, 99):.2f}; engine median "

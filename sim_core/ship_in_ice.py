@@ -44,6 +44,12 @@ def contour_in_ice(model: WorldModel, data: WorldData, north: float, east: float
     return ship_to_world(model.contour, north, east, heading) - data.ice_frame.offset
 
 
+def ship_contour_in_ice(model: WorldModel, data: WorldData) -> np.ndarray:
+    """The ship's waterline contour (34, 2) in the ice's frame, where it is now."""
+    eta = data.ship.eta
+    return contour_in_ice(model, data, eta[0], eta[1], eta[5])
+
+
 def hull_in_ice(model: WorldModel, data: WorldData) -> tuple[np.ndarray, HullMotion]:
     """The hull's contour points (34, 2) and motion in the ice's frame: its place less the
     frame's offset, its velocity over ground less the frame's."""
@@ -51,7 +57,7 @@ def hull_in_ice(model: WorldModel, data: WorldData) -> tuple[np.ndarray, HullMot
     north, east, psi = ship.eta[0], ship.eta[1], ship.eta[5]
     over_ground = np.array(ship_vector_to_world((ship.nu[0], ship.nu[1]), psi)) + ship.current[::-1]
     frame = data.ice_frame
-    return (contour_in_ice(model, data, north, east, psi),
+    return (ship_contour_in_ice(model, data),
             HullMotion(np.array([east, north]) - frame.offset, world_heading(psi), over_ground - frame.velocity,
                        -ship.nu[5], *model.ship.bow_surface))
 
@@ -98,7 +104,7 @@ def ice_drift(model: WorldModel, data: WorldData) -> np.ndarray:
     return np.array([current_east + east, current_north + north])
 
 
-def ice_through_water(model: WorldModel, data: WorldData) -> np.ndarray:
+def ice_through_water(data: WorldData) -> np.ndarray:
     """The velocity of the ice the ship is in through the water (north, east m/s), whose
     ice resistance takes the ship's surge over the ice: the drifting field's velocity less
     the current's; the current reversed where the level ice is fast."""

@@ -62,7 +62,7 @@ from sim_core.ship.searchlights import SearchlightMount, SearchlightOrder, Searc
 from sim_core.ship.sensors import SensorFaults, sensor_readings
 from sim_core.ship.wind import wind_load
 from sim_core.ship_in_ice import (contour_in_ice, drift_ice, hull_in_ice, ice_condition, ice_through_water,
-                                  rubble_loads, wash)
+                                  rubble_loads, ship_contour_in_ice, wash)
 
 @dataclass(frozen=True)
 class WorldModel:
@@ -211,7 +211,7 @@ def warm_up(model: WorldModel, data: WorldData) -> None:
     kernels, and build the tiles around the start position (and the ring beyond) in full,
     so that the first step only switches them in."""
     warm_up_ice(model.ice, data.ice)
-    contour, _ = hull_in_ice(model, data)
+    contour = ship_contour_in_ice(model, data)
     start = with_ice(model.scene, tiles_near(contour, model.scene.radius, model.scene.nx, model.scene.ny,
                                              model.scene.side))
     for tile in start.tolist():
@@ -293,10 +293,10 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
         return dataclasses.replace(_held(model, data, rejected), commands=applied)
     ship = data.ship
     wind = _environment_loads(model, data)
-    contour, _ = hull_in_ice(model, data)
+    contour = ship_contour_in_ice(model, data)
     ship.ice_h, ship.ice_condition = ice_condition(model, data, contour[0])  # contour[0] is the stem
     rubble_loads(model, ship, contour[0])
-    ship.ice_drift[:] = ice_through_water(model, data)
+    ship.ice_drift[:] = ice_through_water(data)
     if controls is not None and controls.kinematic is not None:
         k = controls.kinematic
         ship.eta[0], ship.eta[1], ship.eta[5] = k.north, k.east, k.heading

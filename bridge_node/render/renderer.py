@@ -217,8 +217,8 @@ class SceneRenderer(SceneUploads):
 
     def _searchlights(self, ship: ShipOutputs, ice_offset: np.ndarray) -> dict:
         """The searchlights' entries of the ``Scene`` block for the published ship: positions
-        in the ice's frame (the world's less ice_offset, m), beam axes, and per beam the cosine of half its width and its intensity
-        over the illuminance the eye sees as white (the daylight's, or EYE_WHITE_LUX at
+        in the ice's frame (the world's less ice_offset, m), beam axes, and per beam the
+        cosine of half its width and its intensity over the illuminance the eye sees as white (the daylight's, or EYE_WHITE_LUX at
         night); 0 for a light switched off. Each is aimed as published (the console's
         orders), else as configured."""
         n = max(len(self.settings.searchlights), 1)  # the blocks' arrays (LIGHT_SLOTS), filled whole

@@ -69,7 +69,8 @@ def _plan(ax, model: WorldModel, data: WorldData, xy: np.ndarray, track_ne: np.n
     near = np.all((cells.xy >= lo) & (cells.xy <= hi), axis=1)
     if np.count_nonzero(near) > MAX_DRAWN_CELLS:
         for corner in data.ice.tiles.corner:
-            ax.add_patch(Rectangle(tuple(corner + shift), scene.side, scene.side, facecolor="#f4f7fa", edgecolor="none", zorder=0))
+            ax.add_patch(Rectangle(tuple(corner + shift), scene.side, scene.side, facecolor="#f4f7fa", edgecolor="none",
+                                   zorder=0))
         near &= cells.status != FloeStatus.INTACT
     if near.any():
         draw_cells(ax, model.ice, cells_where(cells, near))

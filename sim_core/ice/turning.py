@@ -60,8 +60,9 @@ def turn_angle(advanced: float, psi: float) -> float:
 @numba.njit(cache=True)
 def start_turns(rows, xy, turn, turn_dir, plan_area, gcell, hull_xy, c, s, stem):
     """Start the turn of pieces going under: each has twice its length still to go
-    (``turn``, m: its turn, then its slide under the hull) and the direction (rad, CCW from east) from its centre to the nearest point of the
-    hull's centre line between midship and stem (heading c, s; stem m ahead of hull_xy)."""
+    (``turn``, m: its turn, then its slide under the hull) and the direction (rad, CCW from
+    east) from its centre to the nearest point of the hull's centre line between midship
+    and stem (heading c, s; stem m ahead of hull_xy)."""
     for i in rows:
         turn[i] = 2.0 * math.sqrt(plan_area[gcell[i]])
         dx, dy = xy[i, 0] - hull_xy[0], xy[i, 1] - hull_xy[1]

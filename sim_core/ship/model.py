@@ -109,6 +109,7 @@ def compile_ship(p: ShipParticulars, material: IceMaterial | None = None) -> Shi
     sway_yaw = np.array([[mass + m_y, p.x_g * mass], [p.x_g * mass, i_zg + p.x_g**2 * mass + j_z]])
     h = p.hull
     rpm = p.engine.telegraph_rpm
+    stem, waterline = math.radians(p.ice.stem_angle_deg), math.radians(p.ice.waterline_angle_deg)
     return ShipModel(
         particulars=p, material=material, rho=rho, L=L, B=p.beam, d=d, mass=mass, x_g=p.x_g,
         inv_sway_yaw=np.linalg.inv(sway_yaw), surge_mass=mass + m_x,
@@ -120,11 +121,10 @@ def compile_ship(p: ShipParticulars, material: IceMaterial | None = None) -> Shi
         rudder_limit=math.radians(p.rudder.max_angle_deg), rudder_rate=math.radians(p.rudder.rate_deg_s),
         telegraph_rps={k: v / 60.0 for k, v in rpm.items()},
         rps_ahead_max=rpm["navigation_full_ahead"] / 60.0, rps_astern_max=rpm["crash_astern"] / 60.0,
-        stem_angle=math.radians(p.ice.stem_angle_deg), waterline_angle=math.radians(p.ice.waterline_angle_deg),
-        bow_surface=(bow_normal_angle(math.radians(p.ice.stem_angle_deg), math.radians(p.ice.waterline_angle_deg)),
-                     math.sin(math.radians(p.ice.waterline_angle_deg))), bow=bow_form(p),
-        motions=compile_motions(L, p.beam, d, p.displacement, rho, material.gravity, math.radians(p.ice.stem_angle_deg),
-                                material.hull_friction, p.motions),
+        stem_angle=stem, waterline_angle=waterline,
+        bow_surface=(bow_normal_angle(stem, waterline), math.sin(waterline)), bow=bow_form(p),
+        motions=compile_motions(L, p.beam, d, p.displacement, rho, material.gravity, stem, material.hull_friction,
+                                p.motions),
     )
 
 
