@@ -303,12 +303,12 @@ def step(model: ShipModel, data: ShipData, dt: float) -> None:
     n_sub = max(1, math.ceil(dt / MAX_SUBSTEP - 1e-9))
     h = dt / n_sub
     ext = (float(data.external[0]), float(data.external[1]), float(data.external[2]))
-    eta, nu = data.eta, data.nu
+    eta, nu, (ice_n, ice_e) = data.eta, data.nu, data.ice_drift.tolist()
     for _ in range(n_sub):
         _steering_gear(model, data, h)
         _engine(model, data, h)
         s0 = (eta[0], eta[1], eta[5], nu[0], nu[1], nu[5])
-        ice_x, bow = _ice_force(model, data, s0[3] - data.ice_drift @ (math.cos(s0[2]), math.sin(s0[2])))
+        ice_x, bow = _ice_force(model, data, s0[3] - ice_n * math.cos(s0[2]) - ice_e * math.sin(s0[2]))
         forces = mmg_forces(model, s0[3], s0[4], s0[5], data.rudder, data.rps)
         heel = heeling_moment(model.motions, forces[1], ext[1])
         k1 = state_derivatives(model, s0, data.rudder, data.rps, ext, ice_x, forces)
