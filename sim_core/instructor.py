@@ -1,10 +1,11 @@
 """What an instructor does to a running exercise, as typed values the world applies at a
 step's start (``step(..., commands=...)``), in the order given: freeze and resume, move the
 own ship, set the visibility, the exercise clock, the wind and the current, and fail the
-steering gear, the engine or a sensor (``sim_core.ship.sensors``), and steer other vessels (``OtherVessel``, kept in the world and
-moved with each step, so that a replay has them where the run had them). SI: m, m/s, rad,
-unix s. Values are checked where they are
-made (``bridge_node.exercise.commands``); here they are only applied.
+steering gear, the engine or a sensor (``sim_core.ship.sensors``), steer other vessels
+(``OtherVessel``, kept in the world and moved with each step, so that a replay has them
+where the run had them), and lay other ice over an area of the field (``SetIce``). SI: m,
+m/s, rad, unix s. Values are checked where they are made (``bridge_node.control.commands``);
+here they are only applied.
 """
 from __future__ import annotations
 
@@ -13,7 +14,14 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+import numpy as np
+import shapely
+
+from sim_core.ice.tiles import discard_prepared
+from sim_core.scene.quadtree import tiles_near
+from sim_core.scene.scene import TileState
 from sim_core.ship.model import equilibrium_rps
+from sim_core.ship_in_ice import ship_contour_in_ice
 from sim_core.ship.sensors import SensorFailure, fail_sensor
 
 if TYPE_CHECKING:
@@ -120,8 +128,22 @@ class RemoveVessel:
     mmsi: int
 
 
+@dataclass(frozen=True)
+class SetIce:
+    """Lay the ice of class ``ice_class`` (``SceneModel.class_names``) over the tiles whose
+    centres lie in the polygon: (east, north) m from the exercise origin, as a region's
+    (``sim_core.regimes.settings``), where the field lies now (a drifting field has moved
+    from where it was laid). Only ice the
+    ship has not met changes: tiles placed or frozen keep theirs, and so do the tiles within
+    R_T + ``prepare_ahead`` of the hull, about to be switched in (their engine objects are
+    built ahead; building new ones at the switch would stall the step)."""
+
+    polygon: tuple[tuple[float, float], ...]
+    ice_class: int
+
+
 Command = (Freeze | Reposition | SetEnvironment | SetClock | SteeringFailure | EngineFailure | SensorFailure
-           | AddVessel | MoveVessel | SteerVessel | RemoveVessel)
+           | AddVessel | MoveVessel | SteerVessel | RemoveVessel | SetIce)
 VESSEL_COMMANDS = (AddVessel, MoveVessel, SteerVessel, RemoveVessel)
 
 
@@ -149,7 +171,34 @@ def apply_command(model: WorldModel, data: WorldData, command: Command) -> Comma
     elif isinstance(command, Reposition):
         data.moving_to = None
         move_ship(model, data, command)
+    elif isinstance(command, SetIce) and command.ice_class >= len(model.scene.class_thickness):
+        return None  # a class the world lacks (a record replayed on another exercise)
+    elif isinstance(command, SetIce):
+        lay_ice(model, data, command)
     return command
+
+
+def lay_ice(model: WorldModel, data: WorldData, command: SetIce) -> np.ndarray:
+    """Carry a ``SetIce`` out on the scene; returns the tiles (flat indices) whose class
+    it changed. Preparations of those tiles are dropped (``prepare_ahead`` redoes them)."""
+    scene = model.scene
+    area = shapely.Polygon(np.array(command.polygon) - data.ice_frame.offset)  # in the ice's frame
+    x0, y0, x1, y1 = area.bounds
+    ix = np.arange(max(0, int(x0 // scene.side)), min(scene.nx, int(x1 // scene.side) + 1))
+    iy = np.arange(max(0, int(y0 // scene.side)), min(scene.ny, int(y1 // scene.side) + 1))
+    tiles = (iy[:, None] * scene.nx + ix[None, :]).ravel()
+    centre = scene.centre(tiles)
+    tiles = tiles[shapely.contains_xy(area, centre[:, 0], centre[:, 1])
+                  & (data.scene.tile_state[tiles] == TileState.UNBREAKABLE)
+                  & (data.scene.tile_class[tiles] != command.ice_class)]
+    near = tiles_near(ship_contour_in_ice(model, data), scene.radius + scene.settings.prepare_ahead,
+                      scene.nx, scene.ny, scene.side)
+    tiles = np.setdiff1d(tiles, near)
+    data.scene.tile_class[tiles] = command.ice_class
+    for tile in tiles.tolist():
+        if tile in data.ahead:
+            discard_prepared(data.ice, data.ahead.pop(tile))
+    return tiles
 
 
 def _command_vessel(vessels: dict[int, OtherVessel], command: Command) -> bool:

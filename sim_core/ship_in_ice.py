@@ -70,7 +70,7 @@ def ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple[
     tile = tile_under(bow, scene.nx, scene.ny, scene.side)
     if tile < 0:
         return 0.0, OPEN_WATER
-    h = scene.thickness_at(bow)
+    h = scene.thickness_at(bow, data.scene.tile_class)
     if h <= 0.0:  # an open-water tile (a lead, an ice-free region)
         return 0.0, OPEN_WATER
     breaking = data.time - data.last_hull_break < BREAKING_MEMORY

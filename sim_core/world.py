@@ -36,11 +36,12 @@ from sim_core.ice.model import IceModel
 from sim_core.ice.bending import CRACK_EVENT, crack_events
 from sim_core.ice.drift import IceFrame
 from sim_core.ice.step import ice_step
-from sim_core.instructor import Command, OtherVessel, Reposition, apply_command, move_vessels
+from sim_core.instructor import Command, OtherVessel, Reposition, SetIce, apply_command, move_vessels
 from sim_core.ice.step import warm_up as warm_up_ice
 from sim_core.ice.tiles import IceData, PreparedTile, advance, new_ice_data
 from sim_core.scene.quadtree import tiles_near
-from sim_core.scene.scene import SceneData, SceneModel, TileState, new_scene_data, update_scene, with_ice
+from sim_core.scene.scene import (RETILED, SceneData, SceneModel, TileState, new_scene_data, retiled_records,
+                                  update_scene, with_ice)
 from sim_core.scene.switches import (
     NO_FROZEN_FLOES,
     NO_ROWS,
@@ -63,6 +64,10 @@ from sim_core.ship.sensors import SensorFaults, sensor_readings
 from sim_core.ship.wind import wind_load
 from sim_core.ship_in_ice import (contour_in_ice, drift_ice, hull_in_ice, ice_condition, ice_through_water,
                                   rubble_loads, ship_contour_in_ice, wash)
+
+NO_RETILED = np.zeros(0, dtype=RETILED)
+NO_RETILED.flags.writeable = False  # shared by the events of every step that lays no ice
+
 
 @dataclass(frozen=True)
 class WorldModel:
@@ -146,6 +151,8 @@ class WorldEvents:
     are (x, y, heave, yaw, roll, pitch) in m and rad, and they, the tiles' corners and the
     frozen floes lie in the ice's frame: a point (x, y) of it is at (x, y) + ``ice_offset``
     in the world (``sim_core.ice.drift.IceFrame``; zero unless the field drifts).
+    ``retiled`` names the tiles whose ice class the instructor changed at the step's start
+    (``RETILED`` records; in a snapshot, every tile whose class is not the one laid).
     """
 
     seq: int
@@ -172,6 +179,7 @@ class WorldEvents:
     vessels: tuple[tuple[int, OtherVessel], ...] = ()  # the instructor's other vessels (MMSI, copy) at its end
     instruments: ShipOutputs | None = None  # what the sensors read (their failures applied); None: ``ship``
     ice_offset: tuple[float, float] = (0.0, 0.0)  # m, x east, y north: the ice's frame in the world
+    retiled: np.ndarray = field(default_factory=lambda: NO_RETILED)  # tiles given other ice, their classes
 
     @property
     def readings(self) -> ShipOutputs:
@@ -212,8 +220,8 @@ def warm_up(model: WorldModel, data: WorldData) -> None:
     so that the first step only switches them in."""
     warm_up_ice(model.ice, data.ice)
     contour = ship_contour_in_ice(model, data)
-    start = with_ice(model.scene, tiles_near(contour, model.scene.radius, model.scene.nx, model.scene.ny,
-                                             model.scene.side))
+    start = with_ice(model.scene, data.scene, tiles_near(contour, model.scene.radius, model.scene.nx,
+                                                         model.scene.ny, model.scene.side))
     for tile in start.tolist():
         data.ahead[tile] = prepare_switch(model, data, tile)
     prepare_ahead(model, data, contour, budget_s=math.inf)
@@ -247,16 +255,21 @@ def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> 
                        vessels=tuple((m, dataclasses.replace(v)) for m, v in data.vessels.items()), **fields)
 
 
-def _apply_commands(model: WorldModel, data: WorldData, commands: tuple[Command, ...]) -> tuple[Command, ...]:
-    """Apply the step's commands, and a waiting move whose tiles are ready; returns what
-    was applied, a move as ``at_once``."""
+def _apply_commands(model: WorldModel, data: WorldData, commands: tuple[Command, ...]) -> dict:
+    """Apply the step's commands, and a waiting move whose tiles are ready; returns the
+    events' fields of what was applied: the commands (a move as ``at_once``), and the tiles
+    given other ice."""
+    laid = data.scene.tile_class.copy() if any(isinstance(c, SetIce) for c in commands) else None
     applied = [done for c in commands if (done := apply_command(model, data, c)) is not None]
     to = data.moving_to
     if to is not None:
         contour = contour_in_ice(model, data, to.north, to.east, to.heading)
         if prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3):
             applied.append(apply_command(model, data, dataclasses.replace(to, at_once=True)))
-    return tuple(applied)
+    if laid is None:
+        return {"commands": tuple(applied), "retiled": NO_RETILED}
+    tiles = np.flatnonzero(laid != data.scene.tile_class)
+    return {"commands": tuple(applied), "retiled": retiled_records(tiles, data.scene.tile_class[tiles])}
 
 
 def _held(model: WorldModel, data: WorldData, rejected: list[OrderRejection]) -> WorldEvents:
@@ -284,13 +297,13 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
     """Advance the world by dt seconds after the instructor's ``commands``, with the
     console's orders (a frozen exercise: take them, move nothing); returns what it
     publishes."""
-    applied = _apply_commands(model, data, commands)
+    applied = _apply_commands(model, data, commands)  # the events' commands and retiled
     rejected = apply_controls(model.ship, data.ship, controls) if controls is not None else []
     for order in controls.searchlights if controls is not None else ():
         if refused := order_searchlight(model.searchlights, data.searchlights, order):
             rejected.append(refused)
     if data.environment.frozen:
-        return dataclasses.replace(_held(model, data, rejected), commands=applied)
+        return dataclasses.replace(_held(model, data, rejected), **applied)
     ship = data.ship
     wind = _environment_loads(model, data)
     contour = ship_contour_in_ice(model, data)
@@ -322,7 +335,7 @@ def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | Non
                     broken_by_contact=report.broken_by_contact,
                     cracked=cracks_published(data, placed, report.cracked),
                     frozen_cracks=frozen_cracks_of(data.ice, frozen.tolist()), ice_load=load, rejected=tuple(rejected),
-                    commands=applied)
+                    **applied)
 
 
 def snapshot(model: WorldModel, data: WorldData) -> WorldEvents:
@@ -334,6 +347,7 @@ def snapshot(model: WorldModel, data: WorldData) -> WorldEvents:
     rows = data.live_rows
     broken = rows[st.status[rows] == FloeStatus.FREE]
     placed = placed_tiles(tiles, [t for t, _ in by_tile], [k for _, k in by_tile])
+    changed = np.flatnonzero(data.scene.tile_class != model.scene.tile_class)
     return _publish(model, data, rows, placed=placed,
                     thawed=NO_ROWS, frozen=np.array(frozen, dtype=np.int64),
                     frozen_floes=frozen_floes_of(data.ice, frozen),
@@ -341,4 +355,5 @@ def snapshot(model: WorldModel, data: WorldData) -> WorldEvents:
                     broken_by_contact=broken[st.cause[broken] == BreakCause.CONTACT],
                     cracked=crack_events(st.crack, rows), frozen_cracks=frozen_cracks_of(data.ice, frozen),
                     ice_load=data.ship.external.copy(), rejected=(),
+                    retiled=retiled_records(changed, data.scene.tile_class[changed]),
                     snapshot=True)

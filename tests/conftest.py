@@ -62,6 +62,18 @@ def exercise_config(cache_dir: Path, width: float, height: float, tile_side: flo
     })
 
 
+def region_world(cache_dir: Path, width: float, height: float, regions: list[dict], start_north: float):
+    """The world (model, data at the start) of ``exercise_config`` with 100 m tiles and these
+    ``[[ice_field.regions]]`` (as TOML tables)."""
+    from bridge_node.node.world_setup import build_world, start_world
+    from sim_core.regimes.settings import RegionSettings
+    cfg = exercise_config(cache_dir, width, height, 100.0, start_north=start_north)
+    field = cfg.ice_field.model_copy(update={"regions": [RegionSettings.model_validate(r) for r in regions]})
+    cfg = cfg.model_copy(update={"ice_field": field})
+    model = build_world(cfg, None)
+    return model, start_world(model, cfg)
+
+
 def exercise_toml(folder: Path, channels: str = "", **sections: str) -> Path:
     """A config file for CLI runs: a 400 m x 400 m field of 0.3 m ice, the ship's bow in the
     ice, its own template cache and session folder, a state stream and a control endpoint on

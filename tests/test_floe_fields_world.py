@@ -7,10 +7,10 @@ near the ship and far from it."""
 import numpy as np
 import pytest
 import shapely
-from conftest import exercise_config
+from conftest import exercise_config, region_world
 
 from bridge_node.node.floe_field_setup import field_regions, lay_floe_fields
-from bridge_node.node.world_setup import build_world, field_tile_classes, start_world
+from bridge_node.node.world_setup import field_tile_classes
 from bridge_node.render.channels import ChannelSet
 from bridge_node.render.classes import CLASS_INDEX, class_of_pixels
 from bridge_node.render.renderer import SceneRenderer
@@ -31,11 +31,7 @@ MEDIUM = {**PACK, "concentration": 8, "ice": [{"stage": "thin_first_year", "floe
 
 
 def _pack_world(tmp_path_factory, start_north, region=PACK):
-    cfg = exercise_config(tmp_path_factory.getbasetemp() / "pack", 400.0, 600.0, 100.0, start_north=start_north)
-    field = cfg.ice_field.model_copy(update={"regions": [RegionSettings.model_validate(region)]})
-    cfg = cfg.model_copy(update={"ice_field": field})
-    model = build_world(cfg, None)
-    return model, start_world(model, cfg)
+    return region_world(tmp_path_factory.getbasetemp() / "pack", 400.0, 600.0, [region], start_north)
 
 
 @pytest.fixture(scope="module")
@@ -155,7 +151,7 @@ def test_regions_of_one_egg_code_share_a_class_and_its_templates(tmp_path):
     cfg = cfg.model_copy(update={"ice_field": cfg.ice_field.model_copy(update={"regions": regions})})
     laid = field_regions(cfg)
     level_class, level_h = field_tile_classes(cfg, None, laid)
-    tile_class, class_h, templates = lay_floe_fields(cfg, None, laid, level_class, level_h, 24.0)
+    tile_class, class_h, templates, _ = lay_floe_fields(cfg, None, laid, level_class, level_h, 24.0)
     assert len(templates) == 2 and len(class_h) == len(level_h) + 2  # 7/10 pack, and 8/10 medium floes
     assert set(np.unique(tile_class[1:])) == {len(level_h)}  # both halves north of 100 m: one class
     assert set(np.unique(tile_class[0, :2])) == {len(level_h) + 1}  # the medium floes' corner

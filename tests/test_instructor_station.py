@@ -190,6 +190,27 @@ def test_the_map_shows_the_regions_and_their_open_water(exercise, browser):
         browser.execute_script("map.applyFrame = window.applyFrame;")
 
 
+def test_lay_open_water_from_the_page(exercise, browser):
+    config, url, _ = exercise
+    open_page(browser, url)
+    names = browser.execute_script("return [...document.getElementById('ice-name').options].map((o) => o.value)")
+    assert names == ["open water", "level ice 0.30 m"] == ctl_status(config)["ice"]
+    view(browser, 700.0, 700.0, 1.0)
+    x, y = (round(v) for v in canvas_pixel(browser, 700.0, 700.0))
+    assert near(screenshot(browser)[y - 10:y + 11, x - 10:x + 11], LEVEL_ICE_RGB, 6).mean() > 0.9
+    for field, value in (("ice-e0", "600"), ("ice-e1", "800"), ("ice-n0", "600"), ("ice-n1", "800")):
+        browser.find_element("id", field).clear()
+        browser.find_element("id", field).send_keys(value)
+    browser.execute_script("document.getElementById('ice-name').value = 'open water';")
+    browser.find_element("id", "set-ice").click()
+    wait_until(lambda: browser.execute_script("return lastFrame.laid.length") > 0, 20, "the laid ice in a frame")
+    assert browser.execute_script("return lastFrame.laid") == [[row, 6, 2, 0] for row in (6, 7)]  # 100 m tiles
+    view(browser, 700.0, 700.0, 1.0)
+    assert near(screenshot(browser)[y - 10:y + 11, x - 10:x + 11], WATER_RGB, 6).mean() > 0.9
+    wait_until(lambda: "open water laid over E 600-800 m, N 600-800 m" in browser.find_element("id", "log").text, 10,
+               "the command in the log")
+
+
 def test_freeze_and_resume_from_the_page(exercise, browser):
     config, url, _ = exercise
     open_page(browser, url)

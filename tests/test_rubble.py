@@ -137,8 +137,8 @@ def test_a_brash_channel_is_open_water_that_resists_by_the_rules(tmp_path_factor
     it meets the rules' channel resistance times the brash's concentration; outside the
     channel the level ice's, and no brash."""
     model, data = _world(tmp_path_factory, 200.0, regions=[CHANNEL])
-    assert model.scene.thickness_at(np.array([150.0, 400.0])) == 0.0
-    assert model.scene.thickness_at(np.array([250.0, 400.0])) > 0.0
+    assert model.scene.thickness_at(np.array([150.0, 400.0]), model.scene.tile_class) == 0.0
+    assert model.scene.thickness_at(np.array([250.0, 400.0]), model.scene.tile_class) > 0.0
     expected_5kn = 0.9 * brash_channel_resistance(1.0, model.ship.bow)
     broken = 0
     for _ in range(50):

@@ -116,8 +116,9 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
         station = StationProcess(cfg, args.config, Path(args.out)) if cfg.instructor.start else nullcontext()
         status = _StatusLine(live, hub, first, station.address if cfg.instructor.start else None)
         queue = CommandQueue(cfg.control.queue, cfg.control.per_tick)
-        with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last, data, hub),
-                             [link.name for link in hub.links], record) as control, station:
+        ice = {"ice": list(model.scene.class_names)}  # what set_ice may lay
+        with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last, data, hub) | ice,
+                             [link.name for link in hub.links], record, model.scene.class_names) as control, station:
             stats = run_realtime(model, data, hub, rate, args.duration,
                                  [StreamOutput(publisher, traffic, model.origin), status], commands=queue,
                                  scheduler=(cfg.realtime.scheduler, cfg.realtime.priority))

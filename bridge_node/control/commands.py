@@ -30,9 +30,14 @@ units of the bridge (degrees, knots, metres, UTC):
 ``move_vessel``           ``mmsi`` and a position
 ``steer_vessel``          ``mmsi``, ``course_deg``, ``speed_kn``
 ``remove_vessel``         ``mmsi``
+``set_ice``               ``ice`` (one of the exercise's ice names: "open water",
+                          "level ice 0.50 m", a floe field's egg code) over
+                          ``polygon_m`` ([[east, north], ...], as a region's) or
+                          ``polygon_deg`` ([[latitude, longitude], ...]) (``ice_command``)
 ========================  =========================================================
 
-A command to a vessel the world does not have is applied as nothing (the step does not
+A command to a vessel the world does not have, or ice of a class it does not have (a
+recorded command replayed on another exercise), is applied as nothing (the step does not
 publish it).
 
 A bad command is refused whole with a ``CommandError`` that names the field, the value and
@@ -46,12 +51,13 @@ import json
 import math
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
+from pydantic import Field, TypeAdapter, ValidationError, model_validator
 
+from bridge_node.control.command_base import CommandBase, CommandError, PlacedCommand
+from bridge_node.control.ice_command import SetIceCommand
 from bridge_node.control.save_point import SAVE_NAME, SaveRequest
 from bridge_node.links.nmea0183.ais import SIX_BIT_TEXT
 from bridge_node.links.faults import LINK_FAULT_KINDS, LinkFault
-from sim_core.frames.geodesy import geodetic_to_local
 from sim_core.frames.units import KNOT
 from sim_core.instructor import (
     AddVessel,
@@ -64,6 +70,7 @@ from sim_core.instructor import (
     Reposition,
     SetClock,
     SetEnvironment,
+    SetIce,
     SteerVessel,
     SteeringFailure,
 )
@@ -73,46 +80,14 @@ from sim_core.world import WorldData, WorldModel
 MAX_COMMAND_BYTES = 4096  # a command's JSON is a few hundred bytes; anything longer is refused unread
 
 
-class CommandError(ValueError):
-    """A command refused: the message names the field, the value and what is allowed."""
-
-
-class _Command(BaseModel):
-    model_config = ConfigDict(extra="forbid", strict=True, frozen=True, allow_inf_nan=False)
-
-
-class FreezeCommand(_Command):
+class FreezeCommand(CommandBase):
     command: Literal["freeze", "resume"]
 
     def to_world(self, model: WorldModel, data: WorldData) -> Command:
         return Freeze(self.command == "freeze")
 
 
-class _Placed(_Command):
-    """A command with a position: latitude and longitude (deg), or north and east (m from
-    the exercise origin: the field's south-west corner as laid; a drifting field moves on)."""
-
-    latitude_deg: float | None = Field(None, ge=-89.0, le=89.0)
-    longitude_deg: float | None = Field(None, ge=-180.0, le=180.0)
-    north_m: float | None = Field(None, ge=-1.0e5, le=1.0e6)
-    east_m: float | None = Field(None, ge=-1.0e5, le=1.0e6)
-
-    @model_validator(mode="after")
-    def _one_position(self) -> _Placed:
-        geographic = (self.latitude_deg is not None, self.longitude_deg is not None)
-        local = (self.north_m is not None, self.east_m is not None)
-        if not (all(geographic) and not any(local) or all(local) and not any(geographic)):
-            raise ValueError("give latitude_deg and longitude_deg, or north_m and east_m")
-        return self
-
-    def north_east(self, model: WorldModel) -> tuple[float, float]:
-        """The position in the field's frame, m."""
-        if self.north_m is not None:
-            return self.north_m, self.east_m
-        return geodetic_to_local(math.radians(self.latitude_deg), math.radians(self.longitude_deg), *model.origin)
-
-
-class RepositionCommand(_Placed):
+class RepositionCommand(PlacedCommand):
     command: Literal["reposition"]
     heading_deg: float = Field(ge=0.0, lt=360.0)
     speed_kn: float = Field(0.0, ge=0.0, le=25.0)
@@ -124,7 +99,7 @@ class RepositionCommand(_Placed):
 Mmsi = Annotated[int, Field(ge=100_000_000, le=999_999_999)]
 
 
-class AddVesselCommand(_Placed):
+class AddVesselCommand(PlacedCommand):
     command: Literal["add_vessel"]
     mmsi: Mmsi
     name: str = Field("", max_length=20, pattern=SIX_BIT_TEXT)
@@ -139,7 +114,7 @@ class AddVesselCommand(_Placed):
                                                 self.speed_kn * KNOT, self.length_m, self.beam_m))
 
 
-class MoveVesselCommand(_Placed):
+class MoveVesselCommand(PlacedCommand):
     command: Literal["move_vessel"]
     mmsi: Mmsi
 
@@ -147,7 +122,7 @@ class MoveVesselCommand(_Placed):
         return MoveVessel(self.mmsi, *self.north_east(model))
 
 
-class SteerVesselCommand(_Command):
+class SteerVesselCommand(CommandBase):
     command: Literal["steer_vessel"]
     mmsi: Mmsi
     course_deg: float = Field(ge=0.0, lt=360.0)
@@ -157,7 +132,7 @@ class SteerVesselCommand(_Command):
         return SteerVessel(self.mmsi, math.radians(self.course_deg), self.speed_kn * KNOT)
 
 
-class RemoveVesselCommand(_Command):
+class RemoveVesselCommand(CommandBase):
     command: Literal["remove_vessel"]
     mmsi: Mmsi
 
@@ -165,7 +140,7 @@ class RemoveVesselCommand(_Command):
         return RemoveVessel(self.mmsi)
 
 
-class VisibilityCommand(_Command):
+class VisibilityCommand(CommandBase):
     command: Literal["visibility"]
     visibility_m: float = Field(ge=50.0, le=100_000.0)
 
@@ -173,7 +148,7 @@ class VisibilityCommand(_Command):
         return SetEnvironment((("visibility", float(self.visibility_m)),))
 
 
-class ClockCommand(_Command):
+class ClockCommand(CommandBase):
     command: Literal["clock"]
     utc: dt.datetime | None = Field(None, strict=False)  # from its ISO 8601 text
     time_of_day: dt.time | None = Field(None, strict=False)  # from HH:MM[:SS]
@@ -197,7 +172,7 @@ class ClockCommand(_Command):
         return SetClock(dt.datetime.combine(day, t, dt.timezone.utc).timestamp())
 
 
-class WindCommand(_Command):
+class WindCommand(CommandBase):
     command: Literal["wind"]
     speed_kn: float = Field(ge=0.0, le=100.0)
     from_deg: float = Field(ge=0.0, lt=360.0)
@@ -206,7 +181,7 @@ class WindCommand(_Command):
         return SetEnvironment((("wind_speed", self.speed_kn * KNOT), ("wind_from", math.radians(self.from_deg))))
 
 
-class CurrentCommand(_Command):
+class CurrentCommand(CommandBase):
     command: Literal["current"]
     speed_kn: float = Field(ge=0.0, le=10.0)
     to_deg: float = Field(ge=0.0, lt=360.0)
@@ -215,7 +190,7 @@ class CurrentCommand(_Command):
         return SetEnvironment((("current_speed", self.speed_kn * KNOT), ("current_to", math.radians(self.to_deg))))
 
 
-class SteeringFailureCommand(_Command):
+class SteeringFailureCommand(CommandBase):
     command: Literal["steering_failure"]
     pumps_failed: int = Field(ge=0, le=2)
 
@@ -223,7 +198,7 @@ class SteeringFailureCommand(_Command):
         return SteeringFailure(2 - self.pumps_failed)
 
 
-class EngineFailureCommand(_Command):
+class EngineFailureCommand(CommandBase):
     command: Literal["engine_failure"]
     power_percent: float = Field(ge=0.0, le=100.0)
 
@@ -231,7 +206,7 @@ class EngineFailureCommand(_Command):
         return EngineFailure(self.power_percent / 100.0)
 
 
-class SensorFailureCommand(_Command):
+class SensorFailureCommand(CommandBase):
     command: Literal["sensor_failure"]
     sensor: Literal["gyro", "gnss", "log"]
     mode: Literal["ok", "frozen", "offset", "lost", "jumping"]
@@ -258,7 +233,7 @@ class SensorFailureCommand(_Command):
         return SensorFailure(self.sensor, self.mode)
 
 
-class LinkFaultCommand(_Command):
+class LinkFaultCommand(CommandBase):
     command: Literal["link_fault"]
     link: str = Field(min_length=1, max_length=64)
     fault: Literal[LINK_FAULT_KINDS]
@@ -276,7 +251,7 @@ class LinkFaultCommand(_Command):
         return LinkFault(self.link, self.fault, self.probability, self.delay_s or 0.0, data.seq + 1)
 
 
-class SaveCommand(_Command):
+class SaveCommand(CommandBase):
     command: Literal["save"]
     name: str = Field(pattern=SAVE_NAME)
 
@@ -289,11 +264,11 @@ NODE_COMMANDS = (LinkFault, SaveRequest)
 WireCommand = Annotated[FreezeCommand | RepositionCommand | VisibilityCommand | ClockCommand | WindCommand |
                         CurrentCommand | SteeringFailureCommand | EngineFailureCommand | SensorFailureCommand |
                         AddVesselCommand | MoveVesselCommand | SteerVesselCommand | RemoveVesselCommand |
-                        LinkFaultCommand | SaveCommand, Field(discriminator="command")]
+                        LinkFaultCommand | SaveCommand | SetIceCommand, Field(discriminator="command")]
 _WIRE = TypeAdapter(WireCommand)
 COMMAND_NAMES = ("freeze", "resume", "reposition", "visibility", "clock", "wind", "current", "steering_failure",
                  "engine_failure", "sensor_failure", "link_fault", "save", "add_vessel", "move_vessel", "steer_vessel",
-                 "remove_vessel")
+                 "remove_vessel", "set_ice")
 
 
 def parse_command(message: dict) -> WireCommand:
@@ -313,6 +288,8 @@ def _explain(error: dict) -> str:
     value = error.get("input")
     shown = json.dumps(value) if isinstance(value, (int, float, str, bool)) or value is None else type(value).__name__
     text = error["msg"].removeprefix("Value error, ")
+    if error["type"] == "missing":
+        return f"{where}: missing (required)"
     return f"{where} = {shown}: {text}" if where != "command" else text
 
 
@@ -320,7 +297,7 @@ def _explain(error: dict) -> str:
 _ENVIRONMENT_FIELDS = {"visibility", "wind_speed", "wind_from", "current_speed", "current_to"}
 _TYPES = {cls.__name__: cls for cls in (Freeze, Reposition, SetEnvironment, SetClock, SteeringFailure,
                                         EngineFailure, SensorFailure, AddVessel, MoveVessel, SteerVessel, RemoveVessel,
-                                        LinkFault, SaveRequest)}
+                                        SetIce, LinkFault, SaveRequest)}
 
 
 def command_record(command: Command | NodeCommand) -> dict:
@@ -337,6 +314,10 @@ def command_from_record(record: dict) -> Command | NodeCommand:
             fields["changes"] = tuple((str(k), float(v)) for k, v in fields["changes"])
         if cls is AddVessel:
             fields["vessel"] = OtherVessel(**fields["vessel"])
+        if cls is SetIce:
+            fields["polygon"] = tuple((float(x), float(y)) for x, y in fields["polygon"])
+            if type(fields["ice_class"]) is not int or fields["ice_class"] < 0:
+                raise ValueError(f"ice_class {fields['ice_class']!r} is not a class index")
         command = cls(**fields)
         numbers = [v for v in _leaves(dataclasses.asdict(command)) if isinstance(v, float)]
         if not all(math.isfinite(v) for v in numbers) or \

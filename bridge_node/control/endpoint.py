@@ -32,6 +32,7 @@ from bridge_node.control.commands import (
     WireCommand,
     parse_command,
 )
+from bridge_node.control.ice_command import SetIceCommand
 from bridge_node.control.queue import CommandQueue
 from bridge_node.control.settings import ControlSettings
 from bridge_node.control.save_point import SAVES_FOLDER
@@ -48,9 +49,10 @@ class ControlEndpoint:
     for status requests. A context manager; stopping twice is safe."""
 
     def __init__(self, settings: ControlSettings, queue: CommandQueue, status: Callable[[], dict],
-                 links: Sequence[str] = (), record: Path | None = None) -> None:
+                 links: Sequence[str] = (), record: Path | None = None, ice: Sequence[str] = ()) -> None:
         self.settings, self.queue, self.status = settings, queue, status
         self.links, self.record = tuple(links), record  # the links' names; the session record's folder
+        self.ice = tuple(ice)  # the names of the ice the exercise can lay (``SceneModel.class_names``)
         self._save_names: set[str] = set()  # save points asked for (a file is written at its tick)
         self.token = settings.access_token()
         if settings.allow_network and self.token is None:
@@ -148,6 +150,9 @@ class ControlEndpoint:
         if isinstance(command, LinkFaultCommand) and command.link not in self.links:
             raise CommandError(f"link = {json.dumps(command.link)}: no such link; the node's links: "
                                f"{', '.join(self.links) or 'none'}")
+        if isinstance(command, SetIceCommand) and command.ice not in self.ice:
+            raise CommandError(f"ice = {json.dumps(command.ice)}: this exercise has no such ice; it has: "
+                               f"{', '.join(json.dumps(name) for name in self.ice) or 'none'}")
         if not isinstance(command, SaveCommand):
             return {}
         if self.record is None:

@@ -40,19 +40,21 @@ def field_regions(cfg: NodeConfig) -> FieldRegions:
 
 
 def lay_floe_fields(cfg: NodeConfig, config_path: str | None, laid: FieldRegions, tile_class: np.ndarray,
-                    class_h: np.ndarray, beam: float) -> tuple[np.ndarray, np.ndarray, list[list[TileTemplate]]]:
+                    class_h: np.ndarray, beam: float) -> tuple[np.ndarray, np.ndarray, list[list[TileTemplate]],
+                                                              list[str]]:
     """The field's tile classes (ny, nx) and class thicknesses (m) with a class added per
     regime (egg code) of the floe-field regions that hold a tile's centre, and each added
     class's templates (``fracture.variants`` of them, laid from the first such region; floes
-    wider than the ship's ``beam``, m, pre-fractured). Its thickness is its thickest floes'."""
+    wider than the ship's ``beam``, m, pre-fractured) and name (its egg code's label). Its
+    thickness is its thickest floes'."""
     regions, index = laid.regions, laid.index
     if index is None:
-        return tile_class, class_h, []
+        return tile_class, class_h, [], []
     side = cfg.fracture.tile_side
     nx, ny = tile_counts(cfg.ice_field, side)
     packs = [r for r, region in enumerate(regions) if region.floe_field and np.any(index == r)]
     if not packs:
-        return tile_class, class_h, []
+        return tile_class, class_h, [], []
     regimes = compile_regimes(regions, shapely.box(0.0, 0.0, nx * side, ny * side), cfg.fracture.seed)
     tile_class, classes = np.array(tile_class, dtype=np.uint8), {}  # regime -> its class's first region
     for r in packs:  # regions of one egg code share a class and its templates
@@ -66,4 +68,4 @@ def lay_floe_fields(cfg: NodeConfig, config_path: str | None, laid: FieldRegions
     templates = [[pack_template(regimes, r, v, cfg.fracture, cfg.ice_material, beam)
                   for v in range(cfg.fracture.variants)] for r in first]
     thickness = [max(t.thickness for t in variants) for variants in templates]
-    return tile_class, np.concatenate([class_h, thickness]), templates
+    return tile_class, np.concatenate([class_h, thickness]), templates, [regions[r].regime.label() for r in first]

@@ -15,7 +15,7 @@ from rich.progress import Progress
 from bridge_node.charts.field_regions import configured_ridges
 from bridge_node.library.templates import library_template
 from bridge_node.node.config import NodeConfig, load_ship, resolve_path
-from bridge_node.node.floe_field_setup import FieldRegions, field_regions, lay_floe_fields
+from bridge_node.node.floe_field_setup import MAX_CLASSES, FieldRegions, field_regions, lay_floe_fields
 from bridge_node.common.errors import UserError
 from bridge_node.common.paths import writable_dir
 from sim_core.environment import Environment
@@ -25,7 +25,7 @@ from sim_core.fracture.fragment_count import MAX_THICKNESS
 from sim_core.regimes.regime import region_tile_thickness
 from sim_core.regimes.rubble import compile_rubble
 from sim_core.scene.field import tile_classes
-from sim_core.scene.scene import compile_scene, open_water
+from sim_core.scene.scene import compile_scene, level_ice_name, open_water
 from sim_core.ship.model import compile_ship
 from sim_core.ship_in_ice import start_drifting
 from sim_core.world import WorldData, WorldModel, compile_world, new_world_data, step
@@ -60,7 +60,8 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
     ship = compile_ship(load_ship(cfg.ship.name, config_path), cfg.ice_material)
     laid = field_regions(cfg)
     tile_class, level_h = field_tile_classes(cfg, config_path, laid)
-    tile_class, class_h, packs = lay_floe_fields(cfg, config_path, laid, tile_class, level_h, ship.particulars.beam)
+    tile_class, class_h, packs, pack_names = lay_floe_fields(cfg, config_path, laid, tile_class, level_h,
+                                                             ship.particulars.beam)
     cache = writable_dir(resolve_path(config_path, cfg.paths.cache_dir), f"{config_path or 'default config'}: "
                          "paths.cache_dir")
     jobs = [(h, v) for h in level_h[level_h > 0.0] for v in range(cfg.fracture.variants)]  # none for open water
@@ -76,10 +77,14 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
     for variants in packs:  # a floe-field region's class: its own templates
         per_class.append(np.arange(len(templates), len(templates) + len(variants)))
         templates += variants
+    names = [level_ice_name(h) for h in level_h] + pack_names
+    if not np.any(class_h <= 0.0) and len(class_h) < MAX_CLASSES:  # for the instructor to lay; no templates
+        class_h, names = np.append(class_h, 0.0), names + [level_ice_name(0.0)]
+        per_class.append(np.zeros(0, dtype=np.int64))
     ice = compile_ice_model(templates, cfg.ice_material, cfg.ice_dynamics)
     try:
         scene = compile_scene(cfg.scene, tile_class, class_h, per_class, cfg.fracture.tile_side,
-                              ship.particulars.length)
+                              ship.particulars.length, names)
     except ValueError as exc:
         raise UserError(f"{config_path}: scene: {exc}") from None
     origin = math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg)

@@ -84,16 +84,17 @@ def template_meshes(model: WorldModel) -> list[TemplateMesh]:
     return out
 
 
-def floe_field_layouts(model: WorldModel) -> dict[int, int]:
-    """The tiles (flat index) of floe-field classes, and each one's template | quarter turns
-    << 16 as the scene lays it: until simulated, such a tile is drawn from its template's
-    raster, its floes where the template lays them."""
+def floe_field_layouts(model: WorldModel, tiles: np.ndarray, classes: np.ndarray) -> dict[int, int]:
+    """Of these tiles (flat indices) of these classes, those of floe-field classes, and each
+    one's template | quarter turns << 16 as the scene lays it: until simulated, such a tile
+    is drawn from its template's raster, its floes where the template lays them."""
     scene = model.scene
     loose = np.array([len(t) > 0 and bool(model.ice.floe_field[t].all()) for t in scene.class_templates], dtype=bool)
     out = {}
-    for tile in np.nonzero(loose[scene.tile_class])[0].tolist() if len(loose) else []:
-        template, turns = tile_layout(scene, tile)
-        out[tile] = template | (turns << 16)
+    for tile, klass in zip(tiles.tolist(), classes.tolist()) if len(loose) else ():
+        if loose[klass]:
+            template, turns = tile_layout(scene, tile, klass)
+            out[tile] = template | (turns << 16)
     return out
 
 

@@ -89,8 +89,9 @@ class SceneRenderer(SceneUploads):
                              f"this one has {scene.nx * scene.ny}")
         # per tile: first status entry (its first row, or a frozen tile's first cell entry),
         # template | quarter turns << 16, level-ice thickness (m, float bits), 1 if breakable
+        self.tile_class = scene.tile_class.copy()  # as laid, until the instructor lays other ice
         self.tile_thickness = scene.class_thickness[scene.tile_class].astype("f4")
-        self.floe_field_info = floe_field_layouts(model)  # tile -> its template | turns << 16
+        self.floe_field_info = floe_field_layouts(model, np.arange(len(self.tile_class)), self.tile_class)
         self.rubble_bits = rubble_tile_bits(model.rubble)  # the tile table flag entry's upper bytes
         self.tile_info = ctx.texture((scene.nx, scene.ny), 4, self._first_tile_table().tobytes(), dtype="i4")
         self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST
@@ -133,14 +134,17 @@ class SceneRenderer(SceneUploads):
         self._ship_to_world = np.eye(4)
         self._tile_boxes: tuple[list[int], np.ndarray, np.ndarray, np.ndarray] = ([], *np.zeros((3, 0, 2)))
 
-    def _first_tile_table(self) -> np.ndarray:
-        """The tile table before any tile is simulated: every tile's thickness, and a floe
-        field's tiles their layouts, drawn from their templates' rasters."""
-        info = np.zeros((len(self.tile_thickness), 4), "i4")
-        info[:, 2] = self.tile_thickness.view("i4")
-        info[:, 3] = self.rubble_bits
-        for tile, layout in self.floe_field_info.items():
-            info[tile, 1], info[tile, 3] = layout, UNPLACED_FLOE_FIELD | self.rubble_bits[tile]
+    def _first_tile_table(self, tiles: np.ndarray | None = None) -> np.ndarray:
+        """The tile table's rows (of these tiles; None: all) while not simulated: each
+        tile's thickness, and a floe field's tiles their layouts, drawn from their
+        templates' rasters."""
+        tiles = np.arange(len(self.tile_thickness)) if tiles is None else tiles
+        info = np.zeros((len(tiles), 4), "i4")
+        info[:, 2] = self.tile_thickness[tiles].view("i4")
+        info[:, 3] = self.rubble_bits[tiles]
+        for i, tile in enumerate(tiles.tolist()):
+            if tile in self.floe_field_info:
+                info[i, 1], info[i, 3] = self.floe_field_info[tile], UNPLACED_FLOE_FIELD | self.rubble_bits[tile]
         return info
 
     def _make_passes(self, hull: np.ndarray, lights: np.ndarray) -> None:

@@ -1,7 +1,7 @@
 """The renderer's uploads (``SceneUploads``, a part of ``SceneRenderer``): what changed in
-the world view since the last frame goes to the GPU: tiles placed, thawed and frozen, the
-triangles of newly broken floes, the poses of the rows simulated, a frozen tile's floes
-once. Split from ``bridge_node.render.renderer`` by responsibility; the renderer's own
+the world view since the last frame goes to the GPU: tiles given other ice by the
+instructor, tiles placed, thawed and frozen, the triangles of newly broken floes, the poses
+of the rows simulated, a frozen tile's floes once. Split from ``bridge_node.render.renderer`` by responsibility; the renderer's own
 attributes are used as they are there."""
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ import moderngl
 import numpy as np
 
 from bridge_node.render.floe_buffers import FloeBuffer, FloeCopies, pose_textures, write_entries
+from bridge_node.render.meshes import floe_field_layouts
 from bridge_node.render.passes.glsl import FROZEN_CRACKED, POSE_WIDTH, UNPLACED_FLOE_FIELD
 from bridge_node.render.sky import sky_for
 from bridge_node.stream.world_view import Placement, WorldView
@@ -34,6 +35,8 @@ class SceneUploads:
         changes = view.take_changes()
         lat, lon = local_to_geodetic(view.ship.north, view.ship.east, *self.model.origin)
         self.sky = sky_for(datetime.fromtimestamp(view.ship.utc, timezone.utc), lat, lon)  # the exercise clock
+        if changes.retiled:
+            self._retile(view, np.array(changes.retiled, dtype=np.int64))
         for k in changes.frozen:
             self._freeze(view, k)
         for k in changes.placements:
@@ -48,6 +51,23 @@ class SceneUploads:
                 if k in self._frozen:
                     self._upload_frozen(view, k)
         self._append_broken(view, changes.broken)
+
+    def _retile(self, view: WorldView, tiles: np.ndarray) -> None:
+        """Take the instructor's new ice of these tiles (a class the model lacks, or a tile
+        off the field, is passed over), and redraw those not simulated: the world changes
+        only the ice the ship has not met, so a tile placed since is drawn as placed."""
+        scene = self.model.scene
+        tiles = tiles[(tiles >= 0) & (tiles < len(self.tile_class))]
+        classes = np.array([view.retiled.get(t, scene.tile_class[t]) for t in tiles.tolist()], dtype=np.int64)
+        tiles, classes = tiles[classes < len(scene.class_thickness)], classes[classes < len(scene.class_thickness)]
+        self.tile_class[tiles] = classes
+        self.tile_thickness[tiles] = scene.class_thickness[classes]
+        for tile in tiles.tolist():
+            self.floe_field_info.pop(tile, None)
+        self.floe_field_info.update(floe_field_layouts(self.model, tiles, classes))
+        tiles = np.setdiff1d(tiles, [p.tile for p in view.placements.values()])
+        for tile, row in zip(tiles.tolist(), self._first_tile_table(tiles)):
+            self.tile_info.write(row.tobytes(), viewport=(tile % scene.nx, tile // scene.nx, 1, 1))
 
     def _write_tile_info(self, p: Placement, first_entry: int, breakable: bool) -> None:
         nx = self.model.scene.nx

@@ -39,6 +39,7 @@ def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions:
                  "hull": np.round(model.contour, 3).tolist()},
         "searchlights": len(model.searchlights),
         "templates": templates,
+        "ice_names": list(scene.class_names), "ice_kinds": ice_kinds(model),
         "rate_hz": rate_hz,
     }
     header["regions"], rings = region_outlines(list(regions), shapely.box(0.0, 0.0, scene.nx * scene.side,
@@ -47,6 +48,28 @@ def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions:
               "centroid": ice.centroid[:, :2], "water_runs": water_runs(scene),
               "brash_runs": brash_runs(model)} | rings | ridge_lines(model)
     return pack(header, arrays)
+
+
+def ice_kinds(model: WorldModel) -> list[str]:
+    """How the map draws each ice class: "water" (thickness 0), "pack" (a floe field's
+    templates) or "ice" (level ice)."""
+    scene, floe_field = model.scene, model.ice.floe_field
+    return ["water" if h <= 0.0 else "pack" if len(t) and bool(floe_field[t].all()) else "ice"
+            for h, t in zip(scene.class_thickness, scene.class_templates)]
+
+
+def laid_runs(retiled: dict[int, int], nx: int, ny: int) -> list[list[int]]:
+    """The tiles the instructor gave other ice (tile -> class) as runs along the tile rows:
+    [row, first column, tiles, class] each."""
+    if not retiled:
+        return []
+    tiles, classes = np.array(list(retiled), dtype=np.int64), np.array(list(retiled.values()), dtype=np.int64)
+    out = []
+    for k in np.unique(classes).tolist():
+        mask = np.zeros(nx * ny, dtype=bool)
+        mask[tiles[(classes == k) & (tiles < nx * ny)]] = True
+        out += [[*run, k] for run in tile_runs(mask.reshape(ny, nx)).reshape(-1, 3).tolist()]
+    return out
 
 
 def ridge_lines(model: WorldModel) -> dict[str, np.ndarray]:

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bridge_node.station.events import EventLog
+from bridge_node.station.geometry import laid_runs
 from bridge_node.station.wire import pack
 from bridge_node.stream.world_view import WorldView
 from sim_core.frames.units import KNOT
@@ -96,8 +97,9 @@ class Picture:
 
     def __init__(self, model: WorldModel) -> None:
         self.template_start = np.asarray(model.ice.template_start, dtype=np.int64)
+        self.grid = model.scene.nx, model.scene.ny
         self.tiles: dict[int, TileEntry] = {}
-        self.log = EventLog()
+        self.log = EventLog(model.scene.class_names)
         self._track = np.full((TRACK_MAX, 2), np.nan, dtype=np.float32)
         self._track_n, self.track_epoch, self._track_time = 0, 0, -math.inf
         self._number = 0
@@ -184,6 +186,7 @@ class Picture:
         header = {"type": "frame", "seq": view.seq, "time": view.time, "ship": ship_panel(view), "floe_tiles": floe_tiles,
                   "environment": environment_panel(view), "traffic": traffic_list(view),
                   "ice_offset": [round(float(v), 3) for v in view.ice_offset],
+                  "laid": laid_runs(view.retiled, *self.grid),
                   "counts": {"free": len(floe_cell), "frozen_floes": int(sum(len(t.cells) for t in self.tiles.values()
                                                                              if t.meta["frozen"])),
                              "tiles_live": sum(not t.meta["frozen"] for t in self.tiles.values()),

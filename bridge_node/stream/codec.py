@@ -6,6 +6,8 @@ dtype and shape in frame order. Floe poses travel as float32 (what the renderer 
 at 1 km) and row numbers as int32; frozen floes as ``FROZEN_FLOE_EVENT`` records. ``input_time`` is the monotonic time (s) of the newest
 console order that went into the step, or None. The last frame is the whole traffic picture
 at the step (``TRAFFIC_DTYPE`` rows; a few vessels, so every message carries all of them).
+The tiles given other ice (``RETILED`` records) are the last array; a recording made before
+the instructor could lay ice lacks it, and reads as none.
 
 A decoded message is checked against the bounds of a view before anyone applies it (render
 PCs may read the stream off the bridge network): row, placement and tile numbers within
@@ -28,6 +30,7 @@ from sim_core.ice.bending import CRACK_EVENT
 from sim_core.ice.floes import FROZEN_CRACK
 from sim_core.ship.model import OrderRejection
 from sim_core.ship.outputs import ShipOutputs
+from sim_core.scene.scene import RETILED
 from sim_core.scene.switches import FROZEN_FLOE_EVENT, PlacedTiles
 from sim_core.world import WorldEvents
 
@@ -36,11 +39,11 @@ TOPIC = b"w"
 HEARTBEAT = b"h"  # [HEARTBEAT, b"<seq>"]: the last sequence number published
 _PLACED = [f.name for f in dataclasses.fields(PlacedTiles)]
 _ARRAYS = ("thawed", "frozen", "broken_by_hull", "broken_by_contact", "floe_rows", "floe_pose", "floe_status",
-           "ice_load", "frozen_floes", "cracked", "frozen_cracks")
+           "ice_load", "frozen_floes", "cracked", "frozen_cracks", "retiled")
 FRAME_NAMES = (*_PLACED, *_ARRAYS)  # the array frames, in order, after the header
 _WIRE = {"floe_pose": np.float32, "floe_rows": np.int32, "broken_by_hull": np.int32,
          "broken_by_contact": np.int32, "frozen_floes": FROZEN_FLOE_EVENT,
-         "cracked": CRACK_EVENT, "frozen_cracks": FROZEN_CRACK}
+         "cracked": CRACK_EVENT, "frozen_cracks": FROZEN_CRACK, "retiled": RETILED}
 
 
 class CodecError(ValueError):
@@ -92,7 +95,7 @@ def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
             raise CodecError("not a state message")
         header = json.loads(bytes(frames[1]))
         specs = header["arrays"]
-        if len(specs) != len(_PLACED) + len(_ARRAYS) or len(frames) != 3 + len(specs):
+        if len(specs) not in (len(FRAME_NAMES), len(FRAME_NAMES) - 1) or len(frames) != 3 + len(specs):
             raise CodecError("wrong number of frames")
         dtypes = [np.dtype(d) for d, _ in specs]
         if any(d.kind not in "iufV" or d.hasobject for d in dtypes):  # numbers and raw records only
@@ -104,6 +107,7 @@ def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
         named["frozen_floes"] = named["frozen_floes"].view(FROZEN_FLOE_EVENT)  # records travel as raw bytes
         named["cracked"] = named["cracked"].view(CRACK_EVENT)
         named["frozen_cracks"] = named["frozen_cracks"].view(FROZEN_CRACK)
+        named["retiled"] = named["retiled"].view(RETILED) if "retiled" in named else np.zeros(0, dtype=RETILED)
         events = WorldEvents(
             seq=int(header["seq"]), time=float(header["time"]), ship=ShipOutputs.from_dict(header["ship"]), placed=placed,
             floes_free=int(header["floes_free"]), floes_frozen=int(header["floes_frozen"]),
@@ -148,7 +152,8 @@ def _check_bounds(events: WorldEvents, input_time: object) -> None:
     rows = [events.floe_rows, events.broken_by_hull, events.broken_by_contact, p.row_start, p.row_start + p.row_count,
             p.tile, p.placement, events.thawed, events.frozen, events.frozen_floes["placement"].astype(np.int64),
             events.cracked["row"].astype(np.int64), events.frozen_cracks["placement"].astype(np.int64),
-            events.frozen_floes["cell"].astype(np.int64), events.frozen_cracks["cell"].astype(np.int64)]
+            events.frozen_floes["cell"].astype(np.int64), events.frozen_cracks["cell"].astype(np.int64),
+            events.retiled["tile"].astype(np.int64)]
     m = len(events.floe_rows)
     problems = [
         len(counts) != 1 and "placed tiles of different lengths",

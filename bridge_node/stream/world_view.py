@@ -9,7 +9,8 @@ store. Rows a frozen tile gave up are VACANT until a placement is given them. Th
 snapshot service answers late joiners from a view (``to_snapshot``). Since the consumer
 last looked, the view also collects what changed: placements given rows (new or thawed),
 placements frozen, the span of rows whose pose changed, and the rows newly broken (a thawed
-tile's floes among them), so a renderer uploads only those.
+tile's floes among them), so a renderer uploads only those; and the tiles the instructor
+gave other ice.
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ from sim_core.ice.bending import crack_events
 from sim_core.ice.floes import NO_FROZEN_CRACKS, BreakCause, FloeStatus, frozen_crack_records
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.environment import Environment
+from sim_core.scene.scene import retiled_records
 from sim_core.scene.switches import FROZEN_FLOE_EVENT, PlacedTiles
 from sim_core.world import WorldEvents
 
@@ -44,13 +46,15 @@ class Placement:
 class ViewChanges:
     """What changed since the last ``take_changes``: placements given rows (new or thawed)
     and placements frozen, each only if still so; the rows [rows_from, rows_to) whose pose or
-    status may have changed; and rows broken (they may since have gone to another tile)."""
+    status may have changed; rows broken (they may since have gone to another tile); and the
+    tiles whose ice class changed (``WorldView.retiled`` gives the class, or none: as laid)."""
 
     placements: list[int]
     frozen: list[int]
     rows_from: int
     rows_to: int
     broken: np.ndarray
+    retiled: list[int] = dataclasses.field(default_factory=list)
 
 
 class WorldView:
@@ -59,7 +63,8 @@ class WorldView:
     placement's floes (``FROZEN_FLOE_EVENT`` records); ``traffic`` the other vessels as
     last published (``TRAFFIC_DTYPE`` rows, shape (0,) when there are none); ``ice_offset``
     where the ice's frame lies in the world (m, x east, y north: the poses, corners and frozen
-    floes are in that frame, ``WorldEvents.ice_offset``); ``environment``
+    floes are in that frame, ``WorldEvents.ice_offset``); ``retiled`` the class of every tile
+    the instructor gave ice not as laid (field tile -> class); ``environment``
     the instructor's (``sim_core.environment``) and ``ship.utc`` the exercise clock, as
     last published."""
 
@@ -79,6 +84,8 @@ class WorldView:
         self.ice_offset = np.zeros(2)
         self.environment = Environment()  # visibility, wind, current, freeze: as last published
         self.traffic = np.zeros(0, dtype=TRAFFIC_DTYPE)
+        self.retiled: dict[int, int] = {}
+        self._retiled_new: set[int] = set()
         self._blend: tuple | None = None  # (rows, pose before, after, ship before, after, ice offset before, after)
         self._new: list[int] = []
         self._frozen_new: list[int] = []
@@ -110,6 +117,7 @@ class WorldView:
         self.ice_offset = np.array(events.ice_offset, dtype=float)
         self.seq, self.time, self.ship, self.ice_load = events.seq, events.time, events.ship, events.ice_load
         self.environment = events.environment
+        self._take_retiled(events)
         frozen = set(events.frozen.tolist())
         held, held_cracks = self.frozen_floes, self.frozen_cracks
         if events.snapshot:  # every frozen tile with all its floes; rows it does not name belong to no tile
@@ -153,6 +161,16 @@ class WorldView:
         self.cause[events.broken_by_hull] = BreakCause.HULL
         self.cause[events.broken_by_contact] = BreakCause.CONTACT
         self._broken += [events.broken_by_hull, events.broken_by_contact]
+
+    def _take_retiled(self, events: WorldEvents) -> None:
+        """Keep the tiles' new ice classes (a snapshot's are all; the tiles it omits are as laid)."""
+        given = dict(zip(events.retiled["tile"].tolist(), events.retiled["ice_class"].tolist()))
+        if events.snapshot:
+            self._retiled_new |= {t for t in self.retiled.keys() | given.keys() if self.retiled.get(t) != given.get(t)}
+            self.retiled = given
+        else:
+            self._retiled_new |= given.keys()
+            self.retiled.update(given)
 
     def _take_placements(self, p: PlacedTiles) -> None:
         """Keep the tiles placed (those new or changed, and not frozen, noted for the
@@ -208,8 +226,9 @@ class WorldView:
         changes = ViewChanges(list(dict.fromkeys(k for k in self._new if k not in self.frozen)),
                               list(dict.fromkeys(k for k in self._frozen_new if k in self.frozen)),
                               min(lo, hi), hi, np.unique(np.concatenate(self._broken)) if self._broken
-                              else np.zeros(0, dtype=np.int64))
+                              else np.zeros(0, dtype=np.int64), sorted(self._retiled_new))
         self._new, self._frozen_new, self._span, self._broken = [], [], [np.iinfo(np.int64).max, 0], []
+        self._retiled_new = set()
         return changes
 
     def live_rows(self) -> np.ndarray:
@@ -243,7 +262,8 @@ class WorldView:
             cracked=crack_events(self.crack, rows),
             frozen_cracks=frozen_crack_records(self.frozen_cracks[k] for k in frozen if k in self.frozen_cracks),
             floes_free=len(broken), floes_frozen=sum(len(f) for f in floes),
-            ice_load=self.ice_load.copy(), rejected=(), snapshot=True, ice_offset=tuple(self.ice_offset.tolist()))
+            ice_load=self.ice_load.copy(), rejected=(), snapshot=True, ice_offset=tuple(self.ice_offset.tolist()),
+            retiled=retiled_records(list(self.retiled), list(self.retiled.values())))
 
     def blend(self, alpha: float) -> None:
         """Show the state ``alpha`` (0..1) of the way from before the last applied step to

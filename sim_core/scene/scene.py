@@ -47,35 +47,45 @@ class SceneSettings(Params):
     prepare_budget_ms: float = Field(1.0, gt=0.0, le=50.0, description="wall time per step spent preparing tiles, ms")
 
 
+# A tile whose ice the instructor changed (``sim_core.instructor.SetIce``), as published:
+# its flat index and its new class.
+RETILED = np.dtype([("tile", np.int32), ("ice_class", np.uint8)])
+
+
 @dataclass(frozen=True)
 class SceneModel:
-    """Static scene data: the tile grid, each tile's thickness class and its templates."""
+    """Static scene data: the tile grid, each tile's thickness class as laid, each class's
+    thickness, templates and name (what the instructor calls it)."""
 
     settings: SceneSettings
     nx: int
     ny: int
     side: float  # m
     radius: float  # detection radius R_T, m
-    tile_class: np.ndarray  # (ny * nx,) uint8: thickness class of each tile
+    tile_class: np.ndarray  # (ny * nx,) uint8: thickness class of each tile as laid
     class_thickness: np.ndarray  # (classes,) m
     class_templates: tuple  # per class: array of the ice model's template indices (variants)
+    class_names: tuple[str, ...] = ()  # per class: "open water", "level ice 0.50 m", a floe field's egg code
 
     def centre(self, tiles: np.ndarray) -> np.ndarray:
         """Centres (n, 2) of flat tile indices, world m."""
         tiles = np.asarray(tiles)
         return np.column_stack([(tiles % self.nx + 0.5) * self.side, (tiles // self.nx + 0.5) * self.side])
 
-    def thickness_at(self, point: np.ndarray) -> float:
-        """Level-ice thickness (m) of the tile holding the point; 0 off the field."""
+    def thickness_at(self, point: np.ndarray, tile_class: np.ndarray) -> float:
+        """Level-ice thickness (m) of the tile holding the point, its class as ``tile_class``
+        gives it (``SceneData.tile_class``); 0 off the field."""
         tile = tile_under(point, self.nx, self.ny, self.side)
-        return 0.0 if tile < 0 else float(self.class_thickness[self.tile_class[tile]])
+        return 0.0 if tile < 0 else float(self.class_thickness[tile_class[tile]])
 
 
 @dataclass
 class SceneData:
-    """Per-step scene state: every tile's state, and where breakable tiles sit in the ice world."""
+    """Per-step scene state: every tile's state and class, and where breakable tiles sit in
+    the ice world."""
 
     tile_state: np.ndarray  # (ny * nx,) uint8
+    tile_class: np.ndarray  # (ny * nx,) uint8: as laid, unless the instructor changed a tile's ice
     placement: dict[int, int] = field(default_factory=dict)  # tile -> index of its placement in the ice world
     live: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # TileState.BREAKABLE tiles
 
@@ -90,16 +100,27 @@ class SceneUpdate:
 
 
 def compile_scene(settings: SceneSettings, tile_class: np.ndarray, class_thickness: np.ndarray,
-                  class_templates: list[np.ndarray], tile_side: float, ship_length: float) -> SceneModel:
+                  class_templates: list[np.ndarray], tile_side: float, ship_length: float,
+                  class_names: list[str] | None = None) -> SceneModel:
     """Scene model of a field whose tiles (ny, nx) carry thickness classes (indices into
-    class_thickness, m); class_templates lists each class's template indices."""
+    class_thickness, m); class_templates lists each class's template indices, class_names
+    their names (by default "open water" or "level ice H m")."""
     radius = detection_radius(tile_side, ship_length)
     if settings.reverse_replacement and settings.reverse_distance < radius + ship_length:
         raise ValueError(f"reverse_distance = {settings.reverse_distance} m must be at least R_T + L = "
                          f"{radius + ship_length:.1f} m, or tiles near the hull would be frozen")
     ny, nx = tile_class.shape
+    names = class_names or [level_ice_name(h) for h in class_thickness]
+    if len(names) != len(class_thickness) or len(set(names)) != len(names):
+        raise ValueError(f"class names {names} must name each of {len(class_thickness)} classes once")
     return SceneModel(settings, nx, ny, float(tile_side), radius, np.ascontiguousarray(tile_class, np.uint8).ravel(),
-                      np.asarray(class_thickness, float), tuple(np.asarray(t, np.int64) for t in class_templates))
+                      np.asarray(class_thickness, float), tuple(np.asarray(t, np.int64) for t in class_templates),
+                      tuple(names))
+
+
+def level_ice_name(thickness: float) -> str:
+    """What the instructor calls a level-ice class of this thickness (m)."""
+    return "open water" if thickness <= 0.0 else f"level ice {thickness:.2f} m"
 
 
 def open_water(model: SceneModel) -> SceneModel:
@@ -109,8 +130,8 @@ def open_water(model: SceneModel) -> SceneModel:
 
 
 def new_scene_data(model: SceneModel) -> SceneData:
-    """Every tile unbreakable."""
-    return SceneData(np.zeros(model.nx * model.ny, dtype=np.uint8))
+    """Every tile unbreakable, of its class as laid."""
+    return SceneData(np.zeros(model.nx * model.ny, dtype=np.uint8), model.tile_class.copy())
 
 
 def detected_tiles(model: SceneModel, contour: np.ndarray, origin: np.ndarray) -> np.ndarray:
@@ -122,9 +143,16 @@ def detected_tiles(model: SceneModel, contour: np.ndarray, origin: np.ndarray) -
     return tiles_near(contour, model.radius, model.nx, model.ny, model.side)
 
 
-def with_ice(model: SceneModel, tiles: np.ndarray) -> np.ndarray:
+def with_ice(model: SceneModel, data: SceneData, tiles: np.ndarray) -> np.ndarray:
     """The tiles (flat indices) that hold ice: open-water tiles (thickness 0) are never placed."""
-    return tiles[model.class_thickness[model.tile_class[tiles]] > 0.0]
+    return tiles[model.class_thickness[data.tile_class[tiles]] > 0.0]
+
+
+def retiled_records(tiles: np.ndarray, classes: np.ndarray) -> np.ndarray:
+    """The published records (``RETILED``) of tiles (flat indices) and their classes."""
+    out = np.zeros(len(tiles), dtype=RETILED)
+    out["tile"], out["ice_class"] = tiles, classes
+    return out
 
 
 def tiles_to_prepare(model: SceneModel, data: SceneData, contour: np.ndarray) -> np.ndarray:
@@ -132,7 +160,7 @@ def tiles_to_prepare(model: SceneModel, data: SceneData, contour: np.ndarray) ->
     points (n, 2) m: those a switch may soon need."""
     if model.settings.prepare_ahead <= 0.0:
         return np.zeros(0, dtype=np.int64)
-    near = with_ice(model, tiles_near(contour, model.radius + model.settings.prepare_ahead, model.nx, model.ny,
+    near = with_ice(model, data, tiles_near(contour, model.radius + model.settings.prepare_ahead, model.nx, model.ny,
                                       model.side))
     return near[data.tile_state[near] != TileState.BREAKABLE]
 
@@ -141,7 +169,7 @@ def update_scene(model: SceneModel, data: SceneData, contour: np.ndarray, origin
     """Decide and record this step's swaps: detected unbreakable tiles with ice are placed,
     detected frozen tiles thawed, and (with reverse replacement) breakable tiles whose centre lies
     farther than the reverse distance from the hull's reference point are frozen."""
-    wanted = with_ice(model, detected_tiles(model, contour, origin))
+    wanted = with_ice(model, data, detected_tiles(model, contour, origin))
     state = data.tile_state[wanted]
     place, thaw = wanted[state == TileState.UNBREAKABLE], wanted[state == TileState.FROZEN]
     live = data.live
@@ -158,14 +186,14 @@ def update_scene(model: SceneModel, data: SceneData, contour: np.ndarray, origin
     return SceneUpdate(place, thaw, freeze)
 
 
-def tile_layout(model: SceneModel, tile: int) -> tuple[int, int]:
-    """(template index, quarter turns) for a tile: a variant of its thickness class and a
+def tile_layout(model: SceneModel, tile: int, tile_class: int) -> tuple[int, int]:
+    """(template index, quarter turns) for a tile of this class: a variant of the class and a
     rotation, both from a hash of the tile index (SplitMix64's finaliser)."""
     z = (int(tile) + 0x9E3779B97F4A7C15) & 0xFFFFFFFFFFFFFFFF
     z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & 0xFFFFFFFFFFFFFFFF
     z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & 0xFFFFFFFFFFFFFFFF
     z ^= z >> 31
-    variants = model.class_templates[model.tile_class[tile]]
+    variants = model.class_templates[tile_class]
     return int(variants[z % len(variants)]), int((z >> 8) % 4)
 
 

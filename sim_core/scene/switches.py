@@ -93,7 +93,7 @@ def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate,
     reclaim_rows(data.ice)
     new = []
     for tile in update.place.tolist():
-        template, turns = tile_layout(scene, tile)
+        template, turns = tile_layout(scene, tile, data.scene.tile_class[tile])
         placement[tile] = place_tile(model.ice, data.ice, template, tile_corner(scene, tile), turns,
                                      _take_prepared(model, data, tile))
         new.append(placement[tile])
@@ -132,7 +132,7 @@ def prepare_switch(model: WorldModel, data: WorldData, tile: int) -> PreparedTil
     """Start preparing a field tile's switch: a new placement, or the thaw of its frozen one."""
     if data.scene.tile_state[tile] == TileState.FROZEN:
         return prepare_thaw(model.ice, data.ice, data.scene.placement[tile])
-    template, turns = tile_layout(model.scene, tile)
+    template, turns = tile_layout(model.scene, tile, data.scene.tile_class[tile])
     return prepare_place(model.ice, template, tile_corner(model.scene, tile), turns)
 
 

@@ -6,7 +6,7 @@
 "use strict";
 
 const MAP_COLORS = {
-  water: "#17364f", ice: "#d2dde6", tileLine: "rgba(70, 110, 140, 0.35)", frozenTile: "rgba(96, 130, 160, 0.10)",
+  water: "#17364f", ice: "#d2dde6", pack: "#8fb0c8", tileLine: "rgba(70, 110, 140, 0.35)", frozenTile: "rgba(96, 130, 160, 0.10)",
   floe: "#f7fbfe", floeEdge: "#6d8aa1", frozenFloe: "#c3d1dc", track: "#ffb13b", ship: "#e8331f",
   shipEdge: "#ffffff", traffic: "#2fd27a", light: "rgba(255, 236, 140, 0.28)", grid: "rgba(255, 255, 255, 0.28)",
   gridText: "rgba(255, 255, 255, 0.85)", ghost: "rgba(255, 176, 59, 0.9)", region: "#ff7ad9", ridge: "#e040c0", brash: "#8596a6",
@@ -233,6 +233,10 @@ class MapView {
     ctx.fillStyle = MAP_COLORS.brash;
     for (let i = 0; i + 2 < brash.length; i += 3) {
       ctx.fillRect(brash[i + 1] * side, brash[i] * side, brash[i + 2] * side, side);
+    }
+    for (const [row, col, n, k] of (this.frame && this.frame.laid) || []) {  // the instructor's ice, by kind
+      ctx.fillStyle = MAP_COLORS[(this.geo.ice_kinds || [])[k]] || MAP_COLORS.ice;
+      ctx.fillRect(col * side, row * side, n * side, side);
     }
     ctx.lineWidth = 1 / s;
     const frozen = new Path2D(), tileLines = new Path2D();

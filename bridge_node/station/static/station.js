@@ -35,7 +35,7 @@ function connect() {
   ws.onmessage = (e) => {
     if (typeof e.data === "string") return onText(JSON.parse(e.data));
     const [header, arrays] = unpack(e.data);
-    if (header.type === "geometry") { map.setGeometry(header, arrays); if (!lastFrame) map.zoom(1); }
+    if (header.type === "geometry") { map.setGeometry(header, arrays); iceNames(header.ice_names); if (!lastFrame) map.zoom(1); }
     else if (header.type === "frame") onFrame(header, arrays);
     else if (header.type === "debrief") startDebrief(header, arrays);
   };
@@ -200,11 +200,31 @@ function wireControls() {
     };
   };
   ["rp-north", "rp-east", "rp-heading"].forEach((id) => $(id).addEventListener("input", updateGhost));
+  wireIceForm();
   window.addEventListener("keydown", (e) => { if (e.key === "Escape" && map.pick) { map.pick = null; $("pick-hint").hidden = true; $("map").classList.remove("picking"); } });
   $("zoom-in").onclick = () => map.zoom(1.5);
   $("zoom-out").onclick = () => map.zoom(1 / 1.5);
   $("fit").onclick = () => map.fitField();
   $("follow").onclick = () => map.setFollow(!map.follow);
+}
+
+// lay ice: a rectangle of the field, picked as two corners on the map or typed
+function wireIceForm() {
+  onSubmit("ice-form", () => {
+    const e0 = num("ice-e0"), e1 = num("ice-e1"), n0 = num("ice-n0"), n1 = num("ice-n1");
+    return { command: "set_ice", ice: $("ice-name").value, polygon_m: [[e0, n0], [e1, n0], [e1, n1], [e0, n1]] };
+  });
+  const corner = (e, n, then) => {
+    $("pick-hint").hidden = false; $("map").classList.add("picking");
+    map.pick = (x, y) => { $("pick-hint").hidden = true; $(e).value = x.toFixed(0); $(n).value = y.toFixed(0); if (then) then(); };
+  };
+  $("ice-pick").onclick = () => corner("ice-e0", "ice-n0", () => corner("ice-e1", "ice-n1"));
+}
+
+function iceNames(names) {
+  const select = $("ice-name");
+  if (select.options.length) return;
+  for (const name of names || []) select.add(new Option(name, name));
 }
 
 function updateGhost() {
