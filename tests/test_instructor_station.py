@@ -44,6 +44,7 @@ WATER_RGB = (23, 54, 79)  # MAP_COLORS.water
 REGION_RGB = (255, 122, 217)  # MAP_COLORS.region
 RIDGE_RGB = (224, 64, 192)  # MAP_COLORS.ridge
 BRASH_RGB = (133, 150, 166)  # MAP_COLORS.brash
+CONVOY_RGB = (255, 210, 63)  # MAP_COLORS.convoy
 
 
 def write_config(folder: Path, stream: tuple[int, int], control: int, port: int, extra: str = "") -> Path:
@@ -209,6 +210,27 @@ def test_lay_open_water_from_the_page(exercise, browser):
     assert near(screenshot(browser)[y - 10:y + 11, x - 10:x + 11], WATER_RGB, 6).mean() > 0.9
     wait_until(lambda: "open water laid over E 600-800 m, N 600-800 m" in browser.find_element("id", "log").text, 10,
                "the command in the log")
+
+
+def test_the_map_draws_the_convoy_red_while_too_close(exercise, browser):
+    """A ship ahead in the picture, 250 m north of the own ship (frames given it here; the
+    convoy's own test drives the real traffic picture): a dashed line to it, in the convoy's
+    yellow beyond the limit and red under it."""
+    browser.execute_script(
+        "window.applyFrame = map.applyFrame;"
+        "map.applyFrame = (h, a) => window.applyFrame.call(map, {...h, traffic: [{id: 230000001, x: h.ship.east,"
+        " y: h.ship.north + 250, heading: 0, speed_kn: 6, length: 100, beam: 20}]}, a);")
+    try:
+        for limit, rgb in ((200.0, CONVOY_RGB), (400.0, SHIP_RGB)):
+            browser.execute_script("map.geo.convoy = {ahead_mmsi: 230000001, astern_mmsi: null, min_distance_m: arguments[0]};",
+                                   limit)
+            ship = browser.execute_script("return [lastFrame.ship.east, lastFrame.ship.north]")
+            view(browser, ship[0], ship[1] + 125.0, 1.0)
+            image = screenshot(browser)
+            x, y = (round(v) for v in canvas_pixel(browser, ship[0], ship[1] + 160.0))
+            assert near(image[y - 30:y + 31, x - 3:x + 4], rgb, 30).any(), limit
+    finally:
+        browser.execute_script("map.applyFrame = window.applyFrame; map.geo.convoy = null;")
 
 
 def test_freeze_and_resume_from_the_page(exercise, browser):

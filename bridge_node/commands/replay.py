@@ -230,7 +230,8 @@ def _play(cfg: NodeConfig, args: argparse.Namespace, prep: _Prepared, playback: 
             traffic = replay_traffic(prep.source, prep.seek_to, prep.model.origin, cfg.replay, cfg.links)
             # the run's software console was another process, gone now: its orders come from the record
             links = [s for s in cfg.links if not (args.recorded and s.name == RUN_CONSOLE_LINK)]
-            with LinkHub(links, cfg.arbitration, Path(args.record) if args.record else None, traffic) as hub, \
+            with LinkHub(links, cfg.arbitration, Path(args.record) if args.record else None, traffic,
+                         convoy=cfg.convoy) as hub, \
                     session, KeyReader() as keys, ReplayProgress(console, prep.source, keys) as progress:
                 publisher.publish(snapshot(prep.model, prep.data))
                 wait_for_renderers(renderers, publisher, 300.0)

@@ -108,7 +108,7 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
     """The real-time loop with its live status line; returns the statistics, the last
     events, the links' health and the active alarms."""
     first = snapshot(model, data)
-    with LinkHub(cfg.links, cfg.arbitration, record, traffic) as hub, \
+    with LinkHub(cfg.links, cfg.arbitration, record, traffic, convoy=cfg.convoy) as hub, \
             Live(console=console, refresh_per_second=4, transient=True) as live:
         publisher.publish(first)
         live.update("starting the render processes")

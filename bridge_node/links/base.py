@@ -26,6 +26,7 @@ from collections import Counter
 from collections.abc import Iterable
 from typing import TYPE_CHECKING, ClassVar
 
+from bridge_node.links.convoy import ConvoyTarget
 from bridge_node.links.device_io import Backoff, Opener
 from bridge_node.links.faults import FaultyLine, LinkFault
 from bridge_node.links.messages import (
@@ -179,6 +180,10 @@ class Link(ABC):
 
     def publish_vessels(self, vessels: list[Vessel], now: float) -> None:
         """Send the other vessels that are due, where the protocol has a way to (default: none)."""
+
+    def publish_targets(self, targets: list[ConvoyTarget], now: float) -> None:
+        """Send the convoy's ships as tracked targets, where the protocol has a way to
+        (default: none); called before ``publish`` each tick."""
     @property
     def connected(self) -> bool:
         """Whether the device is open (or, for a link with ``up_when_open`` False, the peer answers)."""

@@ -6,7 +6,8 @@ order source of the exercise's one tick (``bridge_node.exercise.tick``), which g
 alarm change of a step. ``publish`` raises the tick's alarm changes, sends the ship state
 and the other vessels the links hear of (from DIS) on every link, announces the pending
 alarm changes (and every active alarm again each ``ALARM_REPEAT_S``), and flushes the
-listeners. The links' raw traffic goes to the hub's
+listeners. With a convoy configured it tracks the convoy's ships in the traffic picture
+(``bridge_node.links.convoy``): the links send them, and their distance alarms are raised. The links' raw traffic goes to the hub's
 listeners; given a record folder, the hub adds a ``SessionRecord``.
 """
 from __future__ import annotations
@@ -19,6 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from bridge_node.links.arbiter import Decision, OrderArbiter
+from bridge_node.links.convoy import ConvoySettings, ConvoyTarget, ConvoyWatch, convoy_targets
 from bridge_node.links.base import OPEN_WAIT_S, Link
 from bridge_node.links.messages import Alarm, ControlInput, Listener
 from bridge_node.links.faults import LinkFault
@@ -39,10 +41,10 @@ class LinkHub:
 
     def __init__(self, links: Sequence[LinkSettingsBase], arbitration: ArbitrationSettings,
                  record_dir: Path | None = None, traffic: TrafficPicture | None = None,
-                 made: Sequence[Link] | None = None) -> None:
+                 made: Sequence[Link] | None = None, convoy: ConvoySettings | None = None) -> None:
         """The links made from ``links``' settings, or ``made``: links already made (a
         session re-simulation's, which read a record; the settings then give the
-        arbitration its sources' timeouts)."""
+        arbitration its sources' timeouts); with ``convoy``, the convoy watch."""
         self.links = list(made) if made is not None else [make_link(s) for s in links]
         self.traffic = traffic or TrafficPicture()
         self.arbiter = OrderArbiter(arbitration, {s.name: s.timeout_s for s in links})
@@ -56,6 +58,8 @@ class LinkHub:
         self._pending: list[Alarm] = []  # alarm changes not yet announced
         self._down: set[int] = set()  # link-down alarms this hub's polls have raised
         self._last_announce = -math.inf
+        self.convoy = ConvoyWatch(convoy) if convoy is not None else None
+        self.convoy_targets: list[ConvoyTarget] = []  # as last published
 
     def add_listener(self, listener: Listener) -> None:
         """Give ``listener`` the raw traffic of every link; it is stopped when the hub closes."""
@@ -144,12 +148,17 @@ class LinkHub:
             self.raise_alarm(alarm, now)
         if state is None:
             return
+        vessels = self.traffic.gather([v for link in self.links for v in link.vessels(now)], now)
+        if self.convoy is not None:
+            self.convoy_targets = convoy_targets(state, vessels, self.convoy.settings)
+            for alarm in self.convoy.changes(self.convoy_targets):
+                self.raise_alarm(alarm, now)
         changes, self._pending = self._pending, []
         if now - self._last_announce >= ALARM_REPEAT_S:
             self._last_announce = now
             changes += [a for a in self.active_alarms.values() if a not in changes]
-        vessels = self.traffic.gather([v for link in self.links for v in link.vessels(now)], now)
         for link in self.links:
+            link.publish_targets(self.convoy_targets, now)
             link.publish(truth if link.simulator_peer and truth is not None else state, now)
             link.publish_vessels(vessels, now)
             for alarm in changes:

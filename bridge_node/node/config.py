@@ -17,6 +17,7 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 from bridge_node.charts.sigrid3 import read_chart
 from bridge_node.control.settings import ControlSettings
 from bridge_node.links.registry import LinkSettings
+from bridge_node.links.convoy import ConvoySettings
 from bridge_node.links.settings import ArbitrationSettings
 from bridge_node.common.errors import UserError
 from bridge_node.common.input_files import TOML_LIMIT, read_input_text
@@ -125,6 +126,7 @@ class NodeConfig(Params):
     links: list[LinkSettings] = Field(default_factory=list)
     arbitration: ArbitrationSettings = ArbitrationSettings()
     traffic: TrafficSettings = TrafficSettings()
+    convoy: ConvoySettings | None = None
     paths: PathSettings = PathSettings()
     console: RunConsoleSettings | None = None
 

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import shapely
 
+from bridge_node.links.convoy import ConvoySettings
 from bridge_node.station.wire import pack
 from sim_core.csr import offsets
 from sim_core.frames.geodesy import radii
@@ -16,7 +17,8 @@ from sim_core.scene.scene import SceneModel
 from sim_core.world import WorldModel
 
 
-def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions: list[IceRegion] = ()) -> bytes:
+def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions: list[IceRegion] = (),
+                     convoy: ConvoySettings | None = None) -> bytes:
     """The ``geometry`` message: JSON for the field, ship (``ship_name``), templates and the
     station's update rate (``rate_hz``, Hz); arrays of every
     global cell's outline points (x, y about its centroid, m), outline starts (G + 1) and
@@ -24,7 +26,9 @@ def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions:
     tiles of brash alone (``brash_runs``), and
     the ice regions as they lie on the field (``regions`` in the header: name, egg code, kind,
     label point; their outline rings' points ``region_xy``, ring starts and owners), and the
-    ridge lines' points ``ridge_xy`` and line starts ``ridge_start``."""
+    ridge lines' points ``ridge_xy`` and line starts ``ridge_start``; the exercise's ice
+    classes (``ice_names``, ``ice_kinds``) and its convoy (``convoy``: the MMSIs of the ships
+    ahead and astern and the alarm's distance, or null)."""
     ice, scene, ship = model.ice, model.scene, model.ship.particulars
     lat0, lon0 = model.origin
     m, n = radii(lat0)
@@ -41,6 +45,7 @@ def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions:
         "templates": templates,
         "ice_names": list(scene.class_names), "ice_kinds": ice_kinds(model),
         "rate_hz": rate_hz,
+        "convoy": convoy.model_dump() if convoy is not None else None,
     }
     header["regions"], rings = region_outlines(list(regions), shapely.box(0.0, 0.0, scene.nx * scene.side,
                                                                           scene.ny * scene.side))

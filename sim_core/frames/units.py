@@ -1,3 +1,4 @@
 """Units used at the edges (config files, displays, NMEA): SI inside, these only outside."""
 
-KNOT = 1852.0 / 3600.0  # m/s
+NAUTICAL_MILE = 1852.0  # m
+KNOT = NAUTICAL_MILE / 3600.0  # m/s

@@ -18,10 +18,12 @@ import serial
 
 from bridge_node.common.network import is_loopback_host
 from bridge_node.links.base import Link
+from bridge_node.links.convoy import ConvoyTarget
 from bridge_node.links.device_io import QueuedWriter, RateSchedule
 from bridge_node.links.messages import Alarm, ControlInput, Vessel
 from bridge_node.links.nmea0183.ais import AisReporter
-from bridge_node.links.nmea0183.sentences import SentenceError, parse_order, render_alarm, render_outputs
+from bridge_node.links.nmea0183.sentences import (TTM_RATE, SentenceError, parse_order, render_alarm,
+                                                  render_outputs, render_targets)
 from bridge_node.links.nmea0183.settings import NmeaLinkSettings
 from sim_core.ship.outputs import ShipOutputs
 
@@ -85,7 +87,8 @@ class NmeaLink(Link):
         super().__init__(settings)
         self._udp: socket.socket | None = None
         self._pending = b""
-        self._schedule = RateSchedule(settings.output_rates())
+        self._schedule = RateSchedule({k: r for k, r in settings.output_rates().items() if k != "TTM"})
+        self._targets_schedule = RateSchedule({"TTM": settings.rates.get("TTM", TTM_RATE)})
         self._talkers = settings.talkers
         self._allowed = settings.order_talkers()
         self._ais = AisReporter(settings.ais) if settings.ais is not None else None
@@ -179,6 +182,10 @@ class NmeaLink(Link):
             sentences += self._ais.own_ship(state, now, utc)
         if sentences:
             self._send(sentences, now)
+
+    def publish_targets(self, targets: list[ConvoyTarget], now: float) -> None:
+        if targets and self._targets_schedule.due(now):
+            self._send(render_targets(targets, self._utc(), self._talkers.get("TTM", "RA")), now)
 
     def publish_vessels(self, vessels: list[Vessel], now: float) -> None:
         if self._ais is not None and vessels:

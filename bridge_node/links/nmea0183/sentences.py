@@ -1,5 +1,5 @@
 """NMEA 0183 sentences: console orders in (ROR, ETL, PRC and the proprietary searchlight
-order PICBSL), ship state and alarms out.
+order PICBSL), ship state, the convoy's ships (TTM) and alarms out.
 
 pynmea2 parses and renders the standard sentences. It has no ROR, ETL, PRC or ALR, so
 those are registered here as ``pynmea2.TalkerSentence`` subclasses (parse and render both
@@ -15,8 +15,9 @@ from dataclasses import dataclass
 
 import pynmea2
 
+from bridge_node.links.convoy import ConvoyTarget
 from bridge_node.links.messages import ETL_POSITIONS, RUDDER_ORDER_LIMIT_DEG, Alarm, ControlInput, searchlight_order
-from sim_core.frames.units import KNOT
+from sim_core.frames.units import KNOT, NAUTICAL_MILE
 from sim_core.ship.orders import OrderKind
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.ship.searchlights import SearchlightOrder
@@ -25,14 +26,15 @@ from sim_core.ship.searchlights import SearchlightOrder
 # gpsd up to 3.23 (Debian 12, Ubuntu 22.04) drops the gyro's HE talker in its packet lexer,
 # and every gpsd accepts GP, II and IN; OpenCPN takes any talker.
 DEFAULT_TALKERS = {"RMC": "GP", "GGA": "GP", "VTG": "GP", "ZDA": "GP", "HDT": "IN", "ROT": "IN", "RSA": "II",
-                   "RPM": "II", "VBW": "II", "XDR": "II", "ALR": "II"}
+                   "RPM": "II", "VBW": "II", "XDR": "II", "ALR": "II", "TTM": "RA"}
 # talkers whose orders are taken by default: autopilot (general AG, magnetic AP), propulsion
 # and remote control RC, integrated instrumentation II and integrated navigation IN
 COMMON_ORDER_TALKERS = ("AG", "AP", "RC", "II", "IN")
 DEFAULT_RATES = {"RMC": 1.0, "GGA": 1.0, "VTG": 1.0, "ZDA": 1.0, "HDT": 10.0, "ROT": 5.0, "RSA": 5.0,
                  "RPM": 2.0, "VBW": 1.0, "XDR": 1.0}  # Hz
 TYPICAL_LENGTH = {"RMC": 72, "GGA": 74, "VTG": 40, "ZDA": 36, "HDT": 18, "ROT": 18, "RSA": 22, "RPM": 28,
-                  "VBW": 44, "XDR": 62}  # characters with CR LF, to budget a line's baud rate
+                  "VBW": 44, "XDR": 62, "TTM": 140}  # characters with CR LF, to budget a line's baud rate
+TTM_RATE = 1.0  # Hz: the convoy's ships (two TTM), unless ``rates`` sets it (then it counts in the budget)
 
 _DECIMAL = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)")
 # a framed sentence: $ or !, an address (talker + type, or a proprietary P...), fields of
@@ -270,3 +272,18 @@ def render_alarm(alarm: Alarm, utc: dt.datetime, talker: str = "II") -> str:
     """ALR sentence for an alarm; its text fits whole (see ``Alarm``)."""
     hms = utc.strftime("%H%M%S.") + f"{utc.microsecond // 10000:02d}"
     return str(ALR(talker, "ALR", (hms, f"{alarm.number:03d}", "A" if alarm.active else "V", "V", alarm.text)))
+
+
+def render_targets(targets: list[ConvoyTarget], utc: dt.datetime, talker: str = "RA") -> list[str]:
+    """TTM (tracked target message, IEC 61162-1) for each convoy ship: its number (1 ahead,
+    2 astern), distance and CPA in nautical miles, true bearing and course, speed in knots,
+    TCPA in minutes (negative: past), its name, tracking, acquired as reported (AIS, DIS)."""
+    hms = utc.strftime("%H%M%S.") + f"{utc.microsecond // 10000:02d}"
+    out = []
+    for t in targets:
+        name = "".join(" " if c in ",*$!" else c for c in t.name)[:20]
+        fields = (f"{t.number:02d}", f"{t.distance / NAUTICAL_MILE:.3f}", f"{math.degrees(t.bearing):.1f}", "T",
+                  f"{t.speed / KNOT:.1f}", f"{math.degrees(t.course):.1f}", "T", f"{t.cpa / NAUTICAL_MILE:.3f}",
+                  f"{t.tcpa / 60.0:.1f}", "N", name, "T", "", hms, "R")
+        out.append(str(pynmea2.types.talker.TTM(talker, "TTM", fields)))
+    return out

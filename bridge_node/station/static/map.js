@@ -6,7 +6,7 @@
 "use strict";
 
 const MAP_COLORS = {
-  water: "#17364f", ice: "#d2dde6", pack: "#8fb0c8", tileLine: "rgba(70, 110, 140, 0.35)", frozenTile: "rgba(96, 130, 160, 0.10)",
+  water: "#17364f", ice: "#d2dde6", pack: "#8fb0c8", convoy: "#ffd23f", tileLine: "rgba(70, 110, 140, 0.35)", frozenTile: "rgba(96, 130, 160, 0.10)",
   floe: "#f7fbfe", floeEdge: "#6d8aa1", frozenFloe: "#c3d1dc", track: "#ffb13b", ship: "#e8331f",
   shipEdge: "#ffffff", traffic: "#2fd27a", light: "rgba(255, 236, 140, 0.28)", grid: "rgba(255, 255, 255, 0.28)",
   gridText: "rgba(255, 255, 255, 0.85)", ghost: "rgba(255, 176, 59, 0.9)", region: "#ff7ad9", ridge: "#e040c0", brash: "#8596a6",
@@ -214,13 +214,14 @@ class MapView {
     this._drawTrack(ctx, s);
     if (this.frame) {
       this._drawTraffic(ctx, s);
+      if (this.geo.convoy) drawConvoy(ctx, s, this.geo.convoy, this.frame);
       this._drawShip(ctx, s, this.frame.ship, MAP_COLORS.ship, true);
     }
     if (this.ghost) this._drawGhost(ctx, s);
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     this._drawRegionLabels(ctx, w, h);
     this._drawGrid(ctx, w, h);
-    this._drawScale(ctx, h);
+    drawScale(ctx, h, this.scale);
     this._measure(t0);
   }
 
@@ -385,57 +386,9 @@ class MapView {
     ctx.stroke();
   }
 
-  _drawScale(ctx, h) {
-    const target = 120 / this.scale, pow = Math.pow(10, Math.floor(Math.log10(target)));
-    const metres = [1, 2, 5, 10].map((k) => k * pow).filter((m) => m <= target).pop();
-    const px = metres * this.scale, x = 14, y = h - 18;
-    ctx.fillStyle = "rgba(13, 24, 33, 0.7)"; ctx.fillRect(x - 6, y - 14, px + 110, 24);
-    ctx.strokeStyle = "#fff"; ctx.lineWidth = 2; ctx.beginPath();
-    ctx.moveTo(x, y - 5); ctx.lineTo(x, y); ctx.lineTo(x + px, y); ctx.lineTo(x + px, y - 5); ctx.stroke();
-    ctx.fillStyle = "#fff"; ctx.font = "11px system-ui, sans-serif";
-    ctx.fillText(`${metres >= 1000 ? `${metres / 1000} km` : `${metres} m`}  (${(metres / 1852).toPrecision(2)} NM)`, x + px + 6, y + 1);
-  }
-
   _measure(t0) {
     const st = this.stats, now = performance.now();
     st.draws++; st._n++; st.drawMs = now - t0;
     if (now - st._t0 >= 1000) { st.fps = st._n * 1000 / (now - st._t0); st._n = 0; st._t0 = now; }
   }
-}
-
-function sameArrays(a, b) {
-  if (a.length !== b.length) return false;
-  for (let i = 0; i < a.length; i++) if (a[i] !== b[i]) return false;
-  return true;
-}
-
-// a grid step in degrees: 0.01' to 30' (decimal minutes, as on a chart), or whole degrees
-function niceAngle(span) {
-  const steps = [0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 30].map((m) => m / 60).concat([1, 2, 5, 10]);
-  return steps.find((st) => st >= span) || 10;
-}
-
-// degrees as 74°01.25'N
-function formatAngle(deg, pos, neg, width) {
-  const hemi = deg < 0 ? neg : pos, a = Math.abs(deg) + 1e-9, d = Math.floor(a), m = (a - d) * 60;
-  return `${String(d).padStart(width, "0")}°${m.toFixed(2).padStart(5, "0")}'${hemi}`;
-}
-
-function formatLatLon(geo, x, y) {
-  const o = geo.origin;
-  return `${formatAngle(o.latitude_deg + y / o.m_per_deg_lat, "N", "S", 2)} ${formatAngle(o.longitude_deg + x / o.m_per_deg_lon, "E", "W", 3)}`;
-}
-
-// polylines (world m: points xy flattened, starts of each) as one path, rings if closed, or
-// null when there are none (the regions' outline rings, the ridges' lines)
-function pathOf(xy, start, closed) {
-  if (!xy || !xy.length) return null;
-  const path = new Path2D();
-  for (let r = 0; r + 1 < start.length; r++) {
-    for (let i = start[r]; i < start[r + 1]; i++) {
-      if (i === start[r]) path.moveTo(xy[2 * i], xy[2 * i + 1]); else path.lineTo(xy[2 * i], xy[2 * i + 1]);
-    }
-    if (closed) path.closePath();
-  }
-  return path;
 }
