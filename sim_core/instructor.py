@@ -130,7 +130,7 @@ class RemoveVessel:
 
 @dataclass(frozen=True)
 class SetIce:
-    """Lay the ice of class ``ice_class`` (``SceneModel.class_names``) over the tiles whose
+    """Lay the ice class named ``ice`` (one of ``SceneModel.class_names``) over the tiles whose
     centres lie in the polygon: (east, north) m from the exercise origin, as a region's
     (``sim_core.regimes.settings``), where the field lies now (a drifting field has moved
     from where it was laid). Only ice the
@@ -139,7 +139,7 @@ class SetIce:
     built ahead; building new ones at the switch would stall the step)."""
 
     polygon: tuple[tuple[float, float], ...]
-    ice_class: int
+    ice: str
 
 
 Command = (Freeze | Reposition | SetEnvironment | SetClock | SteeringFailure | EngineFailure | SensorFailure
@@ -171,17 +171,17 @@ def apply_command(model: WorldModel, data: WorldData, command: Command) -> Comma
     elif isinstance(command, Reposition):
         data.moving_to = None
         move_ship(model, data, command)
-    elif isinstance(command, SetIce) and command.ice_class >= len(model.scene.class_thickness):
-        return None  # a class the world lacks (a record replayed on another exercise)
+    elif isinstance(command, SetIce) and command.ice not in model.scene.class_names:
+        return None  # ice the world lacks (a record replayed on another exercise)
     elif isinstance(command, SetIce):
         lay_ice(model, data, command)
     return command
 
 
-def lay_ice(model: WorldModel, data: WorldData, command: SetIce) -> np.ndarray:
-    """Carry a ``SetIce`` out on the scene; returns the tiles (flat indices) whose class
-    it changed. Preparations of those tiles are dropped (``prepare_ahead`` redoes them)."""
-    scene = model.scene
+def lay_ice(model: WorldModel, data: WorldData, command: SetIce) -> None:
+    """Carry a ``SetIce`` out on the scene (its ice one the model has). Preparations of the
+    tiles it changes are dropped (``prepare_ahead`` redoes them)."""
+    scene, ice_class = model.scene, model.scene.class_names.index(command.ice)
     area = shapely.Polygon(np.array(command.polygon) - data.ice_frame.offset)  # in the ice's frame
     x0, y0, x1, y1 = area.bounds
     ix = np.arange(max(0, int(x0 // scene.side)), min(scene.nx, int(x1 // scene.side) + 1))
@@ -190,15 +190,14 @@ def lay_ice(model: WorldModel, data: WorldData, command: SetIce) -> np.ndarray:
     centre = scene.centre(tiles)
     tiles = tiles[shapely.contains_xy(area, centre[:, 0], centre[:, 1])
                   & (data.scene.tile_state[tiles] == TileState.UNBREAKABLE)
-                  & (data.scene.tile_class[tiles] != command.ice_class)]
+                  & (data.scene.tile_class[tiles] != ice_class)]
     near = tiles_near(ship_contour_in_ice(model, data), scene.radius + scene.settings.prepare_ahead,
                       scene.nx, scene.ny, scene.side)
     tiles = np.setdiff1d(tiles, near)
-    data.scene.tile_class[tiles] = command.ice_class
+    data.scene.tile_class[tiles] = ice_class
     for tile in tiles.tolist():
         if tile in data.ahead:
             discard_prepared(data.ice, data.ahead.pop(tile))
-    return tiles
 
 
 def _command_vessel(vessels: dict[int, OtherVessel], command: Command) -> bool:

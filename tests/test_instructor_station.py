@@ -6,7 +6,6 @@ and one station serve the tests in order; the map's test comes first and waits f
 to break a channel behind it."""
 from __future__ import annotations
 
-import io
 import json
 import math
 import subprocess
@@ -32,44 +31,29 @@ from bridge_node.station.harness import (
     stop,
     wait_until,
 )
-from bridge_node.station.wire import unpack
+from station_helpers import (
+    SHIP_RGB,
+    FLOE_RGB,
+    LEVEL_ICE_RGB,
+    WATER_RGB,
+    REGION_RGB,
+    RIDGE_RGB,
+    BRASH_RGB,
+    CONVOY_RGB,
+    write_config,
+    screenshot,
+    near,
+    canvas_pixel,
+    view,
+    shown_time,
+    endpoint_of,
+    websocket_hello,
+    websocket_refused,
+)
 
 REPO = Path(__file__).resolve().parent.parent
 require_chromium()  # a failure, not a skip: the browser checks must run wherever the suite does
 TOKEN = "instructor-test-token-0123456789"
-SHIP_RGB = (232, 51, 31)  # MAP_COLORS.ship in map.js
-FLOE_RGB = (247, 251, 254)  # MAP_COLORS.floe
-LEVEL_ICE_RGB = (210, 221, 230)  # MAP_COLORS.ice
-WATER_RGB = (23, 54, 79)  # MAP_COLORS.water
-REGION_RGB = (255, 122, 217)  # MAP_COLORS.region
-RIDGE_RGB = (224, 64, 192)  # MAP_COLORS.ridge
-BRASH_RGB = (133, 150, 166)  # MAP_COLORS.brash
-CONVOY_RGB = (255, 210, 63)  # MAP_COLORS.convoy
-
-
-def write_config(folder: Path, stream: tuple[int, int], control: int, port: int, extra: str = "") -> Path:
-    """An 800 m field of 0.3 m ice with an ice-free corner (a lake), the ship's bow in it,
-    loopback ports of its own, and NMEA 0183 instrument sentences on UDP (the session
-    record's tx sentences a debrief plays)."""
-    text = ('[ship]\nname = "polar_cargo"\n[ice_field]\nwidth = 800.0\nheight = 800.0\nthickness = 0.3\n'
-            '[[ice_field.regions]]\nname = "lake"\nconcentration = 0\n'  # open water in the north-west corner
-            'polygon_m = [[0.0, 600.0], [200.0, 600.0], [200.0, 800.0], [0.0, 800.0]]\n'
-            '[[ice_field.regions]]\nname = "brash"\nconcentration = 9\n'  # brash alone in the south-east
-            'ice = [{ stage = "grey_white", floe_size = "brash" }]\n'
-            'polygon_m = [[600.0, 0.0], [800.0, 0.0], [800.0, 200.0], [600.0, 200.0]]\n'
-            '[[ice_field.ridges]]\nname = "ridges"\ndirection_deg = 90.0\nspacing_m = 150.0\n'  # one ridge line,
-            'through_m = [0.0, 400.0]\npolygon_m = [[550.0, 350.0], [800.0, 350.0], [800.0, 450.0], [550.0, 450.0]]\n'
-            '[exercise]\nstart_north = -20.0\nstart_east = 450.0\n'
-            f'[paths]\ncache_dir = "{folder / "tiles"}"\nsession_dir = "{folder / "sessions"}"\n'
-            f'[stream]\npublish = "tcp://127.0.0.1:{stream[0]}"\nsnapshot = "tcp://127.0.0.1:{stream[1]}"\n'
-            f'[control]\nendpoint = "tcp://127.0.0.1:{control}"\n' + extra +
-            f'[instructor]\nport = {port}\n' + ("allow_network = true\n" if "token" in extra else "") +
-            f'[[links]]\nname = "instruments"\ntype = "nmea0183"\nudp_port = {free_port()}\n')
-    path = folder / f"exercise-{port}.toml"
-    path.write_text(text)
-    return path
-
-
 @pytest.fixture(scope="module")
 def exercise(tmp_path_factory):
     """A running node and a station on it: (config, station URL, folder)."""
@@ -88,44 +72,12 @@ def browser():
         yield driver
 
 
-def screenshot(browser) -> np.ndarray:
-    return np.asarray(Image.open(io.BytesIO(browser.get_screenshot_as_png())).convert("RGB")).astype(int)
-
-
-def near(image: np.ndarray, rgb: tuple[int, int, int], tolerance: int = 12) -> np.ndarray:
-    return (np.abs(image - np.array(rgb)) <= tolerance).all(axis=2)
-
-
-def canvas_pixel(browser, east: float, north: float) -> tuple[float, float]:
-    """Where a world point is drawn, in page pixels (the map's own transform)."""
-    return browser.execute_script(
-        "const r = map.canvas.getBoundingClientRect(), w = r.width, h = r.height;"
-        "return [r.left + w / 2 + (arguments[0] - map.cx) * map.scale, r.top + h / 2 - (arguments[1] - map.cy) * map.scale];",
-        east, north)
-
-
-def view(browser, east: float, north: float, scale: float) -> None:
-    """Hold the map still on a world point at a scale (px/m), and wait for it to be drawn."""
-    browser.execute_script("map.setFollow(false); map.cx = arguments[0]; map.cy = arguments[1]; map.scale = arguments[2];"
-                           "map.dirty = true;", east, north, scale)
-    draws = browser.execute_script("return window.stationStats.draws")
-    wait_until(lambda: browser.execute_script("return window.stationStats.draws") > draws + 1, 10, "a redraw")
-
-
-def shown_time(browser) -> float:
-    return float(browser.find_element("id", "sim-time").text.split()[0])
-
-
-def _endpoint(config: Path) -> str:
-    return next(line.split('"')[1] for line in config.read_text().splitlines() if line.startswith("endpoint"))
-
-
 def test_map_shows_ship_and_floes(exercise, browser):
     config, url, folder = exercise
     open_page(browser, url, floes=100)
     wait_until(lambda: browser.execute_script("return lastFrame.ship.north") > 120.0, 120,
                "the ship's stern 45 m into the ice (a channel behind it)")
-    request(_endpoint(config), {"command": {"command": "freeze"}}, None)  # a still picture to compare with
+    request(endpoint_of(config), {"command": {"command": "freeze"}}, None)  # a still picture to compare with
     try:
         status = wait_until(lambda: (s := ctl_status(config))["frozen"] and s, 20, "the node frozen")
         wait_until(lambda: browser.execute_script("return lastFrame.environment.frozen"), 10, "the page frozen")
@@ -150,7 +102,7 @@ def test_map_shows_ship_and_floes(exercise, browser):
         level = near(box(-100.0, 60.0, 20), LEVEL_ICE_RGB, 6).mean()  # 60 m to starboard of it: intact
         assert channel < 0.5 < level, f"level ice: {channel:.0%} of the channel astern, {level:.0%} beside it"
     finally:
-        request(_endpoint(config), {"command": {"command": "resume"}}, None)
+        request(endpoint_of(config), {"command": {"command": "resume"}}, None)
 
 
 def test_the_map_shows_the_regions_and_their_open_water(exercise, browser):
@@ -275,7 +227,7 @@ def test_reposition_from_the_page(exercise, browser):
     assert abs(status["heading_deg"] - 90.0) < 5.0
     wait_until(lambda: math.dist(browser.execute_script("return [lastFrame.ship.east, lastFrame.ship.north]"), picked)
                < 20, 10, "the page's ship at the picked place")
-    request(_endpoint(config), {"command": {"command": "freeze"}}, None)
+    request(endpoint_of(config), {"command": {"command": "freeze"}}, None)
     try:
         wait_until(lambda: browser.execute_script("return lastFrame.environment.frozen"), 10, "the page frozen")
         ship = browser.execute_script("return [lastFrame.ship.east, lastFrame.ship.north]")
@@ -285,7 +237,7 @@ def test_reposition_from_the_page(exercise, browser):
         assert near(image[y - 4:y + 5, x - 4:x + 5], SHIP_RGB, 20).mean() > 0.5, "no ship drawn at its new place"
         assert "reposition" in browser.find_element("id", "log").text
     finally:
-        request(_endpoint(config), {"command": {"command": "resume"}}, None)
+        request(endpoint_of(config), {"command": {"command": "resume"}}, None)
 
 
 def test_a_refused_command_is_shown(exercise, browser):
@@ -341,7 +293,7 @@ def test_links_sensor_failures_and_a_save_point_from_the_page(exercise, browser)
         for command in ({"command": "link_fault", "link": "instruments", "fault": "none"},
                         {"command": "sensor_failure", "sensor": "gyro", "mode": "ok"},
                         {"command": "sensor_failure", "sensor": "gnss", "mode": "ok"}):
-            request(_endpoint(config), {"command": command}, None)
+            request(endpoint_of(config), {"command": command}, None)
     apply("save-form", **{"save-name": "from-the-page"})
     path = Path(wait_until(lambda: "writes" in (t := text("save-reply")) and t.rsplit(" ", 1)[1], 10, "the save's path"))
     point = wait_until(lambda: path.is_file() and read_save(path), 20, "the save point written")
@@ -353,7 +305,7 @@ def test_token_asked_with_the_network_opened(exercise, tmp_path, browser):
     stream = [int(line.rsplit(":", 1)[1].rstrip('"')) for line in config.read_text().splitlines()
               if line.startswith(("publish", "snapshot"))]
     port = free_port()
-    guarded = write_config(folder, tuple(stream), int(_endpoint(config).rsplit(":", 1)[1]), port,
+    guarded = write_config(folder, tuple(stream), int(endpoint_of(config).rsplit(":", 1)[1]), port,
                            extra=f'token = "{TOKEN}"\n')
     station = start(folder, "guarded", "instructor", "--config", str(guarded))
     url = f"http://127.0.0.1:{port}/"
@@ -363,8 +315,8 @@ def test_token_asked_with_the_network_opened(exercise, tmp_path, browser):
         assert http(url + "static/station.js")[0] == 401
         assert http(url, {"Authorization": f"Bearer {TOKEN}"})[0] == 200
         assert http(url + "?token=wrong-token-0123456789")[0] == 401
-        _websocket_refused(port)
-        assert _websocket_hello(port, TOKEN)["type"] == "hello"
+        websocket_refused(port)
+        assert websocket_hello(port, TOKEN)["type"] == "hello"
         browser.get(url)  # the login page, then the station with the token's cookie
         browser.find_element("id", "t").send_keys(TOKEN + "\n")
         wait_until(lambda: browser.execute_script("return !!window.stationStats && window.stationStats.frames > 2"),
@@ -372,31 +324,6 @@ def test_token_asked_with_the_network_opened(exercise, tmp_path, browser):
     finally:
         stop(station)
         browser.delete_all_cookies()
-
-
-def _websocket_refused(port: int) -> None:
-    from websockets.exceptions import ConnectionClosed, InvalidStatus
-    from websockets.sync.client import connect
-
-    try:
-        with connect(f"ws://127.0.0.1:{port}/ws", open_timeout=10) as ws:
-            ws.recv(timeout=5)
-    except InvalidStatus as exc:
-        assert exc.response.status_code in (401, 403)
-    except ConnectionClosed:
-        pass
-    else:
-        raise AssertionError("a WebSocket without the token got a message")
-
-
-def _websocket_hello(port: int, token: str) -> dict:
-    from websockets.sync.client import connect
-
-    with connect(f"ws://127.0.0.1:{port}/ws?token={token}", open_timeout=10, max_size=None) as ws:
-        hello = json.loads(ws.recv(timeout=10))
-        header, arrays = unpack(ws.recv(timeout=10))
-        assert header["type"] == "geometry" and len(arrays["outline_start"]) > 1
-        return hello
 
 
 def test_user_errors_are_clean(exercise):

@@ -30,6 +30,8 @@ SCRIPT = [  # (simulated time s at which the instructor sends it, command)
     (3.0, {"command": "add_vessel", "mmsi": 230000001, "name": "ODEN", "length_m": 108.0, "beam_m": 31.0,
            "north_m": 400.0, "east_m": 300.0, "course_deg": 200.0, "speed_kn": 9.0}),
     (4.0, {"command": "steer_vessel", "mmsi": 230000001, "course_deg": 90.0, "speed_kn": 3.0}),
+    (4.5, {"command": "set_ice", "ice": "open water", "polygon_m": [[0.0, 500.0], [600.0, 500.0], [600.0, 600.0],
+                                                                  [0.0, 600.0]]}),
 ]
 
 
@@ -77,4 +79,6 @@ def test_a_replay_of_a_commanded_run_ends_in_its_final_state(tmp_path):
     assert again.vessels == live.vessels and live.vessels[230000001].course == pytest.approx(math.pi / 2)
     a, b = live.ice.state, again.ice.state
     np.testing.assert_array_equal(a.status, b.status)
+    laid = np.flatnonzero(live.scene.tile_class != model.scene.tile_class)
+    assert len(laid) >= 3 and np.array_equal(again.scene.tile_class, live.scene.tile_class)  # the same ice laid
     assert math.hypot(*(again.ship.eta[:2] - live.ship.eta[:2])) < 1e-6

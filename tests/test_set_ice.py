@@ -43,10 +43,6 @@ def world(tmp_path_factory):
     return _world(tmp_path_factory)
 
 
-def _ice(model, name):
-    return model.scene.class_names.index(name)
-
-
 def _move_to(model, data, north: float, east: float = 350.0) -> None:
     """Move the ship there at once (its tiles built at the switch) and steam on for 2 s."""
     step(model, data, DT, commands=(Reposition(north, east, 0.0, 2.0, at_once=True),))
@@ -100,14 +96,14 @@ def test_only_ice_the_ship_has_not_met_changes(tmp_path_factory):
         step(model, data, DT)
     placed = np.flatnonzero(data.scene.tile_state != TileState.UNBREAKABLE)
     everything = ((-10.0, -10.0), (610.0, -10.0), (610.0, 1010.0), (-10.0, 1010.0))
-    events = step(model, data, DT, commands=(SetIce(everything, _ice(model, "open water")),))
+    events = step(model, data, DT, commands=(SetIce(everything, "open water"),))
     changed = events.retiled["tile"]
     assert len(placed) and not np.isin(placed, changed).any()  # the broken ice stays
     near = data.scene.tile_class == model.scene.tile_class
     assert near.sum() > len(placed)  # and so do the tiles about to be switched in around the hull
-    assert np.all(data.scene.tile_class[changed] == _ice(model, "open water")) and len(changed) > 30
+    assert np.all(data.scene.tile_class[changed] == model.scene.class_names.index("open water")) and len(changed) > 30
     assert np.array_equal(np.sort(changed), np.flatnonzero(~near))
-    assert events.commands == (SetIce(everything, _ice(model, "open water")),)
+    assert events.commands == (SetIce(everything, "open water"),)
 
 
 def test_the_ship_meets_open_water_laid_ahead_and_level_ice_without(tmp_path_factory):
@@ -115,7 +111,7 @@ def test_the_ship_meets_open_water_laid_ahead_and_level_ice_without(tmp_path_fac
     for lay in (False, True):
         model, data = _world(tmp_path_factory)
         if lay:
-            step(model, data, DT, commands=(SetIce(NORTH_BAND, _ice(model, "open water")),))
+            step(model, data, DT, commands=(SetIce(NORTH_BAND, "open water"),))
         _move_to(model, data, 800.0)
         tile = 8 * model.scene.nx + 3
         conditions[lay] = data.ship.ice_condition, data.ship.ice_h, TileState(data.scene.tile_state[tile])
@@ -125,7 +121,7 @@ def test_the_ship_meets_open_water_laid_ahead_and_level_ice_without(tmp_path_fac
 
 def test_a_floe_field_laid_over_level_ice_is_placed_from_its_templates(tmp_path_factory):
     model, data = _world(tmp_path_factory)
-    pack = next(k for k, name in enumerate(model.scene.class_names) if name.startswith("7/10"))
+    pack = next(name for name in model.scene.class_names if name.startswith("7/10"))
     step(model, data, DT, commands=(SetIce(NORTH_BAND, pack),))
     _move_to(model, data, 850.0)
     placed = {t: k for t, k in data.scene.placement.items()}
@@ -139,7 +135,7 @@ def test_a_floe_field_laid_over_level_ice_is_placed_from_its_templates(tmp_path_
 def test_on_a_drifting_field_the_area_is_where_the_ice_lies_now(tmp_path_factory):
     model, data = _world(tmp_path_factory)
     data.ice_frame.offset[:] = (200.0, 0.0)  # the field has drifted 200 m east
-    step(model, data, DT, commands=(SetIce(NORTH_BAND, _ice(model, "open water")),))
+    step(model, data, DT, commands=(SetIce(NORTH_BAND, "open water"),))
     changed = np.flatnonzero(data.scene.tile_class != model.scene.tile_class)
     columns = set((changed % model.scene.nx).tolist())
     assert columns == {0, 1, 2, 3}  # world east 200-600 m: the field's first four columns now
@@ -147,7 +143,7 @@ def test_on_a_drifting_field_the_area_is_where_the_ice_lies_now(tmp_path_factory
 
 def test_the_stream_carries_the_new_ice_to_late_joiners(world):
     model, data = world
-    events = step(model, data, DT, commands=(SetIce(NORTH_BAND, _ice(model, "open water")),))
+    events = step(model, data, DT, commands=(SetIce(NORTH_BAND, "open water"),))
     decoded, _, _ = decode(encode(events))
     assert np.array_equal(decoded.retiled, events.retiled) and len(decoded.retiled) == 18
     assert decoded.commands == events.commands
@@ -158,15 +154,18 @@ def test_the_stream_carries_the_new_ice_to_late_joiners(world):
     assert len(older.retiled) == 0
     view = WorldView()
     view.apply(snapshot(model, data))
-    assert view.retiled == {int(t): _ice(model, "open water") for t in events.retiled["tile"]}
+    assert view.retiled == {int(t): model.scene.class_names.index("open water") for t in events.retiled["tile"]}
     assert sorted(view.take_changes().retiled) == sorted(events.retiled["tile"].tolist())
     late = WorldView()
     late.apply(view.to_snapshot())
     assert late.retiled == view.retiled
     record = command_record(events.commands[0])
     assert command_from_record(record) == events.commands[0]
-    with pytest.raises(CommandError, match="not a class index"):
-        command_from_record({**record, "ice_class": -1})
+    for bad in ({"polygon": [[0.0, 0.0], [1.0, 1.0]]}, {"polygon": []}, {"ice": 3},
+                {"polygon": [[0, 0], [100, 100], [100, 0], [0, 100]]}):
+        with pytest.raises(CommandError, match="not a command record"):
+            command_from_record({**record, **bad})
+    assert step(model, data, DT, commands=(SetIce(NORTH_BAND, "fast ice"),)).commands == ()  # ice it lacks: nothing
 
 
 def test_the_channel_shows_open_water_where_the_ice_was_taken(tmp_path_factory, ctx):
@@ -180,7 +179,7 @@ def test_the_channel_shows_open_water_where_the_ice_was_taken(tmp_path_factory, 
     water = []
     for lay in (False, True):
         if lay:
-            view.apply(step(model, data, DT, commands=(SetIce(NORTH_BAND, _ice(model, "open water")),)))
+            view.apply(step(model, data, DT, commands=(SetIce(NORTH_BAND, "open water"),)))
         cls = class_of_pixels(channels.class_images(view)[0])
         water.append((cls[40:90] == CLASS_INDEX["open_water"]).mean())
     assert water[1] > water[0] + 0.2, water  # the band ahead, 70-370 m on, is water now

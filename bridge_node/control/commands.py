@@ -74,6 +74,7 @@ from sim_core.instructor import (
     SteerVessel,
     SteeringFailure,
 )
+from sim_core.regimes.settings import check_polygon
 from sim_core.ship.sensors import SENSOR_MODES, SensorFailure
 from sim_core.world import WorldData, WorldModel
 
@@ -316,8 +317,9 @@ def command_from_record(record: dict) -> Command | NodeCommand:
             fields["vessel"] = OtherVessel(**fields["vessel"])
         if cls is SetIce:
             fields["polygon"] = tuple((float(x), float(y)) for x, y in fields["polygon"])
-            if type(fields["ice_class"]) is not int or fields["ice_class"] < 0:
-                raise ValueError(f"ice_class {fields['ice_class']!r} is not a class index")
+            check_polygon(fields["polygon"], None)  # 3 corners or more, not self-intersecting
+            if not isinstance(fields["ice"], str):
+                raise ValueError(f"ice {fields['ice']!r} is not a name")
         command = cls(**fields)
         numbers = [v for v in _leaves(dataclasses.asdict(command)) if isinstance(v, float)]
         if not all(math.isfinite(v) for v in numbers) or \

@@ -21,6 +21,7 @@ from sim_core.regimes.settings import Pair, check_polygon, local_corners
 from sim_core.world import WorldData, WorldModel
 
 MAX_CORNERS = 64
+MAX_NAME = 200  # an egg code of three ice types is named in about 100 characters
 
 
 class SetIceCommand(CommandBase):
@@ -31,7 +32,7 @@ class SetIceCommand(CommandBase):
     command: Literal["set_ice"]
     polygon_m: list[Pair] | None = Field(None, max_length=MAX_CORNERS)
     polygon_deg: list[Pair] | None = Field(None, max_length=MAX_CORNERS)
-    ice: str = Field(min_length=1, max_length=80)
+    ice: str = Field(min_length=1, max_length=MAX_NAME)
 
     @model_validator(mode="after")
     def _one_simple_polygon(self) -> SetIceCommand:
@@ -41,8 +42,8 @@ class SetIceCommand(CommandBase):
         return self
 
     def to_world(self, model: WorldModel, data: WorldData) -> SetIce:
-        """The world's command; the name is one of ``model.scene.class_names`` (the control
-        endpoint refuses others)."""
+        """The world's command (the control endpoint refuses a name the exercise lacks; the
+        world applies such a command as nothing)."""
         lat0, lon0 = (math.degrees(a) for a in model.origin)
         corners = local_corners(self.polygon_m, self.polygon_deg, lat0, lon0)
-        return SetIce(tuple((float(x), float(y)) for x, y in corners), model.scene.class_names.index(self.ice))
+        return SetIce(tuple((float(x), float(y)) for x, y in corners), self.ice)

@@ -10,6 +10,7 @@ import numpy as np
 from bridge_node.stream.codec import FRAME_NAMES, MAX_ROWS, TOPIC, encode
 from bridge_node.stream.world_view import TRAFFIC_DTYPE
 from sim_core.ice.bending import CRACK_EVENT
+from sim_core.scene.scene import RETILED
 from sim_core.scene.switches import FROZEN_FLOE_EVENT, PlacedTiles
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.world import WorldEvents
@@ -47,7 +48,9 @@ def stream_reference() -> str:
               for i, name in enumerate(names)]
     lines += [f"| {2 + len(names)} | the traffic: records of {_dtype_text(TRAFFIC_DTYPE)} |", "",
               f"`frozen_floes` records: {_dtype_text(FROZEN_FLOE_EVENT)}. `cracked` records (intact cells "
-              f"cracked, with their crack labels): {_dtype_text(CRACK_EVENT)}. Row, placement and tile numbers are "
+              f"cracked, with their crack labels): {_dtype_text(CRACK_EVENT)}. `retiled` records (tiles the "
+              f"instructor gave other ice, and their classes; the last array, which a recording made before it "
+              f"lacks): {_dtype_text(RETILED)}. Row, placement and tile numbers are "
               f"below {MAX_ROWS}; a message outside a view's bounds is refused and counted.", "",
               "| header key | JSON type | example (an empty step) |", "|---|---|---|"]
     lines += [f"| `{key}` | {type(value).__name__} | `{json.dumps(value)[:80]}` |" for key, value in header.items()]

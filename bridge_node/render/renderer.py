@@ -89,9 +89,8 @@ class SceneRenderer(SceneUploads):
                              f"this one has {scene.nx * scene.ny}")
         # per tile: first status entry (its first row, or a frozen tile's first cell entry),
         # template | quarter turns << 16, level-ice thickness (m, float bits), 1 if breakable
-        self.tile_class = scene.tile_class.copy()  # as laid, until the instructor lays other ice
-        self.tile_thickness = scene.class_thickness[scene.tile_class].astype("f4")
-        self.floe_field_info = floe_field_layouts(model, np.arange(len(self.tile_class)), self.tile_class)
+        self.tile_thickness = scene.class_thickness[scene.tile_class].astype("f4")  # as laid, until retiled
+        self.floe_field_info = floe_field_layouts(model, np.arange(len(scene.tile_class)), scene.tile_class)
         self.rubble_bits = rubble_tile_bits(model.rubble)  # the tile table flag entry's upper bytes
         self.tile_info = ctx.texture((scene.nx, scene.ny), 4, self._first_tile_table().tobytes(), dtype="i4")
         self.tile_info.filter = moderngl.NEAREST, moderngl.NEAREST

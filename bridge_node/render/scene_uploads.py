@@ -1,7 +1,7 @@
 """The renderer's uploads (``SceneUploads``, a part of ``SceneRenderer``): what changed in
 the world view since the last frame goes to the GPU: tiles given other ice by the
-instructor, tiles placed, thawed and frozen, the triangles of newly broken floes, the poses
-of the rows simulated, a frozen tile's floes once. Split from ``bridge_node.render.renderer`` by responsibility; the renderer's own
+instructor, tiles placed, thawed and frozen, the triangles of newly broken floes, the
+poses of the rows simulated, a frozen tile's floes once. Split from ``bridge_node.render.renderer`` by responsibility; the renderer's own
 attributes are used as they are there."""
 from __future__ import annotations
 
@@ -57,10 +57,9 @@ class SceneUploads:
         off the field, is passed over), and redraw those not simulated: the world changes
         only the ice the ship has not met, so a tile placed since is drawn as placed."""
         scene = self.model.scene
-        tiles = tiles[(tiles >= 0) & (tiles < len(self.tile_class))]
+        tiles = tiles[(tiles >= 0) & (tiles < len(self.tile_thickness))]
         classes = np.array([view.retiled.get(t, scene.tile_class[t]) for t in tiles.tolist()], dtype=np.int64)
         tiles, classes = tiles[classes < len(scene.class_thickness)], classes[classes < len(scene.class_thickness)]
-        self.tile_class[tiles] = classes
         self.tile_thickness[tiles] = scene.class_thickness[classes]
         for tile in tiles.tolist():
             self.floe_field_info.pop(tile, None)

@@ -7,7 +7,6 @@ import datetime as dt
 import math
 import time
 from collections import deque
-from collections.abc import Sequence
 
 import numpy as np
 
@@ -56,10 +55,9 @@ def _link_fault_text(fault: LinkFault) -> str:
     return f"link {fault.link}: fault {fault.kind} (probability {fault.probability:g}{delay})"
 
 
-def describe(command: Command | LinkFault | SaveRequest, ice_names: Sequence[str] = ()) -> tuple[str, str]:
+def describe(command: Command | LinkFault | SaveRequest) -> tuple[str, str]:
     """The kind ("command", "failure") and one line of text of an applied world command, or
-    of a node command of a session record (a link fault, a save point); ``ice_names`` name
-    the ice classes (``SceneModel.class_names``) where known."""
+    of a node command of a session record (a link fault, a save point)."""
     if isinstance(command, Freeze):
         return "command", "exercise frozen" if command.frozen else "exercise resumed"
     if isinstance(command, Reposition):
@@ -89,9 +87,7 @@ def describe(command: Command | LinkFault | SaveRequest, ice_names: Sequence[str
         return "command", f"save point {command.name}"
     if isinstance(command, SetIce):
         (x0, y0), (x1, y1) = np.min(command.polygon, axis=0), np.max(command.polygon, axis=0)
-        k = command.ice_class
-        name = ice_names[k] if k < len(ice_names) else f"ice class {k}"
-        return "command", f"{name} laid over E {x0:.0f}-{x1:.0f} m, N {y0:.0f}-{y1:.0f} m"
+        return "command", f"{command.ice} laid over E {x0:.0f}-{x1:.0f} m, N {y0:.0f}-{y1:.0f} m"
     return "command", type(command).__name__
 
 
@@ -118,8 +114,7 @@ def link_changes(before: dict | None, now: dict) -> list[tuple[str, str]]:
 class EventLog:
     """Events with increasing ids (the last ``LOG_MAX``), and the alarms now active."""
 
-    def __init__(self, ice_names: Sequence[str] = ()) -> None:
-        self.ice_names = tuple(ice_names)  # the exercise's ice classes, for the commands that lay ice
+    def __init__(self) -> None:
         self._events: deque[dict] = deque(maxlen=LOG_MAX)
         self._next = 1
         self.steering = 2  # pumps working, as the last failure seen (stream or status) set them
@@ -152,7 +147,7 @@ class EventLog:
     def on_events(self, events: WorldEvents) -> None:
         """Log a step's applied commands and refused orders."""
         for command in events.commands:
-            kind, text = describe(command, self.ice_names)
+            kind, text = describe(command)
             self.add(kind, text, events.time, events.ship.utc)
             if isinstance(command, SteeringFailure):
                 self.steering = command.pumps

@@ -98,8 +98,9 @@ class Picture:
     def __init__(self, model: WorldModel) -> None:
         self.template_start = np.asarray(model.ice.template_start, dtype=np.int64)
         self.grid = model.scene.nx, model.scene.ny
+        self._laid: tuple[int, list[list[int]]] = (0, [])  # the view's retiled version, and its runs
         self.tiles: dict[int, TileEntry] = {}
-        self.log = EventLog(model.scene.class_names)
+        self.log = EventLog()
         self._track = np.full((TRACK_MAX, 2), np.nan, dtype=np.float32)
         self._track_n, self.track_epoch, self._track_time = 0, 0, -math.inf
         self._number = 0
@@ -176,6 +177,12 @@ class Picture:
             return np.zeros(0, np.int32), np.zeros((0, 3), np.float32), []
         return np.concatenate(cells).astype(np.int32), np.concatenate(poses).astype(np.float32), tiles
 
+    def _laid_runs(self, view: WorldView) -> list[list[int]]:
+        """The instructor's ice as runs (``laid_runs``), made again only when it changed."""
+        if self._laid[0] != view.retiled_version:
+            self._laid = view.retiled_version, laid_runs(view.retiled, *self.grid)
+        return self._laid[1]
+
     def frame(self, view: WorldView, extra: dict) -> Frame:
         """A frame of the view as it is now; ``extra`` joins the header (stream and
         control health, alarms)."""
@@ -186,7 +193,7 @@ class Picture:
         header = {"type": "frame", "seq": view.seq, "time": view.time, "ship": ship_panel(view), "floe_tiles": floe_tiles,
                   "environment": environment_panel(view), "traffic": traffic_list(view),
                   "ice_offset": [round(float(v), 3) for v in view.ice_offset],
-                  "laid": laid_runs(view.retiled, *self.grid),
+                  "laid": self._laid_runs(view),
                   "counts": {"free": len(floe_cell), "frozen_floes": int(sum(len(t.cells) for t in self.tiles.values()
                                                                              if t.meta["frozen"])),
                              "tiles_live": sum(not t.meta["frozen"] for t in self.tiles.values()),

@@ -85,6 +85,7 @@ class WorldView:
         self.environment = Environment()  # visibility, wind, current, freeze: as last published
         self.traffic = np.zeros(0, dtype=TRAFFIC_DTYPE)
         self.retiled: dict[int, int] = {}
+        self.retiled_version = 0  # counts the changes of ``retiled``
         self._retiled_new: set[int] = set()
         self._blend: tuple | None = None  # (rows, pose before, after, ship before, after, ice offset before, after)
         self._new: list[int] = []
@@ -165,6 +166,8 @@ class WorldView:
     def _take_retiled(self, events: WorldEvents) -> None:
         """Keep the tiles' new ice classes (a snapshot's are all; the tiles it omits are as laid)."""
         given = dict(zip(events.retiled["tile"].tolist(), events.retiled["ice_class"].tolist()))
+        if given or events.snapshot and self.retiled:
+            self.retiled_version += 1
         if events.snapshot:
             self._retiled_new |= {t for t in self.retiled.keys() | given.keys() if self.retiled.get(t) != given.get(t)}
             self.retiled = given

@@ -230,14 +230,14 @@ class MapView {
     const runs = this.geo.waterRuns, side = this.geo.field.side;  // open-water tiles: (row, column, count)
     ctx.fillStyle = MAP_COLORS.water;
     for (let i = 0; i + 2 < runs.length; i += 3) ctx.fillRect(runs[i + 1] * side, runs[i] * side, runs[i + 2] * side, side);
+    for (const [row, col, n, k] of (this.frame && this.frame.laid) || []) {  // the instructor's ice, by kind (brash stays over it)
+      ctx.fillStyle = MAP_COLORS[(this.geo.ice_kinds || [])[k]] || MAP_COLORS.ice;
+      ctx.fillRect(col * side, row * side, n * side, side);
+    }
     const brash = this.geo.brashRuns || [];  // tiles of brash alone: open water with brash on it
     ctx.fillStyle = MAP_COLORS.brash;
     for (let i = 0; i + 2 < brash.length; i += 3) {
       ctx.fillRect(brash[i + 1] * side, brash[i] * side, brash[i + 2] * side, side);
-    }
-    for (const [row, col, n, k] of (this.frame && this.frame.laid) || []) {  // the instructor's ice, by kind
-      ctx.fillStyle = MAP_COLORS[(this.geo.ice_kinds || [])[k]] || MAP_COLORS.ice;
-      ctx.fillRect(col * side, row * side, n * side, side);
     }
     ctx.lineWidth = 1 / s;
     const frozen = new Path2D(), tileLines = new Path2D();
