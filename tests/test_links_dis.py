@@ -24,6 +24,7 @@ from pyais import decode
 from pydantic import ValidationError
 
 from bridge_node.links.nmea0183.ais import static_report
+from sim_core.frames.geodesy import local_to_geodetic
 from bridge_node.links.dis.link import DisLink, PduError
 from bridge_node.links.hub import LinkHub
 from bridge_node.links.dis.settings import DisLinkSettings
@@ -86,15 +87,20 @@ def test_pdus_at_the_heartbeat_and_the_dead_reckoning_thresholds():
     cfg = node_config([dis_link(rx)])
     v = STATE.speed_over_ground
     cn, ce = v * math.cos(STATE.course_over_ground), v * math.sin(STATE.course_over_ground)
-    steady = [dataclasses.replace(STATE, north=STATE.north + cn * 0.1 * k, east=STATE.east + ce * 0.1 * k,
-                                  heading=STATE.heading + STATE.rate_of_turn * 0.1 * k) for k in range(201)]
+
+    def moved(north: float, east: float, **changes):  # the state (north, east) m on, its position with it
+        lat, lon = local_to_geodetic(north, east, STATE.latitude, STATE.longitude)
+        return dataclasses.replace(STATE, north=STATE.north + north, east=STATE.east + east, latitude=lat,
+                                   longitude=lon, **changes)
+    steady = [moved(cn * 0.1 * k, ce * 0.1 * k, heading=STATE.heading + STATE.rate_of_turn * 0.1 * k)
+              for k in range(201)]
     with LinkHub(cfg.links, cfg.arbitration) as hub:
         t0 = time.monotonic()
         for k, state in enumerate(steady):
             tick(hub, state, t0 + 0.1 * k)
         heartbeats = len(datagrams(rx))
         last = steady[-1]
-        tick(hub, dataclasses.replace(last, east=last.east + 1.5), t0 + 20.1)  # 1.5 m off the dead reckoning
+        tick(hub, moved(cn * 20.0, ce * 20.0 + 1.5, heading=last.heading), t0 + 20.1)  # 1.5 m off the dead reckoning
         jump = len(datagrams(rx))
         tick(hub, dataclasses.replace(last, heading=last.heading + math.radians(3.5)), t0 + 20.2)
         turn = len(datagrams(rx))

@@ -7,11 +7,14 @@ import math
 import socket
 import time
 
+import numpy as np
 import pytest
 from conftest import free_port
 from links_helpers import STATE, node_config, tick, wait_for
 from pyais import encode_dict
 from test_links_ais import QUIET, messages
+from opendis.PduFactory import createPdu
+from opendis.RangeCoordinates import GPS
 from test_links_dis import datagrams, other_simulator_pdu, receiver
 
 from bridge_node.links.hub import LinkHub
@@ -150,3 +153,32 @@ def test_a_sessions_dis_vessels_are_heard_again_when_it_is_replayed(tmp_path):
     assert again.latitude == pytest.approx(expected.latitude, abs=0.05 / 6.4e6)  # 5 cm: rx logged ms after read
     assert again.longitude == pytest.approx(expected.longitude, abs=0.05 / 1.8e6)
     assert again.heading == pytest.approx(expected.heading) and again.speed_over_ground == pytest.approx(6.0)
+
+
+def test_dis_sends_the_scripted_vessel_as_an_entity_of_its_own_and_never_echoes_one_heard(tmp_path):
+    rx, listen, sim = receiver(), free_port(), socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    links = (f'[[links]]\ntype = "dis"\nname = "dis"\nlisten_port = {listen}\n'
+             f'send_to = ["127.0.0.1:{rx.getsockname()[1]}"]\n')
+    path = config(tmp_path, "[traffic]\n" + SCRIPTED + links)
+    cfg = load_config(path)
+    with LinkHub(cfg.links, cfg.arbitration, traffic=traffic_picture(cfg, path)) as hub:
+        sim.sendto(other_simulator_pdu(74.02, 20.03, 0.0, 3.0), ("127.0.0.1", listen))  # ODEN, site 3
+        wait_for(lambda: len(hub.traffic.current) == 2, poll=lambda: tick(hub, STATE, time.monotonic()))
+        for _ in range(3):
+            tick(hub, STATE, time.monotonic())
+    sim.close()
+    pdus = [createPdu(d) for d in datagrams(rx)]
+    rx.close()
+    by_entity = {(p.entityID.siteID, p.entityID.applicationID, p.entityID.entityID): p for p in pdus}
+    assert set(by_entity) == {(1, 1, 1), (1, 1, 2)}  # the own ship, the scripted vessel; not ODEN
+    scripted = by_entity[(1, 1, 2)]
+    assert scripted.marking.charactersString() == "SCRIPTED ON"  # its name, cut to the marking's 11
+    loc, o = scripted.entityLocation, scripted.entityOrientation
+    lat, lon, _, _, _, yaw = GPS().ecef2llarpy(loc.x, loc.y, loc.z, o.psi, o.theta, o.phi)
+    north, east = geodetic_to_local(lat, lon, *ORIGIN)
+    assert north == pytest.approx(500.0, abs=0.01) and 199.99 < east < 215.0  # steaming east from (500, 200)
+    assert yaw == pytest.approx(math.pi / 2, abs=1e-5)
+    velocity = np.array([scripted.entityLinearVelocity.x, scripted.entityLinearVelocity.y,
+                         scripted.entityLinearVelocity.z])
+    assert float(np.linalg.norm(velocity)) == pytest.approx(9.0 * KNOT, abs=1e-4)
+    assert sum(p.entityID.entityID == 2 for p in pdus) == 1  # steady: one PDU, then the heartbeat's 5 s

@@ -1,11 +1,14 @@
 """DIS link (IEEE 1278.1-2012, DIS 7): the own ship as Entity State PDUs, unicast over UDP
-to the configured hosts (loopback by default; no multicast, no broadcast), and the Entity
-State PDUs of other simulators as other vessels, which the hub hands to every link (the
-NMEA links send them as AIS targets).
+to the configured hosts (loopback by default; no multicast, no broadcast), with the node's
+other vessels (the instructor's, scripted and logged: ``send_vessels``) as entities of
+their own; and the Entity State PDUs of other simulators as other vessels, which the hub
+hands to every link (the NMEA links send them as AIS targets).
 
-- **Sending**: a PDU when the heartbeat (5 s) has passed, or when the dead reckoning the
-  receivers do from the last PDU (algorithm 3, rotating with constant velocity in world
-  coordinates) has drifted more than 1 m in position or 3 deg in heading.
+- **Sending**: a PDU per entity when the heartbeat (5 s) has passed, or when the dead
+  reckoning the receivers do from its last PDU (algorithm 3, rotating with constant
+  velocity in world coordinates) has drifted more than 1 m in position or 3 deg in heading.
+  The other vessels take the entity numbers after the own ship's, in the order they first
+  appear; a vessel heard on DIS is never sent back.
 - **Frames**: location and velocity are geocentric (WGS 84 ECEF, m and m/s), orientation
   the Tait-Bryan angles psi, theta, phi from the ECEF axes to the ship's body (x forward,
   y starboard, z down); the angular velocity is the body's (the yaw rate about z).
@@ -13,7 +16,7 @@ NMEA links send them as AIS targets).
   subsurface, become vessels, dead-reckoned to the time they are read and forgotten after
   ``vessel_timeout_s`` (12 s: 2.4 heartbeats, the standard's default). Each gets an MMSI
   from ``mmsi_base`` (200 000 000: no country's MID) and its entity id. The node's own
-  PDUs, looped back, are skipped; other PDU types, exercises and entities are ``ignored``;
+  PDUs (its site and application), looped back, are skipped; other PDU types, exercises and entities are ``ignored``;
   a PDU that is short or whose length field is wrong is ``malformed``; non-finite or
   off-Earth positions and speeds over 100 m/s are ``bad_field``. A marking with characters
   that AIS 6-bit text lacks is kept with them as spaces and counted ``marking_sanitised``.
@@ -37,6 +40,7 @@ from bridge_node.links.nmea0183.ais import six_bit_text
 from bridge_node.links.base import Link
 from bridge_node.links.messages import ControlInput, Vessel
 from bridge_node.links.dis.settings import DisLinkSettings
+from sim_core.frames.geodesy import geodetic_to_local
 from sim_core.ship.outputs import ShipOutputs
 
 PROTOCOL_VERSION, ENTITY_STATE, ENTITY_INFORMATION_FAMILY = 7, 1, 1
@@ -47,6 +51,8 @@ MAX_PDUS_PER_POLL = 1000
 WGS84_A, WGS84_E2 = 6378137.0, 6.69437999014e-3
 EARTH_SHELL_M = (6.30e6, 6.45e6)  # |ECEF location| of a vessel lies within this
 MAX_SPEED_MPS = 100.0  # no vessel is faster: a PDU saying so is bad
+DIS_KEY = "dis:"  # the keys of the vessels heard on DIS begin so
+MAX_ENTITY = 65534  # entity numbers: the node's other vessels take those after the own ship's
 
 
 def ned_to_ecef(lat: float, lon: float) -> np.ndarray:
@@ -93,19 +99,71 @@ def dis_timestamp(unix_time: float) -> int:
     return (int((unix_time % 3600.0) / 3600.0 * 2**31) << 1 | 1) & 0xFFFFFFFF
 
 
-def entity_state_pdu(s: DisLinkSettings, state: ShipOutputs, unix_time: float) -> bytes:
-    """The own ship's Entity State PDU."""
-    to_ecef = ned_to_ecef(state.latitude, state.longitude)
-    body = to_ecef @ matrix_from_euler(state.heading, state.pitch, state.roll)  # body (x fwd, y stbd, z down) to NED
-    velocity = to_ecef @ np.array([state.speed_over_ground * math.cos(state.course_over_ground),
-                                   state.speed_over_ground * math.sin(state.course_over_ground), 0.0])
-    location = geodetic_to_ecef(state.latitude, state.longitude)
-    entity_type = (PLATFORM, SURFACE, s.country, s.category, s.subcategory, 0, 0)
+@dataclass(frozen=True)
+class EntityMotion:
+    """What an Entity State PDU says of a vessel, SI: latitude and longitude, true heading,
+    pitch (bow up +) and roll (starboard down +), course over ground (rad), speed over
+    ground (m/s), yaw rate (rad/s, + to starboard)."""
+
+    latitude: float
+    longitude: float
+    heading: float
+    course: float
+    speed: float
+    rate_of_turn: float
+    pitch: float = 0.0
+    roll: float = 0.0
+
+    @classmethod
+    def of_ship(cls, s: ShipOutputs) -> EntityMotion:
+        return cls(s.latitude, s.longitude, s.heading, s.course_over_ground, s.speed_over_ground, s.rate_of_turn,
+                   s.pitch, s.roll)
+
+    @classmethod
+    def of_vessel(cls, v: Vessel) -> EntityMotion:
+        return cls(v.latitude, v.longitude, v.heading, v.course_over_ground, v.speed_over_ground, v.rate_of_turn)
+
+
+def entity_state_pdu(s: DisLinkSettings, motion: EntityMotion, unix_time: float, entity: int | None = None,
+                     marking: str | None = None) -> bytes:
+    """The Entity State PDU of the own ship (the settings' entity, type and marking), or of
+    another vessel the node sends as its own ``entity`` with its ``marking`` (type: a
+    surface platform, country and category 0)."""
+    to_ecef = ned_to_ecef(motion.latitude, motion.longitude)
+    body = to_ecef @ matrix_from_euler(motion.heading, motion.pitch, motion.roll)  # body (x fwd, y stbd, z down)
+    velocity = to_ecef @ np.array([motion.speed * math.cos(motion.course), motion.speed * math.sin(motion.course), 0.0])
+    location = geodetic_to_ecef(motion.latitude, motion.longitude)
+    own = entity is None
+    entity_type = (PLATFORM, SURFACE, *((s.country, s.category, s.subcategory) if own else (0, 0, 0)), 0, 0)
+    text = s.marking if own else marking
     return ESPDU.pack(PROTOCOL_VERSION, s.exercise_id, ENTITY_STATE, ENTITY_INFORMATION_FAMILY,
-                      dis_timestamp(unix_time), ESPDU.size, 0, 0, s.site, s.application, s.entity, s.force_id, 0,
-                      *entity_type, *entity_type, *velocity, *location, *euler_from_matrix(body), 0, DR_RPW,
-                      b"\x00" * 15, 0.0, 0.0, 0.0, 0.0, 0.0, state.rate_of_turn, 1,
-                      s.marking.encode("ascii").ljust(11, b"\x00"), 0)
+                      dis_timestamp(unix_time), ESPDU.size, 0, 0, s.site, s.application, s.entity if own else entity,
+                      s.force_id, 0, *entity_type, *entity_type, *velocity, *location, *euler_from_matrix(body), 0,
+                      DR_RPW, b"\x00" * 15, 0.0, 0.0, 0.0, 0.0, 0.0, motion.rate_of_turn, 1,
+                      text.encode("ascii", "replace")[:11].ljust(11, b"\x00"), 0)
+
+
+class DeadReckoning:
+    """When a sender's next PDU is due: the heartbeat passed, or the dead reckoning the
+    receivers do from its last PDU (constant velocity and yaw rate) drifted past the
+    settings' position or orientation threshold."""
+
+    def __init__(self, settings: DisLinkSettings) -> None:
+        self.settings = settings
+        self._sent: tuple[float, EntityMotion] | None = None  # (monotonic s, motion) of the last PDU
+
+    def due(self, motion: EntityMotion, now: float) -> bool:
+        if self._sent is None:
+            return True
+        t, last = self._sent
+        dt, s = now - t, self.settings
+        north, east = geodetic_to_local(motion.latitude, motion.longitude, last.latitude, last.longitude)
+        drift = math.hypot(north - last.speed * math.cos(last.course) * dt, east - last.speed * math.sin(last.course) * dt)
+        turn = abs(math.remainder(motion.heading - last.heading - last.rate_of_turn * dt, 2 * math.pi))
+        return dt >= s.heartbeat_s or drift > s.position_threshold_m or turn > math.radians(s.orientation_threshold_deg)
+
+    def sent(self, motion: EntityMotion, now: float) -> None:
+        self._sent = now, motion
 
 
 @dataclass(frozen=True)
@@ -171,7 +229,7 @@ class HeardEntities:
             raise PduError("malformed")
         f = ESPDU.unpack_from(data)
         site_app_entity, kind, domain = f[8:11], f[13], f[14]
-        if site_app_entity == self._own:
+        if site_app_entity[:2] == self._own[:2]:  # the node's site and application: its own ship or vessels
             return None
         if kind != PLATFORM or domain not in (SURFACE, SUBSURFACE):
             raise PduError("ignored")
@@ -183,7 +241,7 @@ class HeardEntities:
             raise PduError("bad_field")
         lat, lon = ecef_to_geodetic(location)
         north, east, _ = ned_to_ecef(lat, lon).T @ matrix_from_euler(psi, theta, phi)[:, 0]
-        key = "dis:{}.{}.{}".format(*site_app_entity)
+        key = DIS_KEY + "{}.{}.{}".format(*site_app_entity)
         # character set 1 is ASCII; some senders leave it 0 (unused). The name goes out as AIS
         # 6-bit text, so it is made so here, at the boundary: any simulator on the DIS network
         # may send any bytes (one marking of "{|}~" used to stop the node's AIS encoding).
@@ -209,7 +267,8 @@ class DisLink(Link):
     def __init__(self, settings: DisLinkSettings) -> None:
         super().__init__(settings)
         self.heard = HeardEntities(settings)
-        self._sent = None  # (now, north, east, north speed, east speed, heading, rate of turn) of the last PDU
+        self._own = DeadReckoning(settings)
+        self._others: dict[int, tuple[int, DeadReckoning]] = {}  # MMSI -> (entity, its dead reckoning)
 
     def _open_device(self) -> socket.socket:
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -243,29 +302,37 @@ class DisLink(Link):
     def vessels(self, now: float) -> list[Vessel]:
         return self.heard.vessels(now)
 
-    def _due(self, state: ShipOutputs, now: float) -> bool:
-        """Heartbeat passed, or the receivers' dead reckoning drifted past a threshold."""
-        if self._sent is None:
-            return True
-        t, north, east, vn, ve, heading, rate = self._sent
-        dt = now - t
-        drift = math.hypot(state.north - north - vn * dt, state.east - east - ve * dt)
-        turn = abs(math.remainder(state.heading - heading - rate * dt, 2 * math.pi))
-        s = self.settings
-        return dt >= s.heartbeat_s or drift > s.position_threshold_m or turn > math.radians(s.orientation_threshold_deg)
-
-    def publish(self, state: ShipOutputs, now: float) -> None:
-        if self.device is None or not self._due(state, now):
-            return
-        pdu = entity_state_pdu(self.settings, state, time.time())
+    def _send(self, pdu: bytes, now: float) -> bool:
+        """Send a PDU to every destination; False when the socket was lost."""
         try:
             for host, port in self.settings.destinations():
                 self.device.sendto(pdu, (host, port))
         except self.lost_errors:
             self._lost(now)
-            return
-        self._sent = (now, state.north, state.east, state.speed_over_ground * math.cos(state.course_over_ground),
-                      state.speed_over_ground * math.sin(state.course_over_ground), state.heading,
-                      state.rate_of_turn)
+            return False
         self._health.outputs += 1
         self._report("tx", pdu)
+        return True
+
+    def publish(self, state: ShipOutputs, now: float) -> None:
+        motion = EntityMotion.of_ship(state)
+        if self.device is not None and self._own.due(motion, now) and \
+                self._send(entity_state_pdu(self.settings, motion, time.time()), now):
+            self._own.sent(motion, now)
+
+    def publish_vessels(self, vessels: list[Vessel], now: float) -> None:
+        """The node's other vessels (the instructor's, scripted and logged; not those heard
+        on DIS, which their own simulators send), each as an entity of its own numbered on
+        from the own ship's, in the order they first appear."""
+        if self.device is None or not self.settings.send_vessels:
+            return
+        for v in vessels:
+            if v.key.startswith(DIS_KEY) or not v.fix_valid:
+                continue
+            if v.mmsi not in self._others:
+                self._others[v.mmsi] = self.settings.entity + 1 + len(self._others), DeadReckoning(self.settings)
+            entity, reckoning = self._others[v.mmsi]
+            motion = EntityMotion.of_vessel(v)
+            if entity <= MAX_ENTITY and reckoning.due(motion, now) and self._send(
+                    entity_state_pdu(self.settings, motion, time.time(), entity, v.name or str(v.mmsi)), now):
+                reckoning.sent(motion, now)

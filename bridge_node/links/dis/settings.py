@@ -33,6 +33,7 @@ class DisLinkSettings(LinkSettingsBase):
     orientation_threshold_deg: float = Field(3.0, gt=0.0, le=90.0)
     vessel_timeout_s: float = Field(12.0, gt=0.0, le=600.0, description="an entity silent this long is gone")
     mmsi_base: int = Field(200_000_000, ge=100_000_000, le=999_000_000, description="MMSIs of the vessels heard")
+    send_vessels: bool = Field(True, description="send the node's other vessels (instructor's, scripted, logged) too")
 
     @model_validator(mode="after")
     def _off_the_host(self) -> "DisLinkSettings":
