@@ -3,6 +3,7 @@ mirrored in the sea beside it, and a floe the bow has turned under (held a thick
 and tilted, as the ice model publishes it) shows through the water as a pale blue-green
 slab. One floe is moved into open water south of the field, away from every other."""
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -106,3 +107,19 @@ def test_the_class_mask_tells_a_floe_turned_under_from_a_floating_one(ctx, exerc
         floe = seen != none  # the floe's pixels
         assert floe.sum() >= 40, (cls, floe.sum())
         assert np.all(seen[floe] == CLASS_INDEX[cls]), (cls, np.bincount(seen[floe]))
+
+
+def test_a_floe_turned_over_shows_its_underside_not_its_snow(ctx, exercise):
+    """Rolled over (pi) and floating, the floe's bottom faces the sky: where its level
+    twin shows snow, it shows the wet, brown-tinged underside."""
+    sea = render(ctx, exercise, None)
+    counts = {}
+    for roll in (0.0, math.pi):
+        img = render(ctx, exercise, floating(exercise), roll)
+        floe = img[np.abs(img - sea).sum(axis=-1) > 30]
+        assert len(floe) >= 40, (roll, len(floe))
+        snow = (floe > 170).all(axis=1)
+        brown = (floe[:, 0] > floe[:, 2] + 5) & (floe[:, 1] > floe[:, 2] + 5)  # red and green over blue
+        counts[roll] = snow.sum(), brown.sum()
+    assert counts[0.0][0] >= 20 and counts[0.0][1] == 0, counts
+    assert counts[math.pi][0] == 0 and counts[math.pi][1] >= 20, counts

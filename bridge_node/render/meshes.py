@@ -14,10 +14,11 @@ from sim_core.world import WorldModel
 
 
 def cell_vertices(model: WorldModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Triangles of every template cell that can be seen from above the water (bottom faces
-    left out), wound counter-clockwise from outside: (position 3f, normal 3f) per vertex,
-    each cell's tops first, then its sides. Returns the vertices, each global cell's first
-    vertex (G + 1,) and its first side vertex (G,)."""
+    """Triangles of every template cell, wound counter-clockwise from outside: (position 3f,
+    normal 3f) per vertex, each cell's tops first, then its sides and its bottom (drawn
+    with the sides, near the eye: a floe turned up on edge or over shows its underside;
+    culled, as back faces, while it floats flat). Returns the vertices, each global cell's
+    first vertex (G + 1,) and its first side vertex (G,)."""
     ice = model.ice
     tris = ice.tris.copy()
     owner = np.repeat(np.arange(len(ice.mass)), np.diff(ice.tri_start))
@@ -26,9 +27,7 @@ def cell_vertices(model: WorldModel) -> tuple[np.ndarray, np.ndarray, np.ndarray
     inward = (n * tris.mean(axis=1)).sum(axis=1) < 0.0  # the centroid is the origin
     n[inward] *= -1.0
     tris[inward] = tris[inward][:, ::-1]
-    keep = n[:, 2] > -0.5
-    tris, n, owner = tris[keep], n[keep], owner[keep]
-    side = n[:, 2] < 0.5
+    side = n[:, 2] < 0.5  # sides and bottoms
     order = np.lexsort((side, owner))  # by cell, tops before sides
     tris, n, owner, side = tris[order], n[order], owner[order], side[order]
     out = np.zeros((len(tris) * 3, 6), dtype="f4")

@@ -1,12 +1,15 @@
 #version 330
 // Floe tops are the level ice they broke from; sides show the blue-green of sea ice,
-// darkened at the waterline. Under the water (floes the bow turned under) the ice is seen
+// darkened at the waterline; an underside (a floe turned up on edge or over) is wet, rough
+// ice, tinged brown where ice algae grow at the bottom of first-year ice (Arrigo, "Sea ice
+// ecosystems", Annual Review of Marine Science 6, 2014). Under the water (floes the bow turned under) the ice is seen
 // through the surface as pale blue-green slabs, fading into the sea's body with depth.
 // Reflected (drawn mirrored, blended over the sea as premultiplied colour and alpha: the
 // Fresnel share), a floe's part above the water shows in the sea below its waterline.
 #include "common.glsl"
 
 const vec3 UNDER_WATER = vec3(0.55, 0.88, 0.85);  // ice seen through the sea: the red absorbed first
+const vec3 UNDERSIDE = vec3(0.50, 0.52, 0.44);    // a floe's bottom: wet, grey-green, brown-tinged
 const float FADE_DEPTH = 1.2;    // m: depth over which submerged ice fades into the sea's body (1/e)
 #include "tile.glsl"
 uniform bool reflected;
@@ -29,6 +32,8 @@ void main() {
         float albedo;
         vec3 bump = relief(snow, snow_depth(thickness), albedo);
         c = lit(ice_albedo(thickness) * albedo, normalize(n + vec3(bump.xy, 0.0)), world);
+    } else if (top == 2) {
+        c = lit(UNDERSIDE * (0.85 + 0.3 * texture(noise, OCTAVE[0] * local).x), n, world);
     } else {
         c = lit(mix(vec3(0.42, 0.50, 0.53), vec3(0.30, 0.62, 0.64), smoothstep(0.1, 0.5, thickness)), n, world);
     }

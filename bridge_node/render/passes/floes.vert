@@ -16,7 +16,7 @@ in int in_cell;                  // the cell's index in its template
 out vec3 world;                  // the point itself (also when its reflection is drawn), m
 out vec3 normal;
 out vec2 local;                  // relief coordinates that move with the floe, m
-flat out int top;
+flat out int top;                // 1: a top face, 2: a bottom face (a floe's underside), 0: a side
 flat out float centre_z;         // the floe's centre of mass above the water, m
 void main() {
     int row = first + in_cell;   // a live tile's floe; a frozen tile's: -1 - its pose entry's number
@@ -37,7 +37,7 @@ void main() {
     centre_z = t.z;
     int snow_patch = (patch_base + in_cell) % (61 * 59);  // each floe its own patch of snow
     local = in_pos.xy + 31.7 * vec2(snow_patch % 61, snow_patch / 61);
-    top = in_normal.z > 0.5 ? 1 : 0;
+    top = in_normal.z > 0.5 ? 1 : (in_normal.z < -0.5 ? 2 : 0);
     // ice deeper than SEEN_DEPTH is lost in the sea; only what is above the water is mirrored
     gl_ClipDistance[0] = reflected ? world.z : world.z + SEEN_DEPTH;
     gl_Position = view_proj * vec4(world.xy, reflected ? -world.z : world.z, 1.0);
