@@ -369,7 +369,15 @@ def test_debrief_of_the_session_record(exercise, browser, tmp_path):
         end = browser.execute_script("return [map.frame.ship.east, map.frame.ship.north]")
         assert math.dist(end, browser.execute_script("return [playback.data.a.pos_east.at(-1), "
                                                      "playback.data.a.pos_north.at(-1)]")) < 1.0
-        browser.execute_script("seekTo(0)")
+        laid = []  # the open water laid in the north-east corner (test_lay_open_water_from_the_page)
+        for t in (duration, 0.0):
+            draws = browser.execute_script("return window.stationStats.draws")
+            browser.execute_script("seekTo(arguments[0]); map.setFollow(false); map.cx = 700; map.cy = 700;"
+                                   "map.scale = 1; map.dirty = true;", t)
+            wait_until(lambda: browser.execute_script("return window.stationStats.draws") > draws, 10, "a redraw")
+            x, y = (round(v) for v in canvas_pixel(browser, 700.0, 700.0))
+            laid.append(near(screenshot(browser)[y - 10:y + 11, x - 10:x + 11], WATER_RGB, 6).mean())
+        assert laid[0] > 0.9 and laid[1] < 0.1, laid  # water after the command, level ice before it
         assert "reposition" not in browser.find_element("id", "log").text
         browser.find_element("id", "speed").send_keys("1000")
         browser.find_element("id", "play").click()

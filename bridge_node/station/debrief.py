@@ -1,7 +1,8 @@
 """The debrief of a session record: what the node sent the bridge instruments (``nmea.log``'s
 tx sentences: RMC position, speed and course; HDT heading; RSA rudder; RPM shaft; XDR ice
 resistance; ALR alarms) and the instructor's commands (``commands.log``, timed by
-``ticks.log``), as time series the page plays back on the map, and as time plots (PNG)."""
+``ticks.log``; the areas where the instructor laid ice with them), as time series the page
+plays back on the map, and as time plots (PNG)."""
 from __future__ import annotations
 
 import io
@@ -21,6 +22,7 @@ from bridge_node.exercise.tick_record import TICKS_FILE, read_ticks
 from bridge_node.station.events import describe
 from bridge_node.station.wire import pack
 from sim_core.frames.geodesy import geodetic_to_local
+from sim_core.instructor import SetIce
 
 # series name -> (sentence, what it is, unit): each is sampled at its sentence's own times
 SERIES = {"sog": ("RMC", "speed over ground", "kn"), "heading": ("HDT", "heading", "deg"),
@@ -86,8 +88,12 @@ def _commands(d: Debrief) -> None:
     for line in lines:
         try:
             entry = json.loads(line)
-            kind, text = describe(command_from_record(entry["command"]))
-            d.events.append({"t": unix.get(entry["seq"], math.nan), "kind": kind, "text": text})
+            command = command_from_record(entry["command"])
+            kind, text = describe(command)
+            event = {"t": unix.get(entry["seq"], math.nan), "kind": kind, "text": text}
+            if isinstance(command, SetIce):  # the map draws the area from then on
+                event |= {"ice": command.ice, "area": [list(corner) for corner in command.polygon]}
+            d.events.append(event)
         except (ValueError, KeyError, TypeError, CommandError):
             d.skipped += 1
 

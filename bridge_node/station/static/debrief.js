@@ -72,6 +72,7 @@ function seekTo(t, playing) {
   $("sim-time").textContent = `${t.toFixed(1)} s`;
   $("debrief-time").textContent = `${t.toFixed(1)} s of ${d.duration.toFixed(1)} s`;
   const shown = d.events.filter((e) => e.t <= t).length;
+  map.laidAreas = d.events.slice(0, shown).filter((e) => e.area);
   if (shown !== playback.shownEvents) {
     playback.shownEvents = shown;
     $("log").tBodies[0].innerHTML = "";

@@ -29,6 +29,7 @@ class MapView {
     this.pick = null;           // callback while picking a position
     this.ghost = null;          // {x, y, heading} of a picked position
     this.plan = null;           // a debrief's whole track, drawn faint
+    this.laidAreas = null;      // a debrief's areas of laid ice, as of its time
     this._dirty = false;
     this._drawSoon = () => { this._asked = false; if (this._dirty) this.draw(); };
     this.stats = { frames: 0, draws: 0, fps: 0, drawMs: 0, applyMs: 0, floes: 0, _t0: performance.now(), _n: 0 };
@@ -234,6 +235,7 @@ class MapView {
       ctx.fillStyle = MAP_COLORS[(this.geo.ice_kinds || [])[k]] || MAP_COLORS.ice;
       ctx.fillRect(col * side, row * side, n * side, side);
     }
+    if (this.laidAreas) drawLaidAreas(ctx, this.laidAreas, this.geo);  // a debrief's
     const brash = this.geo.brashRuns || [];  // tiles of brash alone: open water with brash on it
     ctx.fillStyle = MAP_COLORS.brash;
     for (let i = 0; i + 2 < brash.length; i += 3) {

@@ -20,6 +20,18 @@ function drawConvoy(ctx, s, convoy, frame) {
   }
 }
 
+// a debrief's areas of laid ice ({ice, area: [[east, north], ...]}, in the order laid), each
+// filled in its kind's colour (the record has the command, not the tiles it changed)
+function drawLaidAreas(ctx, areas, geo) {
+  for (const a of areas) {
+    const k = (geo.ice_names || []).indexOf(a.ice);
+    ctx.fillStyle = MAP_COLORS[(geo.ice_kinds || [])[k]] || MAP_COLORS.ice;
+    ctx.beginPath();
+    a.area.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
+    ctx.closePath(); ctx.fill();
+  }
+}
+
 // the scale bar (px per m: scale) at the bottom left, in metres and nautical miles
 function drawScale(ctx, h, scale) {
   const target = 120 / scale, pow = Math.pow(10, Math.floor(Math.log10(target)));
