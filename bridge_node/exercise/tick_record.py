@@ -2,8 +2,10 @@
 real-time loop read, so a recorded run can be re-simulated step for step.
 
 The loop writes one line per tick, right after the links were polled: the step number,
-the monotonic time the tick polled at (the clock links and arbitration ran on), the unix
-time, and how many inputs of each link kind that poll read (lines of ``nmea.log``,
+the monotonic time the tick polled at (the clock links and arbitration ran on; written to
+the last bit, so that a replay's output schedules and source timeouts decide at each tick
+as the live run's did: rounded to the microsecond, an output due within a microsecond of a
+tick could go out a tick early or late in the replay), the unix time, and how many inputs of each link kind that poll read (lines of ``nmea.log``,
 ``can.log``, ``modbus.csv``, ...: received sentences, received frames, register reads). The
 raw files are written in the order the traffic happened, so counting their lines gives
 each input its tick exactly. A first line ``# icebridge ticks 2 period_s=<s>
@@ -73,7 +75,7 @@ class TickRecord(Listener, StepListener):
     def on_polled(self, seq: int, now: float) -> None:
         """The tick of step ``seq`` has polled the links at ``now`` (monotonic s)."""
         counts = " ".join(str(self._reads[p]) for p in self._inputs)
-        self._file.write(f"{seq} {now:.6f} {time.time():.6f} {counts}\n")
+        self._file.write(f"{seq} {now!r} {time.time():.6f} {counts}\n")  # the clock to the last bit
         self._reads.clear()
 
     def flush(self) -> None:
