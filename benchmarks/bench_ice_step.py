@@ -80,7 +80,7 @@ def time_steps(model, data, pose, n: int = 240) -> tuple[np.ndarray, np.ndarray,
     for _ in range(n):
         v = SPEED * np.array([math.cos(heading), math.sin(heading)])
         t0 = time.perf_counter()
-        ice_step(model, data, HullMotion(np.array([x, y]), heading, v, 0.0), DT)
+        ice_step(model, data, (HullMotion(np.array([x, y]), heading, v, 0.0),), DT)
         out.append(time.perf_counter() - t0)
         resting.append(data.state.resting.sum() / max(data.state.count(FloeStatus.FREE), 1))
         x, y = x + v[0] * DT, y + v[1] * DT

@@ -235,4 +235,4 @@ def move_ship(model: WorldModel, data: WorldData, to: Reposition) -> None:
     ship.rps = ship.rps_order = equilibrium_rps(model.ship, to.speed)
     ship.rudder = ship.rudder_order = 0.0
     ship.external[:] = 0.0
-    data.last_hull_break = -math.inf
+    data.hull_breaks[0] = -math.inf

@@ -38,34 +38,37 @@ BREAKING_MEMORY = 2.0  # s: the bow counts as in level ice this long after it la
 _STILL = np.zeros(2)
 
 
-def contour_in_ice(model: WorldModel, data: WorldData, north: float, east: float, heading: float) -> np.ndarray:
-    """The hull's waterline contour (34, 2) in the ice's frame (m) for the ship at (north,
-    east) m in the world, heading rad clockwise from north; its first point is the stem."""
-    return ship_to_world(model.contour, north, east, heading) - data.ice_frame.offset
+def contour_in_ice(model: WorldModel, data: WorldData, north: float, east: float, heading: float,
+                   k: int = 0) -> np.ndarray:
+    """The k-th ship's waterline contour (34, 2) in the ice's frame (m) for the ship at
+    (north, east) m in the world, heading rad clockwise from north; its first point is the
+    stem."""
+    return ship_to_world(model.contours[k], north, east, heading) - data.ice_frame.offset
 
 
-def ship_contour_in_ice(model: WorldModel, data: WorldData) -> np.ndarray:
-    """The ship's waterline contour (34, 2) in the ice's frame, where it is now."""
-    eta = data.ship.eta
-    return contour_in_ice(model, data, eta[0], eta[1], eta[5])
+def ship_contour_in_ice(model: WorldModel, data: WorldData, k: int = 0) -> np.ndarray:
+    """The k-th ship's waterline contour (34, 2) in the ice's frame, where it is now."""
+    eta = data.ships[k].eta
+    return contour_in_ice(model, data, eta[0], eta[1], eta[5], k)
 
 
-def hull_in_ice(model: WorldModel, data: WorldData) -> tuple[np.ndarray, HullMotion]:
-    """The hull's contour points (34, 2) and motion in the ice's frame: its place less the
-    frame's offset, its velocity over ground less the frame's."""
-    ship = data.ship
+def hull_in_ice(model: WorldModel, data: WorldData, k: int = 0) -> tuple[np.ndarray, HullMotion]:
+    """The k-th ship's contour points (34, 2) and hull motion in the ice's frame: its place
+    less the frame's offset, its velocity over ground less the frame's."""
+    ship = data.ships[k]
     north, east, psi = ship.eta[0], ship.eta[1], ship.eta[5]
     over_ground = np.array(ship_vector_to_world((ship.nu[0], ship.nu[1]), psi)) + ship.current[::-1]
     frame = data.ice_frame
-    return (ship_contour_in_ice(model, data),
+    return (ship_contour_in_ice(model, data, k),
             HullMotion(np.array([east, north]) - frame.offset, world_heading(psi), over_ground - frame.velocity,
-                       -ship.nu[5], *model.ship.bow_surface))
+                       -ship.nu[5], *model.ships[k].bow_surface))
 
 
-def ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple[float, int]:
-    """The ice thickness (m) and condition (``sim_core.ship.resistance``) at the bow (m, ice
-    frame): open water off the field or in a lead, level ice while the hull is breaking
-    cells, else a broken channel in breakable or frozen tiles."""
+def ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray, k: int = 0) -> tuple[float, int]:
+    """The ice thickness (m) and condition (``sim_core.ship.resistance``) at the k-th ship's
+    bow (m, ice frame): open water off the field or in a lead, level ice while its hull is
+    breaking cells, else a broken channel in breakable or frozen tiles (the channel a ship
+    ahead broke too)."""
     scene = model.scene
     tile = tile_under(bow, scene.nx, scene.ny, scene.side)
     if tile < 0:
@@ -73,24 +76,25 @@ def ice_condition(model: WorldModel, data: WorldData, bow: np.ndarray) -> tuple[
     h = scene.thickness_at(bow, data.scene.tile_class)
     if h <= 0.0:  # an open-water tile (a lead, an ice-free region)
         return 0.0, OPEN_WATER
-    breaking = data.time - data.last_hull_break < BREAKING_MEMORY
+    breaking = data.time - data.hull_breaks[k] < BREAKING_MEMORY
     if breaking or data.scene.tile_state[tile] not in (TileState.BREAKABLE, TileState.FROZEN):
         return h, LEVEL_ICE
     return h, BROKEN_CHANNEL
 
 
-def rubble_loads(model: WorldModel, ship: ShipData, stem: np.ndarray) -> None:
-    """Set the ship's brash resistance (at 5 knots) and ridge-keel load from the rubble at
-    its stem (m, ice frame; ``sim_core.ship.rubble_resistance``): the brash's channel
-    resistance times the share of the tile it covers, and the keel's down to the ship's
-    draught."""
+def rubble_loads(model: WorldModel, k: int, ship: ShipData, stem: np.ndarray) -> None:
+    """Set the k-th ship's brash resistance (at 5 knots) and ridge-keel load from the
+    rubble at its stem (m, ice frame; ``sim_core.ship.rubble_resistance``): the brash's
+    channel resistance times the share of the tile it covers, and the keel's down to the
+    ship's draught."""
     if model.rubble.empty:
         return
     share, thickness, ridges, depth = rubble_at(model.rubble, float(stem[0]), float(stem[1]))
-    ship.brash_resistance = share * brash_channel_resistance(thickness, model.ship.bow)
+    hull = model.ships[k]
+    ship.brash_resistance = share * brash_channel_resistance(thickness, hull.bow)
     m = model.ice.material
     ship.keel_load = 0.0 if ridges is None else keel_resistance(
-        min(depth, model.ship.d), model.ship.B, ridges.friction_angle, ridges.cohesion, ridges.porosity,
+        min(depth, hull.d), hull.B, ridges.friction_angle, ridges.cohesion, ridges.porosity,
         m.water_density, m.density, m.gravity)
 
 
@@ -131,10 +135,10 @@ def drift_ice(model: WorldModel, data: WorldData, dt: float) -> np.ndarray:
     return _STILL
 
 
-def wash(model: WorldModel, data: WorldData) -> Callable[[np.ndarray], np.ndarray] | None:
-    """The propeller's jet as a water velocity field over points of the ice world, or None
-    (no thrust, or the wash switched off): ``sim_core.ship.propeller_jet``."""
-    m, ship = model.ship, data.ship
+def wash(model: WorldModel, data: WorldData, k: int = 0) -> Callable[[np.ndarray], np.ndarray] | None:
+    """The k-th ship's propeller jet as a water velocity field over points of the ice
+    world, or None (no thrust, or the wash switched off): ``sim_core.ship.propeller_jet``."""
+    m, ship = model.ships[k], data.ships[k]
     if not model.ice.settings.propeller_wash:
         return None
     thrust, _, inflow = propeller_thrust(m, ship.nu[0], ship.nu[1], ship.nu[5], ship.rps)

@@ -14,7 +14,10 @@ external load, and the ship's Lindqvist resistance is set from where the bow is:
 while the hull is breaking cells, a broken channel in breakable or frozen tiles, open water
 off the field; the brash and a ridge keel at the stem add theirs (``sim_core.regimes.rubble``).
 The ship meets the ice world in the ice's own frame (``sim_core.ship_in_ice``), which
-drifts where the whole field does. The instructor's environment (``sim_core.environment``)
+drifts where the whole field does. An exercise may hold several ships (``sim_core.fleet``):
+each takes its own orders and breaks ice with its own hull in the one ice world, the scene
+keeps the tiles near every hull breakable, and the ships after the first publish their
+outputs as ``WorldEvents.others``. The instructor's environment (``sim_core.environment``)
 lives in the data and is published with every step: the wind loads the ship
 (``sim_core.ship.wind``) and drifts the ice, the current carries the ship and the ice, and
 a frozen exercise takes its orders but moves nothing and stops its clock, while every tick
@@ -24,13 +27,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from sim_core.environment import Environment
 from sim_core.frames.hull_contour import waterline_contour
-from sim_core.frames.ship_frame import world_vector_to_ship
 from sim_core.ice.floes import FROZEN_CRACK, BreakCause, FloeStatus
 from sim_core.ice.model import IceModel
 from sim_core.ice.bending import CRACK_EVENT, crack_events
@@ -38,7 +41,7 @@ from sim_core.ice.drift import IceFrame
 from sim_core.ice.step import ice_step
 from sim_core.instructor import Command, OtherVessel, Reposition, SetIce, apply_command, move_vessels
 from sim_core.ice.step import warm_up as warm_up_ice
-from sim_core.ice.tiles import IceData, PreparedTile, advance, new_ice_data
+from sim_core.ice.tiles import IceData, PreparedTile, add_hull, advance, new_ice_data
 from sim_core.scene.quadtree import tiles_near
 from sim_core.scene.scene import (RETILED, SceneData, SceneModel, TileState, new_scene_data, retiled_records,
                                   update_scene, with_ice)
@@ -55,15 +58,17 @@ from sim_core.scene.switches import (
     prepare_ahead,
     prepare_switch,
 )
-from sim_core.ship import model as ship_model
+from sim_core.fleet import (Controls, KinematicPose, ShipReport, ShipStart, apply_controls, fleet_wash, hulls_in_ice,
+                             move_ship, new_ship, per_ship, take_ice_loads)
 from sim_core.ship.model import OrderRejection, ShipData, ShipModel
 from sim_core.ship.outputs import ShipOutputs, ship_outputs
 from sim_core.regimes.rubble import RubbleModel, compile_rubble
-from sim_core.ship.searchlights import SearchlightMount, SearchlightOrder, SearchlightState, order_searchlight
+from sim_core.ship.searchlights import SearchlightMount, SearchlightState, order_searchlight
 from sim_core.ship.sensors import SensorFaults, sensor_readings
-from sim_core.ship.wind import wind_load
-from sim_core.ship_in_ice import (contour_in_ice, drift_ice, hull_in_ice, ice_condition, ice_through_water,
-                                  rubble_loads, ship_contour_in_ice, wash)
+from sim_core.ship_in_ice import contour_in_ice, drift_ice, ship_contour_in_ice
+
+__all__ = ["Controls", "KinematicPose", "ShipStart", "WorldData", "WorldEvents", "WorldModel", "compile_world",
+           "new_world_data", "snapshot", "step"]
 
 NO_RETILED = np.zeros(0, dtype=RETILED)
 NO_RETILED.flags.writeable = False  # shared by the events of every step that lays no ice
@@ -73,26 +78,36 @@ NO_RETILED.flags.writeable = False  # shared by the events of every step that la
 class WorldModel:
     """Static half of the world."""
 
-    ship: ShipModel
+    ships: tuple[ShipModel, ...]  # the exercise's ships: the first is the node's own (``sim_core.fleet``)
     ice: IceModel
     scene: SceneModel
-    contour: np.ndarray  # (34, 2) hull waterline contour, ship frame (x forward, y starboard), m
+    contours: tuple[np.ndarray, ...]  # (34, 2) each ship's waterline contour, ship frame (x forward, y starboard), m
     origin: tuple[float, float]  # latitude, longitude of the field's south-west corner, rad
     searchlights: tuple[SearchlightMount, ...]  # the own ship's, by index
     rubble: RubbleModel  # brash and ridges, met through their resistance models
+
+    @property
+    def ship(self) -> ShipModel:
+        """The node's own ship: the one its bridge's links serve."""
+        return self.ships[0]
+
+    @property
+    def contour(self) -> np.ndarray:
+        """The own ship's waterline contour (34, 2), ship frame, m."""
+        return self.contours[0]
 
 
 @dataclass
 class WorldData:
     """Dynamic half of the world; ``time`` is its one clock."""
 
-    ship: ShipData
+    ships: list[ShipData]  # by the model's ships
     ice: IceData
     scene: SceneData
     time: float = 0.0  # s
     epoch: float = 0.0  # UTC of time 0, unix s: the exercise clock the outputs carry (the node sets it)
     seq: int = 0  # steps taken
-    last_hull_break: float = -math.inf  # s
+    hull_breaks: list[float] = field(default_factory=lambda: [-math.inf])  # s: when each ship's hull last broke a cell
     live_rows: np.ndarray = field(default_factory=lambda: NO_ROWS)  # rows of the breakable tiles
     ahead: dict[int, PreparedTile] = field(default_factory=dict)  # field tile -> prepared for its switch
     late_switches: int = 0  # tiles switched in before their preparation was done
@@ -103,33 +118,10 @@ class WorldData:
     sensors: SensorFaults = field(default_factory=SensorFaults)  # the instructor's sensor failures
     ice_frame: IceFrame = field(default_factory=IceFrame)  # where the drifting field has gone
 
-
-@dataclass(frozen=True)
-class KinematicPose:
-    """Where a logged track puts the ship at the end of a step, instead of its manoeuvring
-    model (replay): north, east m from the exercise origin (the field's corner as laid),
-    heading rad clockwise from north, surge and sway m/s, yaw rate rad/s (+ to starboard)."""
-
-    north: float
-    east: float
-    heading: float
-    surge: float
-    sway: float = 0.0
-    yaw_rate: float = 0.0
-
-
-@dataclass
-class Controls:
-    """Console orders for one step; None leaves an order as it was. Rudder in rad (+ to
-    starboard); engine by telegraph position name or lever percent (-100..100). With
-    ``kinematic`` set the ship follows that pose instead of its model; the hull then breaks
-    the ice along it as a driven ship does. ``searchlights``: orders, applied in turn."""
-
-    rudder: float | None = None
-    telegraph: str | None = None
-    lever: float | None = None
-    kinematic: KinematicPose | None = None
-    searchlights: tuple[SearchlightOrder, ...] = ()
+    @property
+    def ship(self) -> ShipData:
+        """The node's own ship's state."""
+        return self.ships[0]
 
 
 @dataclass(frozen=True)
@@ -153,6 +145,8 @@ class WorldEvents:
     in the world (``sim_core.ice.drift.IceFrame``; zero unless the field drifts).
     ``retiled`` names the tiles whose ice class the instructor changed at the step's start
     (``RETILED`` records; in a snapshot, every tile whose class is not the one laid).
+    ``ship``, ``ice_load`` and ``rejected`` are the own ship's (the first); ``others``
+    reports each other ship of the exercise (``sim_core.fleet.ShipReport``).
     """
 
     seq: int
@@ -180,6 +174,7 @@ class WorldEvents:
     instruments: ShipOutputs | None = None  # what the sensors read (their failures applied); None: ``ship``
     ice_offset: tuple[float, float] = (0.0, 0.0)  # m, x east, y north: the ice's frame in the world
     retiled: np.ndarray = field(default_factory=lambda: NO_RETILED)  # tiles given other ice, their classes
+    others: tuple[ShipReport, ...] = ()  # the exercise's other ships, in the model's order after the first
 
     @property
     def readings(self) -> ShipOutputs:
@@ -188,30 +183,40 @@ class WorldEvents:
 
 
 def compile_world(ship: ShipModel, ice: IceModel, scene: SceneModel, origin: tuple[float, float] = (0.0, 0.0),
-                  searchlights: tuple[SearchlightMount, ...] = (), rubble: RubbleModel | None = None) -> WorldModel:
+                  searchlights: tuple[SearchlightMount, ...] = (), rubble: RubbleModel | None = None,
+                  others: tuple[ShipModel, ...] = ()) -> WorldModel:
     """The static world; origin: latitude and longitude (rad) of the field's corner;
-    ``rubble``: the field's brash and ridges (None: none)."""
-    p = ship.particulars
+    ``rubble``: the field's brash and ridges (None: none); ``others``: the exercise's ships
+    besides the own ``ship``, each with its hull in the ice."""
     if rubble is None:
         rubble = compile_rubble([], None, (), scene.nx, scene.ny, scene.side)
-    return WorldModel(ship, ice, scene, waterline_contour(p.length, p.beam), origin, searchlights, rubble)
+    ships = (ship, *others)
+    contours = tuple(waterline_contour(s.particulars.length, s.particulars.beam) for s in ships)
+    return WorldModel(ships, ice, scene, contours, origin, searchlights, rubble)
 
 
 def new_world_data(model: WorldModel, north: float, east: float, heading: float, speed: float,
-                   telegraph: str | None = None) -> WorldData:
+                   telegraph: str | None = None, others: tuple[ShipStart, ...] = ()) -> WorldData:
     """The ship at (north, east) m from the exercise origin (the field's south-west corner
     as laid), heading rad (clockwise from north), steaming at speed m/s; optionally with a
-    telegraph order."""
-    ship = ship_model.new_ship_data(model.ship, speed, heading=heading)
-    ship.eta[0], ship.eta[1] = north, east
-    if telegraph is not None:
-        refused = ship_model.order_telegraph(model.ship, ship, telegraph)
-        if refused:
-            raise ValueError(refused.text)
+    telegraph order; and the model's other ships where ``others`` starts them."""
+    if len(others) != len(model.ships) - 1:
+        raise ValueError(f"the world has {len(model.ships) - 1} other ships; {len(others)} starts were given")
+    starts = (ShipStart(north, east, heading, speed, telegraph), *others)
+    ships = [new_ship(m, start) for m, start in zip(model.ships, starts)]
     ice = new_ice_data(model.ice, model.contour, model.ship.material.hull_friction)
-    data = WorldData(ship, ice, new_scene_data(model.scene), searchlights=[m.default for m in model.searchlights])
+    for m, contour in zip(model.ships[1:], model.contours[1:]):
+        add_hull(ice, contour, m.material.hull_friction)
+    data = WorldData(ships, ice, new_scene_data(model.scene), hull_breaks=[-math.inf] * len(ships),
+                     searchlights=[m.default for m in model.searchlights])
     warm_up(model, data)
     return data
+
+
+def fleet_contour(model: WorldModel, data: WorldData) -> np.ndarray:
+    """Every ship's waterline contour in the ice's frame, stacked (34 x ships, 2) m: the
+    scene keeps the tiles near any of them breakable."""
+    return np.concatenate([ship_contour_in_ice(model, data, k) for k in range(len(model.ships))])
 
 
 def warm_up(model: WorldModel, data: WorldData) -> None:
@@ -219,7 +224,7 @@ def warm_up(model: WorldModel, data: WorldData) -> None:
     kernels, and build the tiles around the start position (and the ring beyond) in full,
     so that the first step only switches them in."""
     warm_up_ice(model.ice, data.ice)
-    contour = ship_contour_in_ice(model, data)
+    contour = fleet_contour(model, data)
     start = with_ice(model.scene, data.scene, tiles_near(contour, model.scene.radius, model.scene.nx,
                                                          model.scene.ny, model.scene.side))
     for tile in start.tolist():
@@ -230,25 +235,19 @@ def warm_up(model: WorldModel, data: WorldData) -> None:
             advance(data.ice, prepared, 1 << 30)
 
 
-def apply_controls(ship: ShipModel, data: ShipData, controls: Controls) -> list[OrderRejection]:
-    """Give the orders to the ship; returns the orders it clamped or refused."""
-    out = []
-    if controls.rudder is not None:
-        out.append(ship_model.order_rudder(ship, data, controls.rudder))
-    if controls.telegraph is not None:
-        out.append(ship_model.order_telegraph(ship, data, controls.telegraph))
-    if controls.lever is not None:
-        out.append(ship_model.order_lever(ship, data, controls.lever))
-    return [r for r in out if r]
-
-
-def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, **fields) -> WorldEvents:
-    """Events with the ship's outputs, the given rows' poses and statuses, and counts."""
+def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, loads: np.ndarray,
+             rejected: list[list[OrderRejection]], **fields) -> WorldEvents:
+    """Events with the ships' outputs, ice loads ((ships, 3): X, Y N; N N m) and refused
+    orders (by ship), the given rows' poses and statuses, and counts."""
     st = data.ice.state
     pose = np.column_stack([st.xy[rows], st.heave[rows], st.yaw[rows], st.roll[rows], st.pitch[rows]])
-    ship = ship_outputs(data.ship, data.time, *model.origin, data.epoch + data.time, tuple(data.searchlights))
+    utc = data.epoch + data.time
+    ship = ship_outputs(data.ship, data.time, *model.origin, utc, tuple(data.searchlights))
+    others = tuple(ShipReport(ship_outputs(other, data.time, *model.origin, utc, ()), load, tuple(refused))
+                   for other, load, refused in zip(data.ships[1:], loads[1:], rejected[1:]))
     readings = sensor_readings(ship, data.sensors, model.origin)
     return WorldEvents(seq=data.seq, time=data.time, ship=ship, instruments=None if readings is ship else readings,
+                       ice_load=loads[0], rejected=tuple(rejected[0]), others=others,
                        floe_rows=rows, floe_pose=pose, floe_status=st.status[rows].copy(),
                        floes_free=st.count(FloeStatus.FREE), floes_frozen=data.ice.frozen.count,
                        environment=data.environment, ice_offset=tuple(data.ice_frame.offset.tolist()),
@@ -263,7 +262,8 @@ def _apply_commands(model: WorldModel, data: WorldData, commands: tuple[Command,
     applied = [done for c in commands if (done := apply_command(model, data, c)) is not None]
     to = data.moving_to
     if to is not None:
-        contour = contour_in_ice(model, data, to.north, to.east, to.heading)
+        contour = np.concatenate([contour_in_ice(model, data, to.north, to.east, to.heading),
+                                  *(ship_contour_in_ice(model, data, k) for k in range(1, len(model.ships)))])
         if prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3):
             applied.append(apply_command(model, data, dataclasses.replace(to, at_once=True)))
     if laid is None:
@@ -272,70 +272,60 @@ def _apply_commands(model: WorldModel, data: WorldData, commands: tuple[Command,
     return {"commands": tuple(applied), "retiled": retiled_records(tiles, data.scene.tile_class[tiles])}
 
 
-def _held(model: WorldModel, data: WorldData, rejected: list[OrderRejection]) -> WorldEvents:
+def _externals(data: WorldData) -> np.ndarray:
+    """Every ship's external load now (ships, 3): X, Y N; N N m."""
+    return np.array([ship.external for ship in data.ships])
+
+
+def _held(model: WorldModel, data: WorldData, rejected: list[list[OrderRejection]]) -> WorldEvents:
     """A frozen exercise's step: nothing moves and the clock stands, but the step is counted
     and published, so that every tick's listeners (the links above all) report the state."""
     data.seq += 1
-    return _publish(model, data, NO_ROWS, placed=placed_tiles(data.ice.tiles, [], []), thawed=NO_ROWS,
-                    frozen=NO_ROWS, broken_by_hull=NO_ROWS, broken_by_contact=NO_ROWS,
-                    ice_load=data.ship.external.copy(), rejected=tuple(rejected))
+    return _publish(model, data, NO_ROWS, _externals(data), rejected, placed=placed_tiles(data.ice.tiles, [], []),
+                    thawed=NO_ROWS, frozen=NO_ROWS, broken_by_hull=NO_ROWS, broken_by_contact=NO_ROWS)
 
 
-def _environment_loads(model: WorldModel, data: WorldData) -> np.ndarray:
-    """Set the current the ship moves in; returns the wind load on it (X, Y N; N N m)."""
-    ship, env = data.ship, data.environment
-    ship.current[:] = env.current_north_east()
-    psi = ship.eta[5]
-    c, s = math.cos(psi), math.sin(psi)
-    u = ship.nu[0] + c * ship.current[0] + s * ship.current[1]  # over ground, in the ship's axes
-    v = ship.nu[1] - s * ship.current[0] + c * ship.current[1]
-    return np.array(wind_load(model.ship.particulars.windage, u, v, psi, env))
+def _take_orders(model: WorldModel, data: WorldData, controls: list[Controls | None]) -> list[list[OrderRejection]]:
+    """Give each ship its orders, and the own ship its searchlights'; returns the orders
+    each ship clamped or refused."""
+    rejected = [apply_controls(m, ship, c) if c is not None else []
+                for m, ship, c in zip(model.ships, data.ships, controls)]
+    for order in controls[0].searchlights if controls[0] is not None else ():
+        if refused := order_searchlight(model.searchlights, data.searchlights, order):
+            rejected[0].append(refused)
+    return rejected
 
 
-def step(model: WorldModel, data: WorldData, dt: float, controls: Controls | None = None,
+def step(model: WorldModel, data: WorldData, dt: float,
+         controls: Controls | Sequence[Controls | None] | None = None,
          commands: tuple[Command, ...] = ()) -> WorldEvents:
     """Advance the world by dt seconds after the instructor's ``commands``, with the
-    console's orders (a frozen exercise: take them, move nothing); returns what it
-    publishes."""
+    consoles' orders (one ``Controls``: the own ship's; a sequence: one per ship, None for
+    none; a frozen exercise: take them, move nothing); returns what it publishes."""
     applied = _apply_commands(model, data, commands)  # the events' commands and retiled
-    rejected = apply_controls(model.ship, data.ship, controls) if controls is not None else []
-    for order in controls.searchlights if controls is not None else ():
-        if refused := order_searchlight(model.searchlights, data.searchlights, order):
-            rejected.append(refused)
+    orders = per_ship(controls, len(model.ships))
+    rejected = _take_orders(model, data, orders)
     if data.environment.frozen:
         return dataclasses.replace(_held(model, data, rejected), **applied)
-    ship = data.ship
-    wind = _environment_loads(model, data)
-    contour = ship_contour_in_ice(model, data)
-    ship.ice_h, ship.ice_condition = ice_condition(model, data, contour[0])  # contour[0] is the stem
-    rubble_loads(model, ship, contour[0])
-    ship.ice_drift[:] = ice_through_water(data)
-    if controls is not None and controls.kinematic is not None:
-        k = controls.kinematic
-        ship.eta[0], ship.eta[1], ship.eta[5] = k.north, k.east, k.heading
-        ship.nu[0], ship.nu[1], ship.nu[5] = k.surge, k.sway, k.yaw_rate
-    else:
-        ship_model.step(model.ship, ship, dt)
+    winds = [move_ship(model, data, k, dt, c) for k, c in enumerate(orders)]
     water = drift_ice(model, data, dt)
-    contour, hull = hull_in_ice(model, data)
-    placed, thawed, frozen = apply_swaps(model, data, update_scene(model.scene, data.scene, contour, hull.xy), contour)
-    report = ice_step(model.ice, data.ice, hull, dt, water, wash(model, data))
+    contours, hulls = hulls_in_ice(model, data)
+    contour = np.concatenate(contours)
+    update = update_scene(model.scene, data.scene, contour, np.array([h.xy for h in hulls]))
+    placed, thawed, frozen = apply_swaps(model, data, update, contours)
+    report = ice_step(model.ice, data.ice, hulls, dt, water, fleet_wash(model, data))
     if data.moving_to is None:  # (a move's tiles are prepared first)
         prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3)
-    load = np.array([*world_vector_to_ship(report.hull_force, ship.eta[5]), -report.hull_moment])
-    ship.external[:] = load + wind
     move_vessels(data.vessels, dt)
     data.time += dt
     data.seq += 1
-    if len(report.broken_by_hull):
-        data.last_hull_break = data.time
+    loads = take_ice_loads(data, report, winds)
     rows = moved_rows(data, placed)
-    return _publish(model, data, rows, placed=placed, thawed=thawed, frozen=frozen,
+    return _publish(model, data, rows, loads, rejected, placed=placed, thawed=thawed, frozen=frozen,
                     frozen_floes=frozen_floes_of(data.ice, frozen.tolist()), broken_by_hull=report.broken_by_hull,
                     broken_by_contact=report.broken_by_contact,
                     cracked=cracks_published(data, placed, report.cracked),
-                    frozen_cracks=frozen_cracks_of(data.ice, frozen.tolist()), ice_load=load, rejected=tuple(rejected),
-                    **applied)
+                    frozen_cracks=frozen_cracks_of(data.ice, frozen.tolist()), **applied)
 
 
 def snapshot(model: WorldModel, data: WorldData) -> WorldEvents:
@@ -348,12 +338,11 @@ def snapshot(model: WorldModel, data: WorldData) -> WorldEvents:
     broken = rows[st.status[rows] == FloeStatus.FREE]
     placed = placed_tiles(tiles, [t for t, _ in by_tile], [k for _, k in by_tile])
     changed = np.flatnonzero(data.scene.tile_class != model.scene.tile_class)
-    return _publish(model, data, rows, placed=placed,
+    return _publish(model, data, rows, _externals(data), [[] for _ in data.ships], placed=placed,
                     thawed=NO_ROWS, frozen=np.array(frozen, dtype=np.int64),
                     frozen_floes=frozen_floes_of(data.ice, frozen),
                     broken_by_hull=broken[st.cause[broken] == BreakCause.HULL],
                     broken_by_contact=broken[st.cause[broken] == BreakCause.CONTACT],
                     cracked=crack_events(st.crack, rows), frozen_cracks=frozen_cracks_of(data.ice, frozen),
-                    ice_load=data.ship.external.copy(), rejected=(),
                     retiled=retiled_records(changed, data.scene.tile_class[changed]),
                     snapshot=True)

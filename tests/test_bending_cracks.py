@@ -250,7 +250,7 @@ def test_many_fresh_loads_in_one_step_crack_as_one_load_at_a_time_did(exercise):
     st, tiles = data.ice.state, data.ice.tiles
     s = data.ship
     hull_xy, angle = np.array([s.eta[1], s.eta[0]]), math.pi / 2 - s.eta[5]
-    outline = data.ice.contacts.hull_outline
+    outline = data.ice.contacts.hulls[0].outline
     fresh = np.flatnonzero((st.status[:st.n] == FloeStatus.INTACT) & (st.crack[:st.n] == 0))
     stem = hull_xy + model.ship.particulars.length / 2 * np.array([math.cos(angle), math.sin(angle)])
     loaded = fresh[np.argsort(np.hypot(*(st.home[fresh] - stem).T))[:60]]  # a turn: many fresh loads at once

@@ -68,7 +68,7 @@ def test_broken_pieces_float_at_equilibrium_when_left_alone(runs):
     r = runs[("hybrid", 3)]
     far = HullMotion(np.array([SIDE / 2, -5000.0]), 0.5 * math.pi, np.zeros(2), 0.0)
     for _ in range(int(40 / (1 / 30))):
-        ice_step(r.model, r.data, far, 1 / 30)
+        ice_step(r.model, r.data, (far,), 1 / 30)
     st = r.data.state
     free = st.status == FloeStatus.FREE
     assert free.sum() > 100
@@ -91,7 +91,7 @@ def test_no_floe_accelerates_without_contact_and_energy_decays():
     far = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
     speeds, energies = [], []
     for _ in range(300):
-        rep = ice_step(m, data, far, 1 / 30)
+        rep = ice_step(m, data, (far,), 1 / 30)
         assert len(rep.broken_by_contact) == 0
         v = data.state.vel[keep]
         speeds.append(np.linalg.norm(v, axis=1))
@@ -117,7 +117,7 @@ def test_a_floe_the_hull_has_left_is_not_among_its_contacts():
     hull_pairs, v = [], 2.0
     for _ in range(90):  # ahead into the floe, then astern once it is struck
         hull += (v / 30, 0.0)
-        ice_step(m, data, HullMotion(hull.copy(), 0.0, np.array([v, 0.0]), 0.0), 1 / 30)
+        ice_step(m, data, (HullMotion(hull.copy(), 0.0, np.array([v, 0.0]), 0.0),), 1 / 30)
         buf = pb.Buffer()
         pb.get_space_arbiters(data.contacts.space, pb.ArbiterFields.BODY_A_ID | pb.ArbiterFields.BODY_B_ID
                               | pb.ArbiterFields.CONTACT_COUNT, buf)
@@ -151,7 +151,7 @@ def test_floes_pushed_under_the_hull_surface_and_right_themselves(runs):
     assert st.submerged.any()  # the stern still covers the end of the strip
     onward = HullMotion(np.array([SIDE / 2, 400.0]), 0.5 * math.pi, np.array([0.0, 3 * KN]), 0.0)
     for _ in range(int(30 / (1 / 30))):
-        ice_step(r.model, r.data, onward, 1 / 30)
+        ice_step(r.model, r.data, (onward,), 1 / 30)
     assert not st.submerged.any()  # the hull has gone: everything surfaced
     by_hull = (st.cause == BreakCause.HULL) & (st.status == FloeStatus.FREE)
     g = st.gcell[by_hull]

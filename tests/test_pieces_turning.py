@@ -39,7 +39,7 @@ def _run(tmp_path_factory, name: str, at_once: bool = False):
     cfg = exercise_config(tmp_path_factory.mktemp(name) / "tiles", 400.0, 600.0, 50.0, start_north=-60.0)
     model = build_world(cfg, None)
     if at_once:
-        model = dataclasses.replace(model, ship=dataclasses.replace(model.ship, bow_surface=(0.0, 1.0)))
+        model = dataclasses.replace(model, ships=(dataclasses.replace(model.ship, bow_surface=(0.0, 1.0)),))
     data = start_world(model, cfg)
     seen, done, jump, pose = [], {}, 0.0, {}
     for _ in range(STEPS):

@@ -79,7 +79,9 @@ def _outputs(record: RecordedSession | None, path) -> list[str]:
     return out
 
 
-def test_a_recorded_session_replays_to_the_same_track_cells_and_outputs(tmp_path):
+def _live_session(tmp_path):
+    """Four seconds of a live run under the consoles' scripted orders, recorded: the config,
+    model, the world at the end, the record's folder, the links' errors and the order counts."""
     lever = ModbusConsole("tcp")
     lever.set(1, 40)  # lever 40 % ahead until the telegraph speaks
     lever.start()
@@ -102,7 +104,11 @@ def test_a_recorded_session_replays_to_the_same_track_cells_and_outputs(tmp_path
                     c.join(2.0)
                 lever.stop()
             errors = {link.name: link.health().errors for link in hub.links}
-            counts = dict(hub.order_counts)
+            return cfg, model, live, record, errors, dict(hub.order_counts)
+
+
+def test_a_recorded_session_replays_to_the_same_track_cells_and_outputs(tmp_path):
+    cfg, model, live, record, errors, counts = _live_session(tmp_path)
     assert errors["helm"]["malformed"] >= 1 and errors["helm"]["bad_checksum"] == 1  # the noise, dropped
     assert errors["telegraph"]["source_not_allowed"] == 1
     assert counts["lever/lever/0"] > 0 and counts["telegraph/telegraph/0"] > 0

@@ -39,7 +39,7 @@ def rested():
     data.contacts.set_velocity(st, loose, rng.uniform(-0.004, 0.004, (len(loose), 2)),
                                rng.uniform(-1e-4, 1e-4, len(loose)))
     for _ in range(30):
-        ice_step(model, data, FAR, DT)
+        ice_step(model, data, (FAR,), DT)
     return model, data, loose
 
 
@@ -50,13 +50,13 @@ def test_resting_floes_keep_pose_and_momentum_and_wake_when_the_hull_comes(reste
     held = st.xy[loose].copy(), st.yaw[loose].copy(), st.vel[loose].copy(), st.yaw_rate[loose].copy()
     assert np.abs(held[2]).max() > 0.0  # they rest with the small velocity they had
     for _ in range(10):
-        ice_step(model, data, FAR, DT)
+        ice_step(model, data, (FAR,), DT)
     assert not len(np.intersect1d(data.contacts.read_free(st), loose))  # out of the dynamic set
     for now, then in zip((st.xy[loose], st.yaw[loose], st.vel[loose], st.yaw_rate[loose]), held):
         np.testing.assert_array_equal(now, then)
     near = np.array([20.0, -60.0])  # the hull south of the tile, inside the wake radius, touching nothing
     assert np.hypot(*(st.xy[loose] - near).T).max() < resting.radii(model, data)[1]
-    resting.wake_near_hull(model, data, near)
+    resting.wake_near_hull(model, data, 0, near)
     assert not st.resting[loose].any()
     moving = data.contacts.read_free(st)  # the engine's bodies, read back
     assert set(loose.tolist()) <= set(moving.tolist())
@@ -75,12 +75,12 @@ def test_a_moving_floe_that_strikes_a_resting_one_wakes_it(rested):
     data.contacts.set_velocity(st, np.array([striker]), (push / np.hypot(*push))[None, :] * 1.0, np.zeros(1))
     start = st.xy[target].copy()
     for _ in range(30):
-        ice_step(model, data, FAR, DT)
+        ice_step(model, data, (FAR,), DT)
         if not st.resting[target]:
             break
     assert not st.resting[target]
     for _ in range(10):
-        ice_step(model, data, FAR, DT)
+        ice_step(model, data, (FAR,), DT)
     assert np.hypot(*(st.xy[target] - start)) > 0.01  # pushed away, as a floe in the dynamic set
 
 
@@ -115,7 +115,7 @@ def test_a_tile_frozen_with_resting_floes_thaws_with_their_pose_and_momentum(res
     cells = loose - data.tiles.rows(tile)[0]
     freeze_tile(data, tile)
     while data.contacts.swaps_pending:  # the resting floes' objects leave the space over the steps
-        ice_step(model, data, FAR, DT)
+        ice_step(model, data, (FAR,), DT)
     assert not data.contacts.has_tile(tile)
     record = data.frozen[tile][np.searchsorted(data.frozen[tile]["cell"], cells)]
     for now, then in zip((record["xy"], record["yaw"], record["vel"], record["yaw_rate"]), held):
@@ -127,7 +127,7 @@ def test_a_tile_frozen_with_resting_floes_thaws_with_their_pose_and_momentum(res
         np.testing.assert_array_equal(now, then)
     steps = 0
     while data.contacts.swaps_pending:
-        ice_step(model, data, FAR, DT)
+        ice_step(model, data, (FAR,), DT)
         steps += 1
     assert set(back.tolist()) <= set(data.contacts.read_free(st).tolist())  # dynamic bodies again
     drift = np.hypot(*(st.xy[back] - held[0]).T)
@@ -150,10 +150,10 @@ def test_floes_come_to_rest_without_contacts_the_engine_would_keep():
         con = data.contacts.read_contacts(st)
         pairs = [(a, b) for a, b in zip(con.a.tolist(), con.b.tolist()) if a in strip or b in strip]
         return sum(static(a) and static(b) for a, b in pairs), len(pairs)
-    ice_step(model, data, FAR, DT)
+    ice_step(model, data, (FAR,), DT)
     assert strip_contacts()[1] > len(loose) // 2  # the strip's floes touch each other and the level ice
     for _ in range(30):
-        ice_step(model, data, FAR, DT)
+        ice_step(model, data, (FAR,), DT)
     assert st.resting[loose].all()
     assert strip_contacts()[0] == 0
 
@@ -165,7 +165,7 @@ def test_floes_counted_at_rest_again_while_they_shed_rest_once():
     (Chipmunk aborts on removing a body twice)."""
     model, data, loose = _broken_strip("sphere")
     for _ in range(30):
-        ice_step(model, data, FAR, 0.1)
+        ice_step(model, data, (FAR,), 0.1)
     st = data.state
     assert st.resting[loose].all()
     moving = set(data.contacts.read_free(st).tolist())

@@ -94,7 +94,7 @@ def test_floes_that_leave_and_reenter_keep_pose_and_momentum(settle):
     rng = np.random.default_rng(3)
     data.contacts.set_velocity(st, loose, rng.uniform(-0.2, 0.2, (len(loose), 2)), rng.uniform(-0.05, 0.05, len(loose)))
     for _ in range(20):
-        ice_step(model, data, far, 1 / 30)
+        ice_step(model, data, (far,), 1 / 30)
     pose = st.xy[loose].copy(), st.yaw[loose].copy()
     momentum = st.vel[loose].copy(), st.yaw_rate[loose].copy()
     assert np.abs(momentum[0]).max() > 0.01
@@ -102,7 +102,7 @@ def test_floes_that_leave_and_reenter_keep_pose_and_momentum(settle):
     assert np.all(st.status[loose] == FloeStatus.FROZEN)
     if settle:  # the tile's bodies leave the engine over the following steps
         while data.contacts.swaps_pending:
-            ice_step(model, data, far, 1 / 30)
+            ice_step(model, data, (far,), 1 / 30)
         reclaim_rows(data)
         assert np.all(st.status[rows] == FloeStatus.VACANT)  # the tile's rows are given back
     else:

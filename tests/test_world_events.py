@@ -86,7 +86,7 @@ def test_live_rows_keep_their_cells_and_frozen_rows_go_to_the_next_tile():
     assert data.tiles.rows(third)[0] == 2 * n  # the first's rows are not given while its bodies leave
     far = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
     while data.contacts.swaps_pending:
-        ice_step(model, data, far, 1 / 30)
+        ice_step(model, data, (far,), 1 / 30)
     reclaim_rows(data)
     assert data.state.count(FloeStatus.VACANT) == n
     fourth = place_tile(model, data, 0, (120.0, 0.0))
@@ -110,7 +110,7 @@ def test_thawed_floes_come_back_to_life_where_they_froze():
     data.contacts.set_velocity(data.state, loose, np.tile([0.0, 0.3], (len(loose), 1)), np.zeros(len(loose)))
     far = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
     for _ in range(30):
-        ice_step(model, data, far, 1 / 30)
+        ice_step(model, data, (far,), 1 / 30)
     moved = st.xy[loose].copy()
     assert np.abs(moved - st.home[loose]).max() > 0.05  # they drifted before freezing
     yaw = st.yaw[loose].copy()
@@ -127,7 +127,7 @@ def test_thawed_floes_come_back_to_life_where_they_froze():
     assert st.count(FloeStatus.FREE) == len(loose)
     # and alive again: the contact space moves them
     data.contacts.set_velocity(data.state, back, np.tile([0.0, 0.3], (len(back), 1)), np.zeros(len(back)))
-    ice_step(model, data, far, 1 / 30)
+    ice_step(model, data, (far,), 1 / 30)
     assert np.abs(st.xy[back] - moved).max() > 1e-3
 
 

@@ -9,7 +9,7 @@ thousands of them cost seconds of creation per tile swap, pauses of a tenth of a
 whenever Python's cyclic collector walks them, and about a kilobyte each. A floe here costs
 its C body and shape and two pointers in an array, and a body names its floe directly: its
 user data is the floe's code (``ROW0 + row``, ``TILE0 + placement`` for a tile's static
-body, ``HULL_ID``), which ``pymunk.batch`` returns as the body id.
+body, ``HULL0 + k`` for the k-th hull), which ``pymunk.batch`` returns as the body id.
 """
 from __future__ import annotations
 
@@ -17,10 +17,12 @@ import numpy as np
 import pymunk
 from pymunk._chipmunk import ffi, lib
 
-HULL_ROW = -1
-NOT_A_FLOE = -2  # bodies that are not floes (the space's own static body)
-TILE_CODE = -3  # a contact on tile t's static body is coded TILE_CODE - t
-HULL_ID, ROW0, TILE0 = 1, 2, 1 << 40  # body user data: the hull, floe rows, tile bodies
+MAX_HULLS = 16  # hulls one contact space holds: the ships of one exercise
+NOT_A_FLOE = -1  # bodies that are not floes (the space's own static body)
+HULL_ROW0 = -2  # a contact's row on hull k is HULL_ROW0 - k
+LOWEST_ROW = HULL_ROW0 - (MAX_HULLS - 1)  # no contact's row is below this
+HULL0 = 1
+ROW0, TILE0 = HULL0 + MAX_HULLS, 1 << 40  # body user data: hull k is HULL0 + k, then floe rows, tile bodies
 HULL_BIT, FLOE_BIT = 1, 2
 INTACT_IN, FLOE_IN = 1, 2  # TileBodies.in_space flags
 HULL_FILTER = (0, HULL_BIT, FLOE_BIT)  # Chipmunk shape filters: (group, categories, mask)
@@ -120,12 +122,14 @@ class TileBodies:
         self.body = 0
 
 
-def free_all(space: pymunk.Space, tiles: dict, leaving: list, hull: tuple[int, int]) -> None:
-    """Free every C object the contact space made, before the space itself goes."""
+def free_all(space: pymunk.Space, tiles: dict, leaving: list, hulls: list[tuple[int, int]]) -> None:
+    """Free every C object the contact space made, before the space itself goes; ``hulls``:
+    each hull's body and shape (C pointers)."""
     for bodies in [*tiles.values(), *(b for _, b in leaving)]:
         bodies.release(space._space)
-    hull_body, hull_shape = body_at(hull[0]), shape_at(hull[1])
-    lib.cpSpaceRemoveShape(space._space, hull_shape)
-    lib.cpSpaceRemoveBody(space._space, hull_body)
-    lib.cpShapeFree(hull_shape)
-    lib.cpBodyFree(hull_body)
+    for body_ptr, shape_ptr in hulls:
+        hull_body, hull_shape = body_at(body_ptr), shape_at(shape_ptr)
+        lib.cpSpaceRemoveShape(space._space, hull_shape)
+        lib.cpSpaceRemoveBody(space._space, hull_body)
+        lib.cpShapeFree(hull_shape)
+        lib.cpBodyFree(hull_body)

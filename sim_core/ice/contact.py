@@ -1,4 +1,4 @@
-"""Planar contact of hull, intact cells and free floes, on Chipmunk2D (through pymunk).
+"""Planar contact of hulls, intact cells and free floes, on Chipmunk2D (through pymunk).
 
 Chipmunk does the collision detection and the contact impulses; this module keeps its
 bodies in step with the floe arrays, through Chipmunk's C API (``chipmunk_bodies`` says why).
@@ -10,14 +10,15 @@ contact point lies on the loaded cell's boundary, and the neighbour across that 
 already broken (that is where the striker came from), so the nearest seed among the tile's
 intact cells names the loaded cell; a sphere collider lies inside its cell, so there the
 answer is exact. The seeds are searched in a uniform grid of buckets per template, in the
-template's frame (``contact_kernels.seed_grid``). Breaking moves a cell's shape from its tile body to a new dynamic body. Colliders
-(mesh or sphere) carry the floe-floe contact, but the hull breaks whatever it touches
-geometrically: the hull's overlap with intact cells is tested against their true outlines
-(separating axes, in numba), not through the engine. The hull is a kinematic body driven
-by the ship model. State moves between Chipmunk and the arrays through ``pymunk.batch``
-(one C call per step, no Python loop over bodies). Water drag in the plane is Chipmunk's
-velocity damping, an exponential decay with the configured time constant, applied in C. A
-quadratic drag would need a Python callback per body and step.
+template's frame (``contact_kernels.seed_grid``). Breaking moves a cell's shape from its
+tile body to a new dynamic body. Colliders (mesh or sphere) carry the floe-floe contact,
+but the hull breaks whatever it touches geometrically: the hull's overlap with intact
+cells is tested against their true outlines (separating axes, in numba), not through the
+engine. Each hull is a kinematic body driven by its ship's model (``hull_bodies``; one per
+ship, all in this one space). State moves between Chipmunk and the arrays through
+``pymunk.batch`` (one C call per step, no Python loop over bodies). Water drag in the
+plane is Chipmunk's velocity damping, an exponential decay with the configured time
+constant, applied in C. A quadratic drag would need a Python callback per body and step.
 
 A tile enters the space in two parts: ``build_tile`` makes its static body and shapes
 (the costly part, a few microseconds per cell, done ahead of need) and ``insert_tile``
@@ -36,9 +37,6 @@ from pymunk._chipmunk import ffi, lib
 
 from sim_core.ice.chipmunk_bodies import (
     FLOE_FILTER,
-    HULL_FILTER,
-    HULL_ID,
-    IDENTITY,
     NO_CONTACT,
     ROW0,
     TILE0,
@@ -52,6 +50,7 @@ from sim_core.ice.chipmunk_bodies import (
 from sim_core.ice.contact_kernels import Contacts, contact_rows, hull_overlaps, scatter_free, seed_grid
 from sim_core.ice.contact_resting import FloeRest
 from sim_core.ice.floes import FloeState, TilePlacement
+from sim_core.ice.hull_bodies import HullBody, move_hull, new_hull
 from sim_core.ice.model import IceModel, placed_centroids, placed_outlines
 
 _ROW_BY_ROW = 16  # fewer rows than this have their engine objects looked up one by one
@@ -63,7 +62,7 @@ _ARB_FIELDS = (pb.ArbiterFields.BODY_A_ID | pb.ArbiterFields.BODY_B_ID | pb.Arbi
 
 
 class ContactSpace(FloeRest):
-    """Chipmunk space holding the hull and the floes of breakable tiles."""
+    """Chipmunk space holding the hulls and the floes of breakable tiles."""
 
     def __init__(self, model: IceModel, tiles: TilePlacement, hull_outline: np.ndarray,
                  hull_friction: float) -> None:
@@ -84,23 +83,7 @@ class ContactSpace(FloeRest):
         # static bodies (``rest``, ``wake``; sim_core/ice/resting.py decides when).
         self.space.damping = math.exp(-1.0 / s.drag_time_s)  # per second: v *= damping ** dt
         self._water = (0.0, 0.0, 0.0)  # the water's velocity (m/s) and the step (s) the gravity was set for
-        hull = lib.cpBodyNewKinematic()
-        lib.cpBodySetUserData(hull, ffi.cast("void *", HULL_ID))
-        ring = [tuple(p) for p in np.asarray(hull_outline, dtype=float).tolist()]
-        hull_shape = lib.cpPolyShapeNew(hull, len(ring), ffi.new("cpVect[]", ring), IDENTITY, 0.0)
-        lib.cpShapeSetFriction(hull_shape, hull_friction)
-        lib.cpShapeSetFilter(hull_shape, HULL_FILTER)
-        lib.cpSpaceAddBody(self._cp, hull)
-        lib.cpSpaceAddShape(self._cp, hull_shape)
-        self._hull = hull
-        # the outline as Chipmunk keeps it: convex, counter-clockwise, body frame (y to port)
-        verts = [lib.cpPolyShapeGetVert(hull_shape, i) for i in range(lib.cpPolyShapeGetCount(hull_shape))]
-        self.hull_outline = np.array([(v.x, v.y) for v in verts])
-        self.hull_half_beam = float(np.abs(self.hull_outline[:, 1]).max())
-        self.hull_stem = float(self.hull_outline[:, 0].max())  # m forward of the reference point
-        self._hull_box = np.array([self.hull_outline[:, 0].min(), self.hull_outline[:, 0].max(),
-                                   self.hull_outline[:, 1].min(), self.hull_outline[:, 1].max()])
-        self._hull_pose = (np.zeros(2), 0.0)
+        self.hulls: list[HullBody] = []  # by index: every ship's hull breaks ice in this one space
         self._tiles: dict[int, TileBodies] = {}  # placement -> its engine objects
         self._tile_index: tuple | None = None  # _in_space's arrays, until _tiles or the placements change
         self._entering: list[TileBodies] = []  # switched in, objects still going into the space
@@ -114,8 +97,7 @@ class ContactSpace(FloeRest):
         self._shedding: list[tuple[int, np.ndarray, np.ndarray, np.ndarray, dict[int, TileBodies]]] = []
         d = np.hypot(model.outline[:, 0], model.outline[:, 1])
         self.extent = np.maximum.reduceat(d, model.outline_start[:-1]) if len(d) else np.zeros(0)  # cell radius, m
-        # farthest a point of the hull and of a cell it touches can be from the hull's reference point, m
-        self.reach = float(np.hypot(*np.abs(self.hull_outline).max(axis=0))) + float(self.extent.max(initial=0.0))
+        self.reach = 0.0  # m: farthest a point of a hull and of a cell it touches can be from its reference point
         self._grid = seed_grid(model)
         # per template, the farthest a cell's outline lies from its Voronoi seed, m
         spread = np.hypot(*model.seed_offset.T) + self.extent if len(self.extent) else np.zeros(0)
@@ -123,7 +105,18 @@ class ContactSpace(FloeRest):
                                                                            model.template_start[1:])])
         self._sides = np.array([t.side for t in model.templates], dtype=float)
         self._buffer = pb.Buffer()
-        weakref.finalize(self, free_all, self.space, self._tiles, self._leaving, (ptr_of(hull), ptr_of(hull_shape)))
+        self._hull_objects: list[tuple[int, int]] = []  # each hull's C body and shape, for free_all
+        weakref.finalize(self, free_all, self.space, self._tiles, self._leaving, self._hull_objects)
+        self.add_hull(hull_outline, hull_friction)
+
+    def add_hull(self, outline: np.ndarray, friction: float) -> int:
+        """Add a hull of the given waterline outline ((n, 2) m, body frame: x forward, y to
+        port) and friction against ice; returns its index."""
+        hull = new_hull(self._cp, len(self.hulls), outline, friction)
+        self.hulls.append(hull)
+        self._hull_objects.append((hull.body, hull.shape))
+        self.reach = max(self.reach, hull.radius + float(self.extent.max(initial=0.0)))
+        return len(self.hulls) - 1
 
     # -- building -------------------------------------------------------------------------
     def build_cells(self, bodies: TileBodies, template: int, corner: tuple[float, float] | np.ndarray,
@@ -309,14 +302,11 @@ class ContactSpace(FloeRest):
             lib.cpBodySetAngularVelocity(body_at(p), w)
 
     # -- per step -------------------------------------------------------------------------
-    def set_hull(self, xy: np.ndarray, angle: float, velocity: np.ndarray, angular_velocity: float) -> None:
-        """Pose (world m, rad CCW) and velocity of the kinematic hull for the coming step."""
-        lib.cpBodySetPosition(self._hull, (float(xy[0]), float(xy[1])))
-        lib.cpBodySetAngle(self._hull, float(angle))
-        lib.cpBodySetVelocity(self._hull, (float(velocity[0]), float(velocity[1])))
-        lib.cpBodySetAngularVelocity(self._hull, float(angular_velocity))
-        lib.cpSpaceReindexShapesForBody(self._cp, self._hull)
-        self._hull_pose = (np.array([float(xy[0]), float(xy[1])]), float(angle))
+    def set_hull(self, hull: int, xy: np.ndarray, angle: float, velocity: np.ndarray,
+                 angular_velocity: float) -> None:
+        """Pose (world m, rad CCW) and velocity (m/s, rad/s CCW) of a kinematic hull (by
+        index) for the coming step."""
+        move_hull(self._cp, self.hulls[hull], xy, angle, velocity, angular_velocity)
 
     def _in_space(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The placements in the space (k,), their south-west and north-east corners (k, 2;
@@ -330,14 +320,14 @@ class ContactSpace(FloeRest):
             self._tile_index = (ids, lo, lo + self._sides[self.tiles.template[ids]][:, None], working)
         return self._tile_index
 
-    def hull_touching(self, state: FloeState) -> np.ndarray:
-        """Rows of intact cells in the space whose true outline the hull overlaps now
-        (kinematic-static pairs make no contacts in Chipmunk, and sphere colliders are not
-        the cells' outlines)."""
-        m = self.model
-        xy, angle = self._hull_pose
+    def hull_touching(self, state: FloeState, index: int) -> np.ndarray:
+        """Rows of intact cells in the space whose true outline the hull (by index)
+        overlaps now (kinematic-static pairs make no contacts in Chipmunk, and sphere
+        colliders are not the cells' outlines)."""
+        m, body = self.model, self.hulls[index]
+        xy, angle = body.xy, body.angle
         c, s = math.cos(angle), math.sin(angle)
-        hull = self.hull_outline @ np.array([[c, s], [-s, c]]) + xy
+        hull = body.in_world()
         tiles, lo, hi, _ = self._in_space()
         near = tiles[np.all((lo <= hull.max(axis=0)) & (hi >= hull.min(axis=0)), axis=1)]  # a tile's cells lie in it
         if not len(near):
@@ -345,7 +335,7 @@ class ContactSpace(FloeRest):
         tl = self.tiles
         found = hull_overlaps(near, np.concatenate([self._tiles[k].in_space for k in near.tolist()]), state.status,
                                state.gcell, state.xy, state.yaw, m.outline, m.outline_start, self.extent, hull, xy,
-                               c, s, self._hull_box, tl.template, tl.corner, tl.quarter_turns, tl.row_start,
+                               c, s, body.box, tl.template, tl.corner, tl.quarter_turns, tl.row_start,
                                tl.row_count, self._sides, self._pad, *self._grid[:5])
         return np.sort(found)
 

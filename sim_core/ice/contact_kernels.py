@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from sim_core.ice.chipmunk_bodies import HULL_ID, HULL_ROW, INTACT_IN, NOT_A_FLOE, ROW0, TILE0
+from sim_core.ice.chipmunk_bodies import HULL0, HULL_ROW0, INTACT_IN, NOT_A_FLOE, ROW0, TILE0
 from sim_core.ice.model import IceModel
 
 SEEDS_PER_BUCKET = 4  # mean Voronoi seeds per bucket of a template's seed grid
@@ -20,7 +20,7 @@ SEEDS_PER_BUCKET = 4  # mean Voronoi seeds per bucket of a template's seed grid
 @dataclass(frozen=True)
 class Contacts:
     """Contacts of the last step, one entry per touching pair: rows of bodies a and b
-    (``HULL_ROW`` for the hull, negative for anything that is not a floe), the impulse on a
+    (``HULL_ROW0 - k`` for the k-th hull, ``NOT_A_FLOE`` for anything else that is not a floe), the impulse on a
     (N s, world), the unit normal from a to b, and the mean contact point (world m)."""
 
     a: np.ndarray  # (k,) int64
@@ -29,23 +29,24 @@ class Contacts:
     normal: np.ndarray  # (k, 2)
     point: np.ndarray  # (k, 2)
 
-    def with_hull(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Contacts with the hull: the other body's row, the impulse on the hull (N s) and
-        the contact point (m); those with the hull as body a first."""
-        return hull_contacts(self.a, self.b, self.impulse, self.point)
+    def with_hull(self, hull: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Contacts with the given hull (by index): the other body's row, the impulse on
+        the hull (N s) and the contact point (m); those with the hull as body a first."""
+        return hull_contacts(self.a, self.b, self.impulse, self.point, HULL_ROW0 - hull)
 
 
 @numba.njit(cache=True)
-def hull_contacts(a, b, impulse, point):
-    """``Contacts.with_hull`` of the contacts' rows a, b (k,), impulses on a and points (k, 2)."""
+def hull_contacts(a, b, impulse, point, hull_row):
+    """``Contacts.with_hull`` of the contacts' rows a, b (k,), impulses on a and points
+    (k, 2), for the hull whose contacts have the row hull_row."""
     n = 0
     for k in range(len(a)):
-        n += (a[k] == HULL_ROW) + (b[k] == HULL_ROW)
+        n += (a[k] == hull_row) + (b[k] == hull_row)
     other, on_hull, at = np.empty(n, np.int64), np.empty((n, 2)), np.empty((n, 2))
     n = 0
     for side in range(2):
         for k in range(len(a)):
-            if (a[k] if side == 0 else b[k]) == HULL_ROW:
+            if (a[k] if side == 0 else b[k]) == hull_row:
                 sign = 1.0 if side == 0 else -1.0
                 other[n] = b[k] if side == 0 else a[k]
                 on_hull[n, 0], on_hull[n, 1] = sign * impulse[k, 0], sign * impulse[k, 1]
@@ -240,8 +241,8 @@ def contact_rows(ints, f, status, working, template, corner, turns, row_start, s
                 rows[side, k] = row
             elif code >= ROW0:
                 rows[side, k] = code - ROW0
-            elif code == HULL_ID:
-                rows[side, k] = HULL_ROW
+            elif code >= HULL0:
+                rows[side, k] = HULL_ROW0 - (code - HULL0)
             else:
                 rows[side, k] = NOT_A_FLOE
     return rows[0], rows[1], point
@@ -257,7 +258,7 @@ def warm_up() -> None:
     contact_rows(np.zeros((0, 3), np.uintp), np.zeros((0, 8)), none.astype(np.uint8), none.astype(np.uint8),
                   none, np.zeros((0, 2)), none, none, np.ones(1), one, one + 1, np.ones(1), np.zeros(2, np.int64),
                   none, np.zeros((0, 2)), np.zeros(2, np.int64))
-    hull_contacts(none, none, np.zeros((0, 2)), np.zeros((0, 2)))
+    hull_contacts(none, none, np.zeros((0, 2)), np.zeros((0, 2)), HULL_ROW0)
     hull_overlaps(none, none.astype(np.uint8), none.astype(np.uint8), none.astype(np.int32), np.zeros((0, 2)),
                    np.zeros(0), square, np.array([0, 4]), np.ones(1), square, np.zeros(2), 1.0, 0.0, np.zeros(4),
                    none, np.zeros((0, 2)), none, none, none, np.ones(1), np.ones(1), one, one + 1, np.ones(1),

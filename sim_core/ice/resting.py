@@ -1,9 +1,9 @@
-"""Floes at rest far from the hull leave the dynamic set, and come back when they are needed.
+"""Floes at rest far from every hull leave the dynamic set, and come back when they are needed.
 
 Astern of the ship the broken channel packs and comes to rest: thousands of floes the engine
 would otherwise solve every step for nothing. A free floe that has stayed slower than
 ``rest_speed`` (its centre, and its rim turning) for ``rest_after_s``, settled on the water
-and farther from the hull than the rest radius sheds its contacts and becomes a static
+and farther from every hull than the rest radius sheds its contacts and becomes a static
 body (``ContactSpace.rest``, then ``settle``): moving floes still strike it, but it and
 its resting neighbours cost no solver work. It wakes (``ContactSpace.wake``), with the
 velocity it came to rest with, when the hull comes within the wake radius (Chipmunk does
@@ -23,6 +23,7 @@ import math
 import numba
 import numpy as np
 
+from sim_core.ice.chipmunk_bodies import LOWEST_ROW
 from sim_core.ice.contact_kernels import Contacts
 from sim_core.ice.model import IceModel
 from sim_core.ice.tiles import IceData
@@ -53,7 +54,8 @@ def _calm_far(rows, vel, yaw_rate, gcell, extent, calm, speed, steps, submerged,
     """Count the moving rows' steps at rest (slower than speed, m/s: the centre's speed
     plus the rim's from turning; a faster step starts the count again), and return the
     places in rows (ascending) of those at rest for ``steps``, above water, settled at
-    their draft and farther than radius (m) from the hull's reference point."""
+    their draft and farther than radius (m) from every hull's reference point (hull_xy
+    (h, 2), m)."""
     out = np.empty(len(rows), np.int64)
     n = 0
     for k in range(len(rows)):
@@ -65,7 +67,10 @@ def _calm_far(rows, vel, yaw_rate, gcell, extent, calm, speed, steps, submerged,
             calm[i] += 1
         if calm[i] < steps or submerged[i]:
             continue
-        if (xy[i, 0] - hull_xy[0]) ** 2 + (xy[i, 1] - hull_xy[1]) ** 2 <= radius * radius:
+        near = False
+        for h in range(hull_xy.shape[0]):
+            near = near or (xy[i, 0] - hull_xy[h, 0]) ** 2 + (xy[i, 1] - hull_xy[h, 1]) ** 2 <= radius * radius
+        if near:
             continue
         if settled(i, gcell, z_equilibrium, heave, roll, pitch, heave_rate, roll_rate, pitch_rate):
             out[n] = k
@@ -112,7 +117,7 @@ def _pushes_on(a, b, impulse, point, flag, xy, gcell, mass, vel, vel_before):
         rows, others = (a, b) if side == 0 else (b, a)
         for k in range(len(rows)):
             if rows[k] >= 0 and flag[rows[k]]:
-                key[n] = rows[k] * (len(flag) + 3) + others[k] + 2  # other >= -2: by row, then other
+                key[n] = rows[k] * (len(flag) - LOWEST_ROW + 1) + others[k] - LOWEST_ROW  # by row, then other
                 entry[n] = side * len(a) + k
                 n += 1
     order = np.argsort(key, kind="mergesort")
@@ -137,21 +142,21 @@ def _pushes_on(a, b, impulse, point, flag, xy, gcell, mass, vel, vel_before):
     return rows_out[:m + 1], push[:m + 1], turn[:m + 1], fastest[:m + 1]
 
 
-def wake_near_hull(model: IceModel, data: IceData, hull_xy: np.ndarray) -> None:
-    """Wake the resting floes within the wake radius of the hull's reference point (m).
-    Resting floes do not move: every ``_LOOK_AGAIN`` m that the hull moves, all rows are
-    looked at, and the resting ones within that distance of the wake radius are kept
-    (``IceData.wake_look``); until the next look only those can come within it."""
-    st, wake = data.state, radii(model, data)[1]
+def wake_near_hull(model: IceModel, data: IceData, hull: int, hull_xy: np.ndarray) -> None:
+    """Wake the resting floes within the wake radius of a hull's (by index) reference
+    point (m). Resting floes do not move: every ``_LOOK_AGAIN`` m that the hull moves, all
+    rows are looked at, and the resting ones within that distance of the wake radius are
+    kept (``HullRows.wake_look``); until the next look only those can come within it."""
+    st, wake, rows_of = data.state, radii(model, data)[1], data.hulls[hull]
     hull_xy = np.asarray(hull_xy, dtype=np.float64)
-    at, rows = data.wake_look
+    at, rows = rows_of.wake_look
     if math.hypot(hull_xy[0] - at[0], hull_xy[1] - at[1]) < _LOOK_AGAIN:
         rows = rows[st.resting[rows]]
         near, rows = _look_among(rows, st.xy, hull_xy, wake)
-        data.wake_look = (at, rows)
+        rows_of.wake_look = (at, rows)
     else:
         near, rows = _look(st.resting, st.xy, hull_xy, wake, wake + _LOOK_AGAIN)
-        data.wake_look = (hull_xy.copy(), rows)
+        rows_of.wake_look = (hull_xy.copy(), rows)
     if len(near):
         data.contacts.wake(st, near)
 
@@ -232,23 +237,24 @@ def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.nda
              new: bool = True) -> None:
     """Settle the floes that have shed their contacts (``ContactSpace.settle``); and (if
     ``new``) count the moving rows' steps at rest, and start taking out of the dynamic set
-    those at rest for ``rest_after_s``, above water, settled and beyond the rest radius: up to
+    those at rest for ``rest_after_s``, above water, settled and beyond the rest radius of
+    every hull (``hull_xy``: their reference points (h, 2), m): up to
     ``rest_per_step`` of them and the contact space's ``rest_share``, first those that come
     first among its dynamic bodies (moving is in that order), which Chipmunk finds soonest."""
     s, st = model.settings, data.state
     settled = data.contacts.settle(st)
-    if len(settled):  # those within the last look's zone join the rows it kept
-        at, rows = data.wake_look
-        zone = radii(model, data)[1] + _LOOK_AGAIN
+    zone = radii(model, data)[1] + _LOOK_AGAIN
+    for hull in data.hulls if len(settled) else ():  # those within a hull's last look's zone join the rows it kept
+        at, rows = hull.wake_look
         inside = settled[((st.xy[settled] - at) ** 2).sum(axis=1) < zone * zone]
         if len(inside):
-            data.wake_look = (at, np.union1d(rows, inside))
+            hull.wake_look = (at, np.union1d(rows, inside))
     if not new:
         return
     steps = min(65535, max(1, math.ceil(s.rest_after_s / dt)))
     picks = _calm_far(moving, st.vel, st.yaw_rate, st.gcell, data.contacts.extent, st.calm, s.rest_speed, steps,
                       st.submerged, model.z_equilibrium, st.heave, st.roll, st.pitch, st.heave_rate, st.roll_rate,
-                      st.pitch_rate, st.xy, np.asarray(hull_xy, dtype=np.float64), radii(model, data)[0])
+                      st.pitch_rate, st.xy, np.asarray(hull_xy, dtype=np.float64).reshape(-1, 2), radii(model, data)[0])
     if len(picks):
         data.contacts.rest(st, moving[picks[:min(s.rest_per_step, data.contacts.rest_share(picks))]])
 
@@ -258,7 +264,7 @@ def warm_up(model: IceModel) -> None:
     none, f32 = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.float32)
     _calm_far(none, np.zeros((0, 2), np.float32), f32, none.astype(np.int32), np.ones(1), none.astype(np.uint16),
               1.0, 1, none.astype(np.bool_), model.z_equilibrium, f32, f32, f32, f32, f32, f32, np.zeros((0, 2)),
-              np.zeros(2), 1.0)
+              np.zeros((1, 2)), 1.0)
     _look(none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 2.0)
     _look_among(none, np.zeros((0, 2)), np.zeros(2), 1.0)
     _take_pushes(none, np.zeros((0, 2)), np.zeros(0), np.zeros(0), model.mass, model.inertia, none.astype(np.int32),

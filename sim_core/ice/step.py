@@ -1,11 +1,13 @@
 """One step of the breakable ice: hull contact, conduction cracking, floating floes.
 
-``ice_step(model, data, hull, dt)`` runs, in order: the hull breaks the intact cells it
-touches, and cracks the level ice about them (``sim_core.ice.bending``); the contact
-engine steps (hull pushes floes, floes push each other and load the intact edge);
-contacts that exceed an intact cell's capacity break it free; the free floes' pose and
-velocity come back into the arrays; their heave, roll and pitch follow the buoyancy. It
-returns the cells broken and cracked, and the contact load on the hull.
+``ice_step(model, data, hulls, dt)`` runs, in order: each hull (one per ship, all in one
+contact space) breaks the intact cells it touches, and cracks the level ice about them
+(``sim_core.ice.bending``); the contact engine steps (hulls push floes, floes push each
+other and load the intact edge); contacts that exceed an intact cell's capacity break it
+free; the free floes' pose and velocity come back into the arrays; their heave, roll and
+pitch follow the buoyancy. It returns the cells broken and cracked, and the contact load
+on each hull. A ship that follows another meets the channel the first one broke, since
+both hulls work on the same floes.
 
 Submersion: a planar model cannot let broken ice go under the bow, so without help the
 hull bulldozes every piece ahead of it into the level ice and the push runs through the
@@ -18,7 +20,7 @@ contact and are pushed aside, and those pushes crack the channel edge.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numba
@@ -55,13 +57,15 @@ class HullMotion:
 
 @dataclass
 class IceStepReport:
-    """What one ice step did. Forces in the world frame; moment CCW about the hull point."""
+    """What one ice step did. Forces in the world frame; moments CCW about each hull's
+    reference point; by hull index."""
 
     broken_by_hull: np.ndarray
     broken_by_contact: np.ndarray
     cracked: np.ndarray  # rows of intact cells cracked (sim_core.ice.bending)
-    hull_force: np.ndarray  # N
-    hull_moment: float  # N m
+    hull_force: np.ndarray  # (h, 2) N, each hull's
+    hull_moment: np.ndarray  # (h,) N m, each hull's
+    hull_broke: np.ndarray  # (h,) int: intact cells each hull broke
 
 
 @numba.njit(cache=True)
@@ -193,7 +197,7 @@ def _unsettled(rows, submerged, gcell, z_equilibrium, heave, roll, pitch, heave_
     return out[:n]
 
 
-def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck: np.ndarray,
+def _update_submersion(model: IceModel, data: IceData, k: int, hull: HullMotion, struck: np.ndarray,
                        jammed: np.ndarray = _NO_ROWS) -> None:
     """Struck floes with their centre inside the beam, and floes jammed against an edge
     they cannot break, go under: struck ones first turn against the bow (``turning``, where
@@ -201,13 +205,13 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
     a submerged floe surfaces once the hull no longer covers or presses it (its centre
     outside the waterline, and aft of midship, more than _BESIDE beyond the beam lines, or
     clear ahead of the stem because the ship stopped or backed), and buoyancy brings it back
-    up and rights it."""
-    st, space = data.state, data.contacts
+    up and rights it. ``k``: the hull's index, whose motion is ``hull``."""
+    st, space, body, rows = data.state, data.contacts, data.contacts.hulls[k], data.hulls[k]
     c, s = math.cos(hull.angle), math.sin(hull.angle)
-    under = _going_under(struck, jammed, st.status, st.submerged, st.xy, hull.xy, c, s, space.hull_half_beam) \
+    under = _going_under(struck, jammed, st.status, st.submerged, st.xy, hull.xy, c, s, body.half_beam) \
         if len(struck) or len(jammed) else _NO_ROWS
     if len(under):
-        data.went_under = np.concatenate([data.went_under[st.submerged[data.went_under]], under])
+        rows.went_under = np.concatenate([rows.went_under[st.submerged[rows.went_under]], under])
         st.submerged[under] = True
         space.set_submerged(st, under, True)
         st.heave_rate[under] = st.roll_rate[under] = st.pitch_rate[under] = 0.0
@@ -215,28 +219,29 @@ def _update_submersion(model: IceModel, data: IceData, hull: HullMotion, struck:
         st.yaw_rate[under] = 0.0
         turns = under[np.isin(under, struck)] if hull.surface_angle > 0.0 else _NO_ROWS
         turning.start_turns(turns, st.xy, st.turn, st.turn_dir, model.plan_area, st.gcell, hull.xy, c, s,
-                            space.hull_stem)
+                            body.stem)
         at_once = under[st.turn[under] <= 0.0]
         g = st.gcell[at_once]
         st.heave[at_once] = model.z_equilibrium[g] - model.thickness[g]
         st.roll[at_once] = turning.PUSHED_DOWN_TILT
-    up = _surfacing(data.went_under, st.submerged, st.xy, hull.xy, c, s, space.hull_outline,
-                    space.hull_half_beam + _BESIDE, space.hull_stem, _CLEAR_AHEAD)
+    up = _surfacing(rows.went_under, st.submerged, st.xy, hull.xy, c, s, body.outline,
+                    body.half_beam + _BESIDE, body.stem, _CLEAR_AHEAD)
     if len(up):
         st.submerged[up] = False
         st.turn[up] = 0.0
-        data.went_under = data.went_under[st.submerged[data.went_under]]
+        rows.went_under = rows.went_under[st.submerged[rows.went_under]]
         space.set_submerged(st, up, False)
 
 
-def _advance_turns(model: IceModel, data: IceData, hull: HullMotion, dt: float) -> None:
-    """Turn the pieces turning against the bow by the hull's advance over the step."""
-    if hull.surface_angle <= 0.0 or not len(data.went_under):
+def _advance_turns(model: IceModel, data: IceData, k: int, hull: HullMotion, dt: float) -> None:
+    """Turn the pieces turning against the k-th hull's bow by its advance over the step."""
+    went_under = data.hulls[k].went_under
+    if hull.surface_angle <= 0.0 or not len(went_under):
         return
     st = data.state
     ahead = float(hull.velocity[0] * math.cos(hull.angle) + hull.velocity[1] * math.sin(hull.angle))
     advance = max(0.0, ahead) * hull.surface_advance * dt  # the surface's, across the waterline
-    turning.advance_turns(data.went_under, st.submerged, st.turn, st.turn_dir, model.plan_area, st.gcell,
+    turning.advance_turns(went_under, st.submerged, st.turn, st.turn_dir, model.plan_area, st.gcell,
                           model.z_equilibrium, model.thickness, st.yaw, st.heave, st.roll, st.pitch, advance,
                           hull.surface_angle)
 
@@ -263,42 +268,88 @@ def _wash(data: IceData, moving: np.ndarray, wash: Callable[[np.ndarray], np.nda
         space.set_velocity(st, rows, st.vel[rows] + share * extra[hit], st.yaw_rate[rows])
 
 
-def _laid_under_hull(model: IceModel, data: IceData, hull: HullMotion) -> None:
-    """What a tile switch laid under the hull (the ship lying in the ice where an exercise
+def _laid_under_hull(model: IceModel, data: IceData, k: int, hull: HullMotion) -> None:
+    """What a tile switch laid under the k-th hull (its ship lying in the ice where an exercise
     starts or it was moved) goes under it, as if pushed down: the intact cells broken first,
     by no load of the bow (``BreakCause.NONE``: no crack patterns, no breaking counted).
     The bow breaking them in the first steps cost a crack pattern each: 23 and 32 ms of
     the first two ticks (74 and 148 cells) at the start of the pack-ice exercise."""
-    laid = data.under_hull
+    laid = data.hulls[k].laid_under
     intact = laid[data.state.status[laid] == FloeStatus.INTACT]
     if len(intact):
         break_cells(data, intact, BreakCause.NONE)
-    _update_submersion(model, data, hull, _NO_ROWS, laid)
-    data.under_hull = _NO_ROWS
+    _update_submersion(model, data, k, hull, _NO_ROWS, laid)
+    data.hulls[k].laid_under = _NO_ROWS
 
 
-def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float, water: np.ndarray | None = None,
-             wash: Callable[[np.ndarray], np.ndarray] | None = None) -> IceStepReport:
-    """Advance the breakable ice by dt seconds with the hull moving as given, in water
-    moving at ``water`` (world x east, y north, m/s; None: still) and, where ``wash`` is
-    given, locally faster by what it gives at a floe's centre (a propeller's jet)."""
+def _hulls_break(model: IceModel, data: IceData,
+                 hulls: Sequence[HullMotion]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each hull breaks the intact cells it touches and cracks the level ice about them;
+    what it struck goes under it. Returns the rows broken by the hulls and cracked (sorted),
+    and how many each hull broke."""
     st, space = data.state, data.contacts
+    broken, cracked, counts = [], [], np.zeros(len(hulls), dtype=np.int64)
+    for k, hull in enumerate(hulls):
+        if len(data.hulls[k].laid_under):
+            _laid_under_hull(model, data, k, hull)
+        by_hull = space.hull_touching(st, k)
+        if len(by_hull):
+            break_cells(data, by_hull, BreakCause.HULL)
+            _update_submersion(model, data, k, hull, by_hull)
+            cracked.append(crack_ahead(model, st, data.tiles, by_hull, np.asarray(hull.xy, dtype=float), hull.angle,
+                                       space.hulls[k].outline))
+            broken.append(by_hull)
+            counts[k] = len(by_hull)
+    return _union(broken), _union(cracked), counts
+
+
+def _union(parts: list[np.ndarray]) -> np.ndarray:
+    """The sorted union of sorted row arrays (each already free of repeats)."""
+    if len(parts) <= 1:
+        return parts[0] if parts else _NO_ROWS
+    return np.unique(np.concatenate(parts))
+
+
+def _nearest_hull(xy: np.ndarray, hulls: Sequence[HullMotion]) -> np.ndarray:
+    """The index of the hull whose reference point is nearest each point (n, 2), m."""
+    at = np.array([np.asarray(h.xy, dtype=float) for h in hulls])
+    return np.argmin(((xy[:, None, :] - at[None, :, :]) ** 2).sum(axis=2), axis=1)
+
+
+def _hull_loads(model: IceModel, data: IceData, con: Contacts, hulls: Sequence[HullMotion], jammed: np.ndarray,
+                dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Send what each hull struck (and the jammed floes, under the hull nearest each) under
+    it; returns each hull's contact force (h, 2; N, world) and moment (h,; N m, CCW)."""
+    force, moment = np.zeros((len(hulls), 2)), np.zeros(len(hulls))
+    owner = _nearest_hull(data.state.xy[jammed], hulls) if len(jammed) else _NO_ROWS
+    for k, hull in enumerate(hulls):
+        struck, impulse, point = con.with_hull(k)
+        _update_submersion(model, data, k, hull, struck[struck >= 0], jammed[owner == k])
+        fx, fy, moment[k] = _hull_load(struck, impulse, point, np.asarray(hull.xy, dtype=np.float64), dt)
+        force[k] = fx, fy
+    return force, moment
+
+
+def ice_step(model: IceModel, data: IceData, hulls: Sequence[HullMotion], dt: float, water: np.ndarray | None = None,
+             wash: Callable[[np.ndarray], np.ndarray] | None = None) -> IceStepReport:
+    """Advance the breakable ice by dt seconds with each hull (in the order of the ice
+    world's hulls, ``tiles.add_hull``) moving as given, in water moving at ``water`` (world
+    x east, y north, m/s; None: still) and, where ``wash`` is given, locally faster by what
+    it gives at a floe's centre (the propellers' jets)."""
+    st, space = data.state, data.contacts
+    if len(hulls) != len(space.hulls):
+        raise ValueError(f"the ice world has {len(space.hulls)} hulls; {len(hulls)} motions were given")
     east, north = (0.0, 0.0) if water is None else (float(water[0]), float(water[1]))
     space.set_water_velocity(east, north, dt)
     resting_on = model.settings.rest_far_floes
     rest = resting_on and resting.drift_settled(model, data, (east, north))
-    space.set_hull(hull.xy, hull.angle, hull.velocity, hull.angular_velocity)
-    if resting_on:
-        resting.wake_near_hull(model, data, hull.xy)
-    if len(data.under_hull):
-        _laid_under_hull(model, data, hull)
-    by_hull, cracked = space.hull_touching(st), _NO_ROWS
-    if len(by_hull):
-        break_cells(data, by_hull, BreakCause.HULL)
-        _update_submersion(model, data, hull, by_hull)
-        cracked = crack_ahead(model, st, data.tiles, by_hull, np.asarray(hull.xy, dtype=float), hull.angle,
-                              space.hull_outline)
-    _advance_turns(model, data, hull, dt)
+    for k, hull in enumerate(hulls):
+        space.set_hull(k, hull.xy, hull.angle, hull.velocity, hull.angular_velocity)
+        if resting_on:
+            resting.wake_near_hull(model, data, k, hull.xy)
+    by_hull, cracked, broke = _hulls_break(model, data, hulls)
+    for k, hull in enumerate(hulls):
+        _advance_turns(model, data, k, hull, dt)
     space.step(dt)
     con = space.read_contacts(st)
     by_contact, jammed = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
@@ -316,13 +367,11 @@ def ice_step(model: IceModel, data: IceData, hull: HullMotion, dt: float, water:
                       model.settings.heave_added_mass, mat.water_density * mat.gravity, mat.gravity,
                       st.heave, st.roll, st.pitch, st.heave_rate, st.roll_rate, st.pitch_rate,
                       dt, vertical_substeps(model, dt))
-    struck, impulse, point = con.with_hull()
-    _update_submersion(model, data, hull, struck[struck >= 0], jammed)
+    force, moment = _hull_loads(model, data, con, hulls, jammed, dt)
     if resting_on:
         resting.wake_struck(model, data, con, vel_before)
-        resting.rest_far(model, data, moving, hull.xy, dt, new=rest)
-    fx, fy, moment = _hull_load(struck, impulse, point, np.asarray(hull.xy, dtype=np.float64), dt)
-    return IceStepReport(by_hull, by_contact, cracked, np.array([fx, fy]), moment)
+        resting.rest_far(model, data, moving, np.array([np.asarray(h.xy, dtype=float) for h in hulls]), dt, new=rest)
+    return IceStepReport(by_hull, by_contact, cracked, force, moment, broke)
 
 
 def warm_up(model: IceModel, data: IceData) -> None:
@@ -334,7 +383,7 @@ def warm_up(model: IceModel, data: IceData) -> None:
     resting.warm_up(model)
     _hull_load(np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(2), 1.0)
     none, f32 = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.float32)
-    _surfacing(none, none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hull_outline,
+    _surfacing(none, none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hulls[0].outline,
                1.0, 1.0, 1.0)
     _going_under(none, none, none.astype(np.uint8), none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 0.0,
                  1.0)

@@ -28,6 +28,21 @@ from sim_core.ice.model import IceModel, placed_centroids
 
 
 @dataclass
+class HullRows:
+    """The rows one hull keeps track of."""
+
+    # rows sent under the hull, each once: a superset of the submerged rows (a row surfaces,
+    # or is vacated or thawed, without leaving it), so that surfacing need not scan every row
+    went_under: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    # free and intact rows a tile switch laid under the hull, to go under it in the next ice step
+    laid_under: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    # the hull's reference point (m) at the last look at every row for resting floes to
+    # wake, and the resting rows (ascending) within the zone it kept (``resting.wake_near_hull``)
+    wake_look: tuple[np.ndarray, np.ndarray] = field(
+        default_factory=lambda: (np.full(2, np.inf), np.zeros(0, dtype=np.int64)))
+
+
+@dataclass
 class IceData:
     """Dynamic half of the ice world: floe rows, placed tiles, the contact space, frozen
     tiles' floes, and the rows of frozen tiles whose engine objects are still leaving."""
@@ -37,17 +52,9 @@ class IceData:
     contacts: ContactSpace
     frozen: FrozenFloes = field(default_factory=FrozenFloes)
     leaving_rows: dict[int, slice] = field(default_factory=dict)  # placement -> rows to give back
-    # rows sent under the hull, each once: a superset of the submerged rows (a row surfaces,
-    # or is vacated or thawed, without leaving it), so that surfacing need not scan every row
-    went_under: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    # free and intact rows a tile switch laid under the hull, to go under it in the next ice step
-    under_hull: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    hulls: list[HullRows] = field(default_factory=lambda: [HullRows()])  # by hull index, as contacts.hulls
     rest_water: tuple[float, float] = (0.0, 0.0)  # the drift (m/s, east, north) the resting floes came to rest in
     wash_turn: int = 0  # the share of the floes the propeller's wash drags this step (``step._wash``)
-    # the hull's reference point (m) at the last look at every row for resting floes to
-    # wake, and the resting rows (ascending) within the zone it kept (``resting.wake_near_hull``)
-    wake_look: tuple[np.ndarray, np.ndarray] = field(
-        default_factory=lambda: (np.full(2, np.inf), np.zeros(0, dtype=np.int64)))
 
 
 @dataclass
@@ -75,10 +82,22 @@ class PreparedTile:
 
 
 def new_ice_data(model: IceModel, hull_contour: np.ndarray, hull_friction: float) -> IceData:
-    """Empty ice world with a hull of the given ship-frame contour (x forward, y starboard)."""
-    outline = np.column_stack([hull_contour[:, 0], -hull_contour[:, 1]])  # body frame: y to port
+    """Empty ice world with a hull of the given ship-frame contour ((n, 2) m: x forward, y
+    starboard) and friction against ice; ``add_hull`` adds more."""
     tiles = TilePlacement()
-    return IceData(FloeState(), tiles, ContactSpace(model, tiles, outline, hull_friction))
+    return IceData(FloeState(), tiles, ContactSpace(model, tiles, _body_frame(hull_contour), hull_friction))
+
+
+def add_hull(data: IceData, hull_contour: np.ndarray, hull_friction: float) -> int:
+    """Add another ship's hull to the ice world (its contour and friction as ``new_ice_data``
+    takes them); returns its index, the place of its motion among an ice step's hulls."""
+    data.hulls.append(HullRows())
+    return data.contacts.add_hull(_body_frame(hull_contour), hull_friction)
+
+
+def _body_frame(contour: np.ndarray) -> np.ndarray:
+    """A ship-frame contour (x forward, y starboard) in the engine's body frame (y to port)."""
+    return np.column_stack([contour[:, 0], -contour[:, 1]])
 
 
 def prepare_place(model: IceModel, template: int, corner: tuple[float, float], quarter_turns: int) -> PreparedTile:

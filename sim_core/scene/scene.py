@@ -135,11 +135,11 @@ def new_scene_data(model: SceneModel) -> SceneData:
 
 
 def detected_tiles(model: SceneModel, contour: np.ndarray, origin: np.ndarray) -> np.ndarray:
-    """Tiles that must be breakable for a hull with these world contour points (n, 2) and
-    reference point (2,), m, by the configured detection."""
+    """Tiles that must be breakable for hulls with these world contour points (n, 2) and
+    reference points ((2,) or (h, 2)), m, by the configured detection."""
     if model.settings.detection == "origin":
-        tile = tile_under(origin, model.nx, model.ny, model.side)
-        return np.array([tile] if tile >= 0 else [], dtype=np.int64)
+        tiles = {tile_under(o, model.nx, model.ny, model.side) for o in np.reshape(origin, (-1, 2))}
+        return np.array(sorted(tiles - {-1}), dtype=np.int64)
     return tiles_near(contour, model.radius, model.nx, model.ny, model.side)
 
 
@@ -168,13 +168,16 @@ def tiles_to_prepare(model: SceneModel, data: SceneData, contour: np.ndarray) ->
 def update_scene(model: SceneModel, data: SceneData, contour: np.ndarray, origin: np.ndarray) -> SceneUpdate:
     """Decide and record this step's swaps: detected unbreakable tiles with ice are placed,
     detected frozen tiles thawed, and (with reverse replacement) breakable tiles whose centre lies
-    farther than the reverse distance from the hull's reference point are frozen."""
+    farther than the reverse distance from every hull's reference point are frozen. contour:
+    every hull's waterline points (n, 2), m; origin: their reference points ((2,) or (h, 2))."""
     wanted = with_ice(model, data, detected_tiles(model, contour, origin))
     state = data.tile_state[wanted]
     place, thaw = wanted[state == TileState.UNBREAKABLE], wanted[state == TileState.FROZEN]
     live = data.live
     if model.settings.reverse_replacement and len(live):
-        far = np.hypot(*(model.centre(live) - origin).T) > model.settings.reverse_distance
+        centres = model.centre(live)
+        far = np.all([np.hypot(*(centres - o).T) > model.settings.reverse_distance
+                      for o in np.reshape(origin, (-1, 2))], axis=0)
         freeze = live[far]
     else:
         freeze = live[:0]

@@ -9,6 +9,7 @@ quadtree's swap). Functions of the world's model and data (``sim_core.world``).
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -83,10 +84,11 @@ def placed_tiles(tiles: TilePlacement, field_tiles: list[int], placements: list[
 
 
 def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate,
-                contour: np.ndarray | None = None) -> tuple[PlacedTiles, np.ndarray, np.ndarray]:
+                contours: Sequence[np.ndarray] = ()) -> tuple[PlacedTiles, np.ndarray, np.ndarray]:
     """Carry out a scene update in the ice world: place, thaw and freeze tiles. Floes and
-    cells that a tile placed or thawed lays under the hull (its contour points (n, 2), m,
-    where given) go under it in the next ice step, the cells broken (not by the bow).
+    cells that a tile placed or thawed lays under a hull (``contours``: each hull's contour
+    points (n, 2), m, in the order of the ice world's hulls) go under it in the next ice
+    step, the cells broken (not by the bow).
     Returns the tiles given rows (placed, and thawed with their new rows) and the placement
     indices thawed and frozen."""
     scene, placement = model.scene, data.scene.placement
@@ -105,8 +107,8 @@ def apply_swaps(model: WorldModel, data: WorldData, update: SceneUpdate,
         freeze_tile(data.ice, k)
     if new or thawed or frozen:
         data.live_rows = _tile_rows(data.ice.tiles, [placement[t] for t in data.scene.live.tolist()])
-    if (new or thawed) and contour is not None:
-        data.ice.under_hull = np.union1d(data.ice.under_hull, _cells_under(model, data, new + thawed, contour))
+    for hull, contour in zip(data.ice.hulls, contours) if new or thawed else ():
+        hull.laid_under = np.union1d(hull.laid_under, _cells_under(model, data, new + thawed, contour))
     return (placed_tiles(data.ice.tiles, update.place.tolist() + update.thaw.tolist(), new + thawed),
             np.array(thawed, dtype=np.int64), np.array(frozen, dtype=np.int64))
 

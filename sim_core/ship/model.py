@@ -226,7 +226,7 @@ def state_derivatives(model: ShipModel, state: tuple, delta: float, n: float, ex
     return (u * c - v * s, u * s + v * c, r, du, dv, dr)
 
 
-def _ice_force(model: ShipModel, data: ShipData, u: float) -> tuple[float, float]:
+def ice_force(model: ShipModel, data: ShipData, u: float) -> tuple[float, float]:
     """Surge force (N) of the ice resistance, against u, faded in near rest so that it can
     stop the ship but never drive it backwards: Lindqvist's for the level ice or channel,
     plus the brash's and a ridge keel's at the bow; and the bow's share of the resistance
@@ -308,7 +308,7 @@ def step(model: ShipModel, data: ShipData, dt: float) -> None:
         _steering_gear(model, data, h)
         _engine(model, data, h)
         s0 = (eta[0], eta[1], eta[5], nu[0], nu[1], nu[5])
-        ice_x, bow = _ice_force(model, data, s0[3] - ice_n * math.cos(s0[2]) - ice_e * math.sin(s0[2]))
+        ice_x, bow = ice_force(model, data, s0[3] - ice_n * math.cos(s0[2]) - ice_e * math.sin(s0[2]))
         forces = mmg_forces(model, s0[3], s0[4], s0[5], data.rudder, data.rps)
         heel = heeling_moment(model.motions, forces[1], ext[1])
         k1 = state_derivatives(model, s0, data.rudder, data.rps, ext, ice_x, forces)
@@ -340,7 +340,7 @@ def equilibrium_rps(model: ShipModel, speed: float, ice_h: float = 0.0, ice_cond
     if speed <= 0.0:
         return 0.0
     probe = ShipData(ice_h=ice_h, ice_condition=ice_condition)
-    ice_x, _ = _ice_force(model, probe, speed)
+    ice_x, _ = ice_force(model, probe, speed)
 
     def surge(n: float) -> float:
         return mmg_forces(model, speed, 0.0, 0.0, 0.0, n)[0] + ice_x

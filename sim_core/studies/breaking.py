@@ -188,9 +188,9 @@ def run_breaking(thickness: float, colliders: str, speed: float, *, ship_length:
     while y < stop:
         hull = HullMotion(np.array([centre_x, y]), 0.5 * math.pi, np.array([0.0, speed]), 0.0)
         t0 = time.perf_counter()
-        report = ice_step(model, data, hull, dt)
+        report = ice_step(model, data, (hull,), dt)
         step_times.append(time.perf_counter() - t0)
-        resistance.append(-report.hull_force[1])
+        resistance.append(-report.hull_force[0, 1])
         y += speed * dt
     st = data.state
     y0, y1 = 0.25 * length, 0.75 * length
