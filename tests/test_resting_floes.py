@@ -11,7 +11,7 @@ from sim_core.ice.contact_kernels import Contacts
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.model import IceDynamicsSettings, compile_ice_model
 from sim_core.ice.step import HullMotion, ice_step
-from sim_core.ice.tiles import break_cells, freeze_tile, new_ice_data, place_tile, thaw_tile
+from sim_core.ice.tiles import add_hull, break_cells, freeze_tile, new_ice_data, place_tile, thaw_tile
 
 DT = 1 / 30
 FAR = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
@@ -62,6 +62,21 @@ def test_resting_floes_keep_pose_and_momentum_and_wake_when_the_hull_comes(reste
     assert set(loose.tolist()) <= set(moving.tolist())
     for now, then in zip((st.xy[loose], st.yaw[loose], st.vel[loose], st.yaw_rate[loose]), held):
         np.testing.assert_array_equal(now, then)  # pose and momentum as they came to rest
+
+
+def test_a_second_hull_wakes_the_floes_it_comes_near_and_none_rest_near_it(rested):
+    """Each hull keeps its own look for resting floes: a second ship's hull coming up to the
+    strip wakes it while the first stays far, and floes near it do not go back to rest."""
+    model, data, loose = rested
+    st = data.state
+    assert st.resting[loose].all()
+    add_hull(data, waterline_contour(100.0, 16.0), 0.1)
+    near = HullMotion(np.array([20.0, -60.0]), 0.5 * np.pi, np.zeros(2), 0.0)  # south of the tile, touching nothing
+    ice_step(model, data, (FAR, near), DT)
+    assert not st.resting[loose].any()
+    for _ in range(30):
+        ice_step(model, data, (FAR, near), DT)
+    assert not st.resting[loose].any()  # within the rest radius of the second hull
 
 
 def test_a_moving_floe_that_strikes_a_resting_one_wakes_it(rested):
