@@ -146,6 +146,12 @@ def move_ship(model: WorldModel, data: WorldData, k: int, dt: float, controls: C
     return wind
 
 
+def fleet_contour(model: WorldModel, data: WorldData) -> np.ndarray:
+    """Every ship's waterline contour in the ice's frame, stacked (34 x ships, 2) m, in the
+    model's order: the scene keeps the tiles near any of them breakable."""
+    return np.concatenate([ship_contour_in_ice(model, data, k) for k in range(len(model.ships))])
+
+
 def hulls_in_ice(model: WorldModel, data: WorldData) -> tuple[list[np.ndarray], list[HullMotion]]:
     """Every ship's contour points (34, 2) and hull motion in the ice's frame."""
     both = [hull_in_ice(model, data, k) for k in range(len(model.ships))]

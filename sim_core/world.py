@@ -58,14 +58,14 @@ from sim_core.scene.switches import (
     prepare_ahead,
     prepare_switch,
 )
-from sim_core.fleet import (Controls, KinematicPose, ShipReport, ShipStart, apply_controls, fleet_wash, hulls_in_ice,
-                             move_ship, new_ship, per_ship, take_ice_loads)
+from sim_core.fleet import (Controls, KinematicPose, ShipReport, ShipStart, apply_controls, fleet_contour, fleet_wash,
+                             hulls_in_ice, move_ship, new_ship, per_ship, take_ice_loads)
 from sim_core.ship.model import OrderRejection, ShipData, ShipModel
 from sim_core.ship.outputs import ShipOutputs, ship_outputs
 from sim_core.regimes.rubble import RubbleModel, compile_rubble
 from sim_core.ship.searchlights import SearchlightMount, SearchlightState, order_searchlight
 from sim_core.ship.sensors import SensorFaults, sensor_readings
-from sim_core.ship_in_ice import contour_in_ice, drift_ice, ship_contour_in_ice
+from sim_core.ship_in_ice import contour_in_ice, drift_ice
 
 __all__ = ["Controls", "KinematicPose", "ShipStart", "WorldData", "WorldEvents", "WorldModel", "compile_world",
            "new_world_data", "snapshot", "step"]
@@ -213,12 +213,6 @@ def new_world_data(model: WorldModel, north: float, east: float, heading: float,
     return data
 
 
-def fleet_contour(model: WorldModel, data: WorldData) -> np.ndarray:
-    """Every ship's waterline contour in the ice's frame, stacked (34 x ships, 2) m: the
-    scene keeps the tiles near any of them breakable."""
-    return np.concatenate([ship_contour_in_ice(model, data, k) for k in range(len(model.ships))])
-
-
 def warm_up(model: WorldModel, data: WorldData) -> None:
     """Do before the first step what it would otherwise do lazily: load the compiled
     kernels, and build the tiles around the start position (and the ring beyond) in full,
@@ -262,8 +256,8 @@ def _apply_commands(model: WorldModel, data: WorldData, commands: tuple[Command,
     applied = [done for c in commands if (done := apply_command(model, data, c)) is not None]
     to = data.moving_to
     if to is not None:
-        contour = np.concatenate([contour_in_ice(model, data, to.north, to.east, to.heading),
-                                  *(ship_contour_in_ice(model, data, k) for k in range(1, len(model.ships)))])
+        contour = fleet_contour(model, data)
+        contour[:len(model.contour)] = contour_in_ice(model, data, to.north, to.east, to.heading)
         if prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3):
             applied.append(apply_command(model, data, dataclasses.replace(to, at_once=True)))
     if laid is None:

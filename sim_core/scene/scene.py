@@ -175,10 +175,8 @@ def update_scene(model: SceneModel, data: SceneData, contour: np.ndarray, origin
     place, thaw = wanted[state == TileState.UNBREAKABLE], wanted[state == TileState.FROZEN]
     live = data.live
     if model.settings.reverse_replacement and len(live):
-        centres = model.centre(live)
-        far = np.all([np.hypot(*(centres - o).T) > model.settings.reverse_distance
-                      for o in np.reshape(origin, (-1, 2))], axis=0)
-        freeze = live[far]
+        offsets = model.centre(live)[:, None, :] - np.reshape(origin, (1, -1, 2))  # (tiles, hulls, 2)
+        freeze = live[np.all(np.hypot(offsets[..., 0], offsets[..., 1]) > model.settings.reverse_distance, axis=1)]
     else:
         freeze = live[:0]
     data.tile_state[place] = TileState.BREAKABLE
