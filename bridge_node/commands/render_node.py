@@ -9,13 +9,15 @@ monitors; ``--frames-every S`` writes the PNG channels every S simulated seconds
 FILE`` writes the last picture of all channels side by side. It ends after ``--duration``
 seconds, when the stream has been silent for ``--idle-exit`` seconds, or on Ctrl-C or
 SIGTERM, and writes a JSON summary (frames, resyncs, input-to-pixels delay) to
-``--summary``. ``--drop-every N`` and ``--frame-delay S`` inject faults for testing: drop
+``--summary``. ``--ship K`` renders from the K-th ship of ``[[ships]]``: its hull, its eyes
+and its lights (``bridge_node.stream.follow``). ``--drop-every N`` and ``--frame-delay S`` inject faults for testing: drop
 every N-th step message, sleep S seconds in every frame.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import signal
 import threading
@@ -23,7 +25,7 @@ import time
 from pathlib import Path
 from urllib.parse import urlsplit, urlunsplit
 
-from bridge_node.node.config import load_config
+from bridge_node.node.config import NodeConfig, load_config
 from bridge_node.common.errors import UserError
 from bridge_node.common.output_files import write_output
 from bridge_node.node.realtime_loop import distribution
@@ -32,8 +34,11 @@ from bridge_node.render.channels import ChannelSet
 from bridge_node.render.open_channels import open_channels, select_channels
 from bridge_node.render.video import VideoWriter, save_png, side_by_side
 from bridge_node.stream.publisher import HEARTBEAT_S
+from bridge_node.stream.follow import FollowedShip, followed_model
 from bridge_node.stream.settings import StreamSettings
 from bridge_node.stream.subscriber import StateSubscriber, StreamError
+from sim_core.ship.outputs import ShipOutputs
+from sim_core.world import WorldModel
 
 CATCH_UP_S = 6 * HEARTBEAT_S  # s spent on the node's last steps after SIGTERM (two heartbeats), at most
 
@@ -41,6 +46,9 @@ CATCH_UP_S = 6 * HEARTBEAT_S  # s spent on the node's last steps after SIGTERM (
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--connect", metavar="HOST", help="the node's host (default: the config's [stream] endpoints)")
     p.add_argument("--channels", help="comma-separated channel names (default: all configured)")
+    p.add_argument("--ship", type=int, default=0, metavar="K",
+                   help="render from the K-th ship of [[ships]] (its hull, eyes and lights); 0, the default: the "
+                        "first ship, [ship]")
     p.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
     p.add_argument("--duration", type=float, default=None, help="stop after this many seconds (default: Ctrl-C)")
     p.add_argument("--idle-exit", type=float, default=None, metavar="S",
@@ -168,6 +176,20 @@ def _check(args: argparse.Namespace) -> None:
         raise UserError(f"--drop-every {args.drop_every}: must be at least 2")
 
 
+def _where(ship: ShipOutputs | None) -> dict | None:
+    """Where the ship the eyes ride on was last drawn (m, deg), for the summary."""
+    return ship and {"north_m": round(ship.north, 1), "east_m": round(ship.east, 1),
+                     "heading_deg": round(math.degrees(ship.heading), 1)}
+
+
+def _followed(cfg: NodeConfig, model: WorldModel, k: int) -> FollowedShip | None:
+    """How the stream turns into the k-th ship's (None: the first ship's, as published)."""
+    if k == 0:
+        return None
+    first = model.ships[0].particulars
+    return FollowedShip(k, cfg.ships[k - 1].mmsi, (cfg.ship.mmsi, first.length, first.beam))
+
+
 def _write_summary(summary: dict, path: str | None) -> None:
     """Write the summary atomically (a reader never sees half of it), replacing only a
     regular file."""
@@ -181,13 +203,18 @@ def run(args: argparse.Namespace) -> int:
     os.nice(args.niceness)
     cfg = load_config(args.config)
     _check(args)
+    if not 0 <= args.ship <= len(cfg.ships):
+        raise UserError(f"--ship {args.ship}: the config lists {len(cfg.ships)} other ships in [[ships]]; give 0 "
+                        f"to {len(cfg.ships)}")
     cfg = cfg.model_copy(update={"render": select_channels(cfg.render, args.channels.split(",") if args.channels
                                                            else None)})
     publish, snapshot = endpoints(cfg.stream, args.connect)
     model = build_world(cfg, args.config)
+    follow = _followed(cfg, model, args.ship)
+    model = followed_model(model, args.ship)
     channels = open_channels(cfg.render, model)
-    summary: dict = {"channels": [c.name for c in cfg.render.channels], "publish": publish}
-    with StateSubscriber(publish, snapshot, timeout_s=args.wait) as sub:
+    summary: dict = {"channels": [c.name for c in cfg.render.channels], "publish": publish, "ship": args.ship}
+    with StateSubscriber(publish, snapshot, timeout_s=args.wait, follow=follow) as sub:
         try:
             sub.sync(give_up=stop.is_set)
         except StreamError as exc:
@@ -197,7 +224,7 @@ def run(args: argparse.Namespace) -> int:
             summary |= _render_loop(sub, channels, outputs, args, stop)
         finally:
             summary |= outputs.close() | {"resyncs": sub.resyncs, "lost": sub.lost, "last_seq": sub.view.seq,
-                                          "sim_time": round(sub.view.time, 3),
+                                          "sim_time": round(sub.view.time, 3), "eye_ship": _where(sub.view.ship),
                                           "floe_memory": channels.renderer.floe_memory(sub.view)}
             _write_summary(summary, args.summary)
     print(json.dumps(summary))

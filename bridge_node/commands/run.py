@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 import math
 import time
-from contextlib import nullcontext
+from contextlib import ExitStack, nullcontext
 from pathlib import Path
 
 from rich.console import Console
@@ -26,6 +26,7 @@ from bridge_node.charts.field_regions import regions_not_in_the_world
 from bridge_node.control.endpoint import ControlEndpoint
 from bridge_node.control.queue import CommandQueue
 from bridge_node.control.status import exercise_status
+from bridge_node.exercise.fleet import Bridge
 from bridge_node.exercise.listeners import StreamOutput
 from bridge_node.control.save_point import FORK_FILE, SavePoint, read_save
 from bridge_node.exercise.tick import StepListener, TickOutcome
@@ -78,7 +79,9 @@ def _end_state(events: WorldEvents) -> dict:
     s = events.ship
     return {"live_floes": events.floes_free, "frozen_floes": events.floes_frozen, "north_m": round(s.north, 1),
             "east_m": round(s.east, 1), "speed_kn": round(s.speed_longitudinal / KNOT, 2),
-            "ice_drift_m": [round(v, 1) for v in events.ice_offset]}  # how far the field has drifted, east, north
+            "ice_drift_m": [round(v, 1) for v in events.ice_offset],  # how far the field has drifted, east, north
+            "other_ships": [{"north_m": round(o.outputs.north, 1), "east_m": round(o.outputs.east, 1),
+                             "speed_kn": round(o.outputs.speed_longitudinal / KNOT, 2)} for o in events.others]}
 
 
 def _check(args: argparse.Namespace, rate: float) -> None:
@@ -108,8 +111,10 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
     """The real-time loop with its live status line; returns the statistics, the last
     events, the links' health and the active alarms."""
     first = snapshot(model, data)
-    with LinkHub(cfg.links, cfg.arbitration, record, traffic, convoy=cfg.convoy) as hub, \
+    with LinkHub(cfg.links, cfg.arbitration, record, traffic, convoy=cfg.convoy) as hub, ExitStack() as bridges, \
             Live(console=console, refresh_per_second=4, transient=True) as live:
+        fleet = _fleet(cfg, hub, record, bridges)
+        hubs = [b.hub for b in fleet] or [hub]
         publisher.publish(first)
         live.update("starting the render processes")
         wait_for_renderers(renderers, publisher, 300.0)
@@ -118,14 +123,31 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
         queue = CommandQueue(cfg.control.queue, cfg.control.per_tick)
         ice = {"ice": list(model.scene.class_names)}  # what set_ice may lay
         with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last, data, hub) | ice,
-                             [link.name for link in hub.links], record, model.scene.class_names) as control, station:
+                             [link.name for h in hubs for link in h.links], record,
+                             model.scene.class_names) as control, station:
             stats = run_realtime(model, data, hub, rate, args.duration,
                                  [StreamOutput(publisher, traffic, model.origin), status], commands=queue,
-                                 scheduler=(cfg.realtime.scheduler, cfg.realtime.priority))
-        return (stats, status.last, [link.health().as_dict() for link in hub.links],
-                [a.text for a in hub.active_alarms.values()],
+                                 scheduler=(cfg.realtime.scheduler, cfg.realtime.priority), fleet=fleet)
+        return (stats, status.last, [link.health().as_dict() for h in hubs for link in h.links],
+                [(f"{b.name}: " if k else "") + a.text for k, b in enumerate(fleet or [None])
+                 for a in hubs[k].active_alarms.values()],
                 {"endpoint": cfg.control.endpoint, "requests": dict(control.counts)},
                 station.stop() if isinstance(station, StationProcess) else None)
+
+
+def _fleet(cfg, hub: LinkHub, record: Path | None, stack: ExitStack) -> list[Bridge]:
+    """Every own ship's bridge where ``[[ships]]`` lists other ships (none otherwise): the
+    first ship's ``hub``, then each other ship's links opened in ``stack``, with its own
+    traffic picture (the run's sources) and convoy watch; each records its links' traffic
+    under the session record's ``ships/N``."""
+    if not cfg.ships:
+        return []
+    bridges = [Bridge(hub, cfg.ship.mmsi, cfg.ship.shown_name())]
+    for k, ship in enumerate(cfg.ships, start=1):
+        other = LinkHub(ship.links, ship.arbitration, record / "ships" / str(k) if record else None,
+                        TrafficPicture(hub.traffic.sources), convoy=ship.convoy)
+        bridges.append(Bridge(stack.enter_context(other), ship.mmsi, ship.shown_name()))
+    return bridges
 
 
 def _fork(model, data, cfg, point: SavePoint, record: Path | None, console: Console) -> None:
@@ -160,8 +182,8 @@ def run(args: argparse.Namespace) -> int:
                 renderers.start()  # they load the exercise while this process does
             with console.status("loading the exercise"):
                 model = build_world(cfg, args.config)
+                data = start_world(model, cfg, args.config)
                 warm_up(model, cfg)
-                data = start_world(model, cfg)
             if point is not None:
                 _fork(model, data, cfg, point, record, console)
             stats, last, links, alarms, control, station = _loop(cfg, args, rate, model, data, publisher, renderers, record,

@@ -45,7 +45,8 @@ class TickOutcome:
     """What one tick published: the step's events, the orders it obeyed, every alarm change
     of the step (the source's and the refused orders'), the tick's clock (s: monotonic in a
     live run, the source's in a replay), when the newest order in it was read (monotonic s,
-    or None), and whether its outputs go out (False while a replay runs ahead to a seek)."""
+    or None), and whether its outputs go out (False while a replay runs ahead to a seek);
+    all of the first ship's, the other own ships' orders in ``others``."""
 
     events: WorldEvents
     controls: Controls
@@ -54,6 +55,7 @@ class TickOutcome:
     input_time: float | None
     send: bool = True
     node_commands: tuple[NodeCommand, ...] = ()  # the instructor's commands to the node applied at the tick
+    others: tuple[Decision, ...] = ()  # the other own ships' orders and alarm changes, as ``events.others``
 
     @property
     def saves(self) -> list[SaveRequest]:
@@ -116,10 +118,11 @@ class ExerciseTick:
         for listener in self.listeners:
             listener.on_polled(self.data.seq, now)
         t1 = time.perf_counter()
-        events = step(self.model, self.data, dt, decision.controls,
+        events = step(self.model, self.data, dt, decision.every_ships_controls(),
                       tuple(c for c in taken if not isinstance(c, NODE_COMMANDS)))
         alarms = (*decision.alarms, *self.refusals.note(events.rejected, now))
-        outcome = TickOutcome(events, decision.controls, alarms, now, decision.input_time, send, node)
+        outcome = TickOutcome(events, decision.controls, alarms, now, decision.input_time, send, node,
+                              decision.others)
         t2 = time.perf_counter()
         phases = self.phase_ms = {"orders": (t1 - t0) * 1e3, "world": (t2 - t1) * 1e3}
         for listener in self.listeners:

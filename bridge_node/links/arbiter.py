@@ -39,12 +39,18 @@ class _Channel:
 @dataclass
 class Decision:
     """One tick's outcome: orders to give the ship, alarm changes, the active sources, and
-    the time (monotonic s) the newest order passed on was read, if any."""
+    the time (monotonic s) the newest order passed on was read, if any; in an exercise of
+    several own ships, the first ship's, with the other ships' decisions in ``others``."""
 
     controls: Controls
     alarms: list[Alarm]
     active: dict[str, str | None]
     input_time: float | None = None
+    others: tuple[Decision, ...] = ()
+
+    def every_ships_controls(self) -> Controls | list[Controls]:
+        """The orders for the world's step: this ship's, or with others one per ship."""
+        return [self.controls, *(d.controls for d in self.others)] if self.others else self.controls
 
 
 class OrderArbiter:

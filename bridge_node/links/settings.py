@@ -28,6 +28,12 @@ class LinkSettingsBase(Params):
         """(host, port) this link alone sends its outputs to on UDP; None: none (default)."""
         return None
 
+    def resources(self) -> list[str]:
+        """What this link holds that no other link of the node may hold too (a CAN bus, a
+        serial port, a server's device, a listening port), in words for an error; the UDP
+        output's destination is ``udp_destination``. Default: nothing."""
+        return []
+
     def with_files(self, resolve: Callable[[str, str], str]) -> Self:
         """These settings with the files they name found: ``resolve(key, value)`` gives a
         key's path relative to the config file's folder, else to ``config/``, checked

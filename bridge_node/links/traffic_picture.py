@@ -1,7 +1,8 @@
 """The traffic picture: every other vessel the node knows of at one moment, one per MMSI.
 
 The hub gathers it each tick from what its links hear (DIS), the vessels the instructor
-steers in the world (``world``, set by ``bridge_node.exercise.listeners.WorldTraffic``) and
+steers in the world (``world``, set by ``bridge_node.exercise.listeners.WorldTraffic``), the
+exercise's other own ships (``fleet``, set by ``bridge_node.exercise.fleet.FleetTraffic``) and
 the picture's own sources (replayed AIS logs, scripted vessels); the NMEA links send it as ``!AIVDM`` and the
 state stream carries it as ``TRAFFIC_DTYPE`` rows (``table``) for the render processes.
 """
@@ -30,19 +31,21 @@ class VesselSource(Protocol):
 
 
 class TrafficPicture:
-    """The other vessels from the links, the world and ``sources``; where two give the same
-    MMSI, the links' (live simulators) win, then the world's, then the sources in their order."""
+    """The other vessels from the links, the own fleet, the world and ``sources``; where two
+    give the same MMSI, the links' (live simulators) win, then the fleet's, the world's, and
+    the sources in their order."""
 
     def __init__(self, sources: Sequence[VesselSource] = ()) -> None:
         self.sources = list(sources)
         self.world: list[Vessel] = []  # the instructor's vessels as the last step left them
+        self.fleet: list[Vessel] = []  # the exercise's other own ships as the last step left them
         self.current: list[Vessel] = []  # as last gathered
 
     def gather(self, heard: list[Vessel], now: float) -> list[Vessel]:
-        """The picture at ``now`` (monotonic s): ``heard`` (the links' vessels) and the
-        sources' vessels, one per MMSI."""
+        """The picture at ``now`` (monotonic s): ``heard`` (the links' vessels), the fleet's,
+        the world's and the sources' vessels, one per MMSI."""
         seen, self.current = set(), []
-        for v in [*heard, *self.world, *(v for source in self.sources for v in source.vessels(now))]:
+        for v in [*heard, *self.fleet, *self.world, *(v for source in self.sources for v in source.vessels(now))]:
             if v.mmsi not in seen:
                 seen.add(v.mmsi)
                 self.current.append(v)

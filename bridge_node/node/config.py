@@ -19,6 +19,8 @@ from bridge_node.control.settings import ControlSettings
 from bridge_node.links.registry import LinkSettings
 from bridge_node.links.convoy import ConvoySettings
 from bridge_node.links.settings import ArbitrationSettings
+from bridge_node.node.ship_settings import (SHIP_NAME, OtherShipSettings, ShipChoice, StartSettings, check_fleet,
+                                            check_links)
 from bridge_node.common.errors import UserError
 from bridge_node.common.input_files import TOML_LIMIT, read_input_text
 from bridge_node.common.paths import NUL_IN_PATH, expand_user, writable_dir
@@ -32,12 +34,11 @@ from bridge_node.traffic.settings import TrafficSettings
 from sim_core.fracture.tile_template import FractureSettings
 from sim_core.ice.model import IceDynamicsSettings
 from sim_core.material import IceMaterial
-from sim_core.params import Params, repeated
+from sim_core.params import Params
 from sim_core.scene.field import IceFieldSettings
 from sim_core.scene.scene import SceneSettings
-from sim_core.ship.particulars import TELEGRAPH_POSITIONS, ShipParticulars
+from sim_core.ship.particulars import ShipParticulars
 
-SHIP_NAME = r"^[A-Za-z0-9_\-]{1,64}$"  # ships/<name>.toml
 DEFAULT_CONFIG = Path(__file__).resolve().parents[2] / "config" / "default.toml"
 
 
@@ -55,13 +56,7 @@ class PathSettings(Params):
         return value
 
 
-class ShipChoice(Params):
-    """Which ship: ``config/ships/<name>.toml`` beside the config (or the built-in one)."""
-
-    name: str = Field(pattern=SHIP_NAME)
-
-
-class ExerciseSettings(Params):
+class ExerciseSettings(StartSettings):
     """Where the exercise takes place, how the ship starts, and the wind and current at the
     start (the instructor changes them as it runs). The local north/east frame has its
     origin at the ice field's south-west corner, at the given latitude/longitude. Unset
@@ -71,11 +66,6 @@ class ExerciseSettings(Params):
 
     origin_latitude_deg: float = Field(74.0, ge=-89.0, le=89.0)
     origin_longitude_deg: float = Field(20.0, ge=-180.0, le=180.0)
-    start_north: float | None = Field(None, ge=-1.0e5, le=1.0e6, description="m from the field's south edge")
-    start_east: float | None = Field(None, ge=-1.0e5, le=1.0e6, description="m from the field's west edge")
-    start_heading_deg: float = Field(0.0, ge=0.0, lt=360.0, description="true heading, deg")
-    start_speed_kn: float = Field(6.0, ge=0.0, le=25.0, description="speed through the water, kn")
-    start_telegraph: Literal[TELEGRAPH_POSITIONS] | None = Field("full_ahead", description="engine order at the start")
     wind_speed_kn: float = Field(0.0, ge=0.0, le=100.0, description="true wind at the start, kn")
     wind_from_deg: float = Field(0.0, ge=0.0, lt=360.0, description="where the wind blows from, deg true")
     current_speed_kn: float = Field(0.0, ge=0.0, le=10.0, description="surface current at the start, kn")
@@ -130,24 +120,14 @@ class NodeConfig(Params):
     paths: PathSettings = PathSettings()
     console: RunConsoleSettings | None = None
 
+    ships: list[OtherShipSettings] = Field(default_factory=list, description="the exercise's other own ships")
+
     @model_validator(mode="after")
-    def _link_names(self) -> "NodeConfig":
-        names = [link.name for link in self.links]
-        doubled = repeated(names)
-        if doubled:
-            raise ValueError(f"links: names must be unique, repeated: {doubled}")
-        for order in ("rudder", "engine"):
-            unknown = [n for n in getattr(self.arbitration, order) if n not in names]
-            if unknown:
-                raise ValueError(f"arbitration.{order}: unknown link(s) {unknown}; links: {names}")
-        udp: dict[tuple[str, int], str] = {}  # destination -> the link that sends there
-        for i, link in enumerate(self.links):
-            destination = link.udp_destination()
-            other = destination and udp.setdefault(destination, link.name)
-            if other and other != link.name:
-                host, port = destination
-                raise ValueError(f"links.{i}.udp_port = {port}: link {link.name!r} would send to {host}:{port} as "
-                                 f"link {other!r} does; give it another udp_port, or udp_output = false")
+    def _links(self) -> "NodeConfig":
+        check_links(self.links, self.arbitration)
+        for i, other in enumerate(self.ships):
+            check_links(other.links, other.arbitration, f"ships.{i}.")
+        check_fleet(self.ship, self.links, self.console is not None, self.ships)
         return self
 
 
@@ -176,6 +156,8 @@ def load_config(path: str | Path | None = None) -> NodeConfig:
     path = Path(path) if path is not None else DEFAULT_CONFIG
     cfg = _load_validated(path, NodeConfig)
     links = [link.with_files(_file_finder(path, f"links.{i}.")) for i, link in enumerate(cfg.links)]
+    ships = [s.model_copy(update={"links": [link.with_files(_file_finder(path, f"ships.{k}.links.{i}."))
+                                            for i, link in enumerate(s.links)]}) for k, s in enumerate(cfg.ships)]
     console = cfg.console and cfg.console.model_copy(
         update={"script": str(_config_file(path, "console.script", cfg.console.script))})
     channels = [c.model_copy(update={"warp": str(_file_finder(path, f"render.channels.{i}.")("warp", c.warp,
@@ -186,7 +168,7 @@ def load_config(path: str | Path | None = None) -> NodeConfig:
     if ice_field.chart is not None:
         chart = _file_finder(path, "ice_field.")("chart", ice_field.chart, _readable_chart)
         ice_field = ice_field.model_copy(update={"chart": str(chart)})
-    return cfg.model_copy(update={"links": links, "console": console, "render": render, "ice_field": ice_field})
+    return cfg.model_copy(update={"links": links, "ships": ships, "console": console, "render": render, "ice_field": ice_field})
 
 
 def _readable_chart(path: Path, where: str) -> None:

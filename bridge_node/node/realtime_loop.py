@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bridge_node.exercise.command_log import CommandLog
+from bridge_node.exercise.fleet import Bridge, FleetOrders, fleet_listeners
 from bridge_node.control.queue import CommandSource
 from bridge_node.exercise.listeners import LinkOutputs, SaveWriter, WorldTraffic
 from bridge_node.exercise.pacer import Pacer
@@ -198,30 +199,35 @@ def _stop_between_ticks() -> Iterator[_StopRequest]:
 
 def live_tick(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float,
               listeners: Sequence[StepListener | Callable[[TickOutcome], None]] = (),
-              commands: CommandSource | None = None) -> ExerciseTick:
+              commands: CommandSource | None = None, fleet: Sequence[Bridge] = ()) -> ExerciseTick:
     """The tick of a live exercise: orders from the hub's links, the instructor's
     ``commands``, outcomes to the session record's tick and command logs and its save
-    points (where the hub records), the links, then ``listeners``."""
+    points (where the hub records), the links, then ``listeners``. With ``fleet`` (every
+    own ship's bridge, the first's hub ``hub``), each ship obeys its own bridge's links and
+    sends on them (``bridge_node.exercise.fleet``)."""
     records = []
     if hub.record is not None:
         ticks = TickRecord(hub.record.folder, 1.0 / rate_hz)
         hub.add_listener(ticks)  # it counts the links' reads; stopped with the hub's other listeners
         records = [ticks, CommandLog(hub.record.folder), SaveWriter(hub.record.folder)]
-    return ExerciseTick(model, data, hub, [*records, WorldTraffic(hub.traffic, model.origin), LinkOutputs(hub),
-                                          *listeners], commands)
+    hubs = [b.hub for b in fleet] or [hub]
+    return ExerciseTick(model, data, FleetOrders(fleet) if fleet else hub,
+                        [*records, *(WorldTraffic(h.traffic, model.origin) for h in hubs),
+                         *(fleet_listeners(model, fleet) if fleet else ()), LinkOutputs(hub), *listeners], commands)
 
 
 def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float, duration: float | None,
                  listeners: Sequence[StepListener | Callable[[TickOutcome], None]] = (),
                  should_stop: Callable[[], bool] = lambda: False,
-                 commands: CommandSource | None = None, scheduler: tuple[str, int] = ("normal", 0)) -> LoopStats:
+                 commands: CommandSource | None = None, scheduler: tuple[str, int] = ("normal", 0),
+                 fleet: Sequence[Bridge] = ()) -> LoopStats:
     """Run the live tick (``live_tick``) at ``rate_hz`` until ``duration`` wall seconds
     have passed (None: until should_stop(), Ctrl-C or SIGTERM, which end the loop after
     the tick in hand); ``listeners`` get every tick's outcome; ``commands`` are the
     instructor's; ``scheduler``: the loop thread's CPU scheduling and real-time priority
-    (``thread_scheduling``)."""
+    (``thread_scheduling``); ``fleet``: every own ship's bridge (``live_tick``)."""
     period = 1.0 / rate_hz
-    tick = live_tick(model, data, hub, rate_hz, listeners, commands)
+    tick = live_tick(model, data, hub, rate_hz, listeners, commands, fleet)
     stats = LoopStats(refusals=tick.refusals)
     # Everything made so far (modules, models, kernels) lives for the whole run. Moved out of
     # the collector's generations, a full collection no longer walks it: that walk, some

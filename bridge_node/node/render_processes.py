@@ -54,7 +54,6 @@ class RenderProcesses:
 
     def __init__(self, cfg: NodeConfig, config_path: str | None, out: Path, frames_every: float | None) -> None:
         channels = cfg.render.channels
-        groups = cfg.render.groups or [[c.name for c in channels]]
         self.headless = not any(c.output == "window" for c in channels)
         fps = cfg.render.headless_fps if self.headless else cfg.render.fps
         self.env = os.environ.copy()
@@ -64,20 +63,9 @@ class RenderProcesses:
         self._stop = threading.Event()
         self._lock = threading.Lock()  # check() runs on the watchdog and may be called directly
         self._watchdog: threading.Thread | None = None
-        self.processes = []
-        for k, group in enumerate(groups):
-            tag = "" if len(groups) == 1 else f"_{k + 1}"
-            command = [sys.executable, "-m", "bridge_node", "render-node", "--channels", ",".join(group),
-                       "--fps", f"{fps:g}", "--out", str(out), "--wait", "600", "--idle-exit", "60",
-                       "--summary", str(out / f"render{tag}.json"), "--niceness", str(cfg.render.niceness)]
-            if config_path:
-                command += ["--config", str(config_path)]
-            if frames_every:
-                command += ["--frames-every", f"{frames_every:g}"]
-            if self.headless:
-                command += ["--video", str(out / f"video{tag}.mp4"), "--video-fps", f"{fps:g}",
-                            "--panorama", str(out / f"panorama{tag}.png")]
-            self.processes.append(RenderProcess(group, command, out / f"render{tag}.json", out / f"render{tag}.log"))
+        self.processes = [process for ship in [0, *(k for k, s in enumerate(cfg.ships, 1) if s.render)]
+                          for process in _ship_processes(cfg, config_path, out, frames_every, ship, fps,
+                                                         self.headless)]
 
     def _launch(self, p: RenderProcess) -> None:
         with open(p.stderr, "a", encoding="utf-8") as err:
@@ -85,8 +73,8 @@ class RenderProcesses:
 
     def start(self) -> None:
         """Start every process, and the watchdog thread."""
-        self.out.mkdir(parents=True, exist_ok=True)
         for p in self.processes:
+            p.summary.parent.mkdir(parents=True, exist_ok=True)
             p.summary.unlink(missing_ok=True)
             p.stderr.unlink(missing_ok=True)
             self._launch(p)
@@ -150,6 +138,31 @@ class RenderProcesses:
             out.append(summary | {"group": p.group, "restarts": p.restarts, "exit": p.proc.returncode,
                                   "errors": p.log[-3:], "log": str(p.stderr)})
         return out
+
+
+def _ship_processes(cfg: NodeConfig, config_path: str | None, out: Path, frames_every: float | None, ship: int,
+                    fps: float, headless: bool) -> list[RenderProcess]:
+    """The render processes of one ship's bridge: one per channel group, from its eyes
+    (``render-node --ship``); the first ship's files in ``out``, the k-th's in
+    ``out/ship<k>``."""
+    groups = cfg.render.groups or [[c.name for c in cfg.render.channels]]
+    folder = out if ship == 0 else out / f"ship{ship}"
+    processes = []
+    for k, group in enumerate(groups):
+        tag = "" if len(groups) == 1 else f"_{k + 1}"
+        command = [sys.executable, "-m", "bridge_node", "render-node", "--channels", ",".join(group),
+                   "--fps", f"{fps:g}", "--out", str(folder), "--wait", "600", "--idle-exit", "60",
+                   "--summary", str(folder / f"render{tag}.json"), "--niceness", str(cfg.render.niceness),
+                   "--ship", str(ship)]
+        if config_path:
+            command += ["--config", str(config_path)]
+        if frames_every:
+            command += ["--frames-every", f"{frames_every:g}"]
+        if headless:
+            command += ["--video", str(folder / f"video{tag}.mp4"), "--video-fps", f"{fps:g}",
+                        "--panorama", str(folder / f"panorama{tag}.png")]
+        processes.append(RenderProcess(group, command, folder / f"render{tag}.json", folder / f"render{tag}.log"))
+    return processes
 
 
 def open_stream(settings: StreamSettings) -> StatePublisher:

@@ -11,10 +11,11 @@ from pathlib import Path
 
 import numpy as np
 from rich.progress import Progress
+from shapely.geometry import Polygon
 
 from bridge_node.charts.field_regions import configured_ridges
 from bridge_node.library.templates import library_template
-from bridge_node.node.config import NodeConfig, load_ship, resolve_path
+from bridge_node.node.config import DEFAULT_CONFIG, ConfigError, NodeConfig, load_ship, resolve_path
 from bridge_node.node.floe_field_setup import MAX_CLASSES, FieldRegions, field_regions, lay_floe_fields
 from bridge_node.common.errors import UserError
 from bridge_node.common.paths import writable_dir
@@ -28,6 +29,7 @@ from sim_core.scene.field import tile_classes
 from sim_core.scene.scene import compile_scene, level_ice_name, open_water
 from sim_core.ship.model import compile_ship
 from sim_core.ship_in_ice import start_drifting
+from sim_core.fleet import ShipStart
 from sim_core.world import WorldData, WorldModel, compile_world, new_world_data, step
 
 
@@ -52,8 +54,10 @@ def field_tile_classes(cfg: NodeConfig, config_path: str | None,
         raise UserError(f"{config_path}: ice_field: {exc}") from None
 
 
-def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | None = None) -> WorldModel:
-    """Compile the configured exercise's world. Dynamics need prism cells."""
+def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | None = None,
+                fleet: bool = True) -> WorldModel:
+    """Compile the configured exercise's world: its ship, and with ``fleet`` the other own
+    ships of ``[[ships]]``. Dynamics need prism cells."""
     if cfg.fracture.cells != "prism":
         raise UserError(f"{config_path}: fracture.cells = {cfg.fracture.cells!r}: the simulated world needs "
                         "'prism' cells (voronoi3d cells overlap in plan view)")
@@ -90,7 +94,10 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
     origin = math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg)
     ridges = configured_ridges(cfg.ice_field, cfg.exercise.origin_deg())
     rubble = compile_rubble(laid.regions, laid.index, ridges, scene.nx, scene.ny, scene.side)
-    return compile_world(ship, ice, scene, origin, tuple(light.mount() for light in cfg.render.searchlights), rubble)
+    others = tuple(compile_ship(load_ship(s.name, config_path, f"ships.{i}.name"), cfg.ice_material)
+                   for i, s in enumerate(cfg.ships)) if fleet else ()
+    return compile_world(ship, ice, scene, origin, tuple(light.mount() for light in cfg.render.searchlights), rubble,
+                         others)
 
 
 def warm_up(model: WorldModel, cfg: NodeConfig) -> None:
@@ -116,7 +123,7 @@ def open_water_world(cfg: NodeConfig, config_path: str | None) -> tuple[WorldMod
     """The configured exercise without its ice field, the ship at rest at the exercise's
     origin, engine stopped, the exercise's clock and environment at the start: a console
     commissioned in open water (``icebridge links monitor``)."""
-    model = build_world(cfg, config_path)
+    model = build_world(cfg, config_path, fleet=False)
     model = dataclasses.replace(model, scene=open_water(model.scene))
     data = new_world_data(model, 0.0, 0.0, 0.0, 0.0)
     start_exercise(model, data, cfg)
@@ -136,11 +143,33 @@ def start_exercise(model: WorldModel, data: WorldData, cfg: NodeConfig) -> None:
     start_drifting(model, data)
 
 
-def start_world(model: WorldModel, cfg: NodeConfig) -> WorldData:
+def start_world(model: WorldModel, cfg: NodeConfig, config_path: str | None = None) -> WorldData:
     """World data at the configured start (``start_position``), heading, speed and
-    telegraph order, with the exercise's clock and environment at the start (``start_exercise``)."""
+    telegraph order, the model's other ships at theirs (``[[ships]]``), with the exercise's
+    clock and environment at the start (``start_exercise``). ConfigError where two ships'
+    hulls would overlap at the start."""
     ex = cfg.exercise
+    others = tuple(ShipStart(s.start_north, s.start_east, math.radians(s.start_heading_deg), s.start_speed_kn * KNOT,
+                             s.start_telegraph) for s in cfg.ships[:len(model.ships) - 1])
     data = new_world_data(model, *start_position(model, cfg), math.radians(ex.start_heading_deg),
-                          ex.start_speed_kn * KNOT, ex.start_telegraph)
+                          ex.start_speed_kn * KNOT, ex.start_telegraph, others)
+    _check_apart(model, data, config_path)
     start_exercise(model, data, cfg)
     return data
+
+
+def _check_apart(model: WorldModel, data: WorldData, config_path: str | None) -> None:
+    """ConfigError naming both ships' keys where two hulls overlap at the start."""
+    hulls = []
+    for contour, ship in zip(model.contours, data.ships):
+        c, s = math.cos(ship.eta[5]), math.sin(ship.eta[5])
+        north = ship.eta[0] + contour[:, 0] * c - contour[:, 1] * s
+        east = ship.eta[1] + contour[:, 0] * s + contour[:, 1] * c
+        hulls.append(Polygon(np.column_stack([east, north])))
+    keys = ["exercise.start_north/start_east"] + [f"ships.{i}.start_north/start_east" for i in range(len(hulls) - 1)]
+    for j, hull in enumerate(hulls):
+        for k in range(j):
+            if hull.intersects(hulls[k]):
+                at = f"north {data.ships[j].eta[0]:.0f} m, east {data.ships[j].eta[1]:.0f} m"
+                raise ConfigError(f"{config_path or DEFAULT_CONFIG}: {keys[j]} = {at}: this ship's hull overlaps the "
+                                  f"one that starts at {keys[k]}; start the ships apart")

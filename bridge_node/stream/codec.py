@@ -7,7 +7,8 @@ at 1 km) and row numbers as int32; frozen floes as ``FROZEN_FLOE_EVENT`` records
 console order that went into the step, or None. The last frame is the whole traffic picture
 at the step (``TRAFFIC_DTYPE`` rows; a few vessels, so every message carries all of them).
 The tiles given other ice (``RETILED`` records) are the last array; a recording made before
-the instructor could lay ice lacks it, and reads as none.
+the instructor could lay ice lacks it, and reads as none. The other own ships' reports
+(``WorldEvents.others``) travel in the header: a few ships.
 
 A decoded message is checked against the bounds of a view before anyone applies it (render
 PCs may read the stream off the bridge network): row, placement and tile numbers within
@@ -32,6 +33,8 @@ from sim_core.ship.model import OrderRejection
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.scene.scene import RETILED
 from sim_core.scene.switches import FROZEN_FLOE_EVENT, PlacedTiles
+from sim_core.fleet import ShipReport
+from sim_core.ice.hull_bodies import MAX_HULLS
 from sim_core.world import WorldEvents
 
 MAX_ROWS = 1 << 24  # row, placement and tile numbers are below this: a view allocates per row
@@ -61,6 +64,8 @@ def encode(events: WorldEvents, input_time: float | None = None, traffic: np.nda
         "floes_frozen": events.floes_frozen, "rejected": [dataclasses.asdict(r) for r in events.rejected],
         "environment": dataclasses.asdict(events.environment), "ice_offset": list(events.ice_offset),
         "commands": [command_record(c) for c in events.commands],
+        "others": [{"outputs": dataclasses.asdict(o.outputs), "ice_load": [float(v) for v in o.ice_load],
+                    "rejected": [dataclasses.asdict(r) for r in o.rejected]} for o in events.others],
         "arrays": [[a.dtype.str, list(a.shape)] for a in arrays],
     }
     return [TOPIC, json.dumps(header).encode(), *(a.tobytes() for a in arrays), traffic.tobytes()]
@@ -85,6 +90,16 @@ def _ice_offset(value: object) -> tuple[float, float]:
             isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)):
         raise CodecError(f"malformed state message: ice offset {value!r}")
     return float(value[0]), float(value[1])
+
+
+def _other_ship(fields: dict) -> ShipReport:
+    """Another own ship's report a header carries; CodecError for an ice load that is not
+    three numbers."""
+    load = np.array(fields["ice_load"], dtype=float)
+    if load.shape != (3,):
+        raise CodecError(f"malformed state message: another ship's ice load {fields['ice_load']!r}")
+    return ShipReport(ShipOutputs.from_dict(fields["outputs"]), load,
+                      tuple(OrderRejection(**r) for r in fields["rejected"]))
 
 
 def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
@@ -115,6 +130,7 @@ def decode(frames: list) -> tuple[WorldEvents, float | None, np.ndarray]:
             environment=_environment(header["environment"]),
             ice_offset=_ice_offset(header.get("ice_offset", [0.0, 0.0])),  # none in recordings before the drift
             commands=tuple(command_from_record(c) for c in header["commands"]),
+            others=tuple(_other_ship(o) for o in header.get("others", [])),  # none before several ships
             **{k: (v.astype(np.int64) if k in _WIRE and v.dtype.kind == "i" else v) for k, v in named.items()})
         input_time = header["input_time"]
     except CodecError:
@@ -163,11 +179,14 @@ def _check_bounds(events: WorldEvents, input_time: object) -> None:
         p.corner.shape != (len(p.tile), 2) and "tile corners of the wrong shape",
         not (np.isfinite(events.floe_pose).all() and np.isfinite(p.corner).all()
              and np.isfinite(events.frozen_floes["pose"]).all()) and "a pose that is not finite",
-        not all(math.isfinite(v) for v in (events.time, *events.ice_load)) and "a time or load that is not finite",
-        not _good_record(events.ship) and "a ship value that is not a finite number, or a flag not true or false",
+        not all(math.isfinite(v) for v in (events.time, *events.ice_load, *(v for o in events.others for v in o.ice_load)))
+        and "a time or load that is not finite",
+        not all(_good_record(s) for s in (events.ship, *(o.outputs for o in events.others)))
+        and "a ship value that is not a finite number, or a flag not true or false",
         input_time is not None and not (isinstance(input_time, float) and math.isfinite(input_time))
         and "an input time that is not a finite number",
         events.ice_load.shape != (3,) and "an ice load of the wrong shape",
+        len(events.others) >= MAX_HULLS and f"{len(events.others) + 1} ships, more than a world holds ({MAX_HULLS})",
     ]
     problem = next((found for found in problems if found), None)
     if problem:

@@ -14,6 +14,7 @@ import numpy as np
 import zmq
 
 from bridge_node.stream.codec import HEARTBEAT, CodecError, decode
+from bridge_node.stream.follow import FollowedShip
 from bridge_node.stream.publisher import SNAPSHOT_REQUEST
 from bridge_node.stream.world_view import WorldView
 from sim_core.world import WorldEvents
@@ -27,10 +28,13 @@ class StateSubscriber:
     """SUB + DEALER sockets and the view they keep; a context manager."""
 
     def __init__(self, publish: str, snapshot: str, timeout_s: float = 10.0,
-                 context: zmq.Context | None = None) -> None:
+                 context: zmq.Context | None = None, follow: FollowedShip | None = None) -> None:
+        """``follow``: the view is the world as another own ship's bridge sees it
+        (``bridge_node.stream.follow``; None: as the node's first ship's)."""
         self.context = context or zmq.Context.instance()
         self.publish_endpoint, self.snapshot_endpoint = publish, snapshot
         self.timeout_s = timeout_s
+        self.follow = follow
         self.view = WorldView()
         self.resyncs = 0  # snapshots taken after a gap
         self.lost = 0  # steps missed (before each resync)
@@ -76,7 +80,13 @@ class StateSubscriber:
         self._dealer.send(SNAPSHOT_REQUEST)
 
     def _apply(self, message: tuple[WorldEvents, float | None, np.ndarray]) -> None:
-        events, input_time, self.view.traffic = message
+        events, input_time, traffic = message
+        if self.follow is not None:
+            try:
+                events, traffic = self.follow(events, traffic)
+            except ValueError as exc:  # a node of another exercise: its ships are not the config's
+                raise StreamError(f"{self.publish_endpoint}: {exc}") from None
+        self.view.traffic = traffic
         self.view.apply(events)
         if input_time is not None:
             self.last_input = (events.seq, input_time)

@@ -23,6 +23,7 @@ import numpy as np
 from bridge_node.links.traffic_picture import TRAFFIC_DTYPE
 from sim_core.ice.bending import crack_events
 from sim_core.ice.floes import NO_FROZEN_CRACKS, BreakCause, FloeStatus, frozen_crack_records
+from sim_core.fleet import ShipReport
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.environment import Environment
 from sim_core.scene.scene import retiled_records
@@ -72,6 +73,7 @@ class WorldView:
         self.seq = -1
         self.time = 0.0
         self.ship: ShipOutputs | None = None
+        self.others: tuple[ShipReport, ...] = ()  # the other own ships as last published
         self.placements: dict[int, Placement] = {}
         self.frozen: set[int] = set()  # frozen placements
         self.frozen_floes: dict[int, np.ndarray] = {}
@@ -117,6 +119,7 @@ class WorldView:
         before_ship, known_rows, before_offset = self.ship, self.rows, self.ice_offset
         self.ice_offset = np.array(events.ice_offset, dtype=float)
         self.seq, self.time, self.ship, self.ice_load = events.seq, events.time, events.ship, events.ice_load
+        self.others = events.others
         self.environment = events.environment
         self._take_retiled(events)
         frozen = set(events.frozen.tolist())
@@ -266,6 +269,7 @@ class WorldView:
             frozen_cracks=frozen_crack_records(self.frozen_cracks[k] for k in frozen if k in self.frozen_cracks),
             floes_free=len(broken), floes_frozen=sum(len(f) for f in floes),
             ice_load=self.ice_load.copy(), rejected=(), snapshot=True, ice_offset=tuple(self.ice_offset.tolist()),
+            environment=self.environment, others=self.others,
             retiled=retiled_records(list(self.retiled), list(self.retiled.values())))
 
     def blend(self, alpha: float) -> None:

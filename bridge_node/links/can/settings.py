@@ -72,6 +72,9 @@ class CanLinkSettings(LinkSettingsBase):
         serial_port_unless(self.channel, self.allow_network, "channel")
         return self
 
+    def resources(self) -> list[str]:
+        return [f"the CAN bus {self.interface}:{self.channel}"]
+
     def output_rates(self) -> dict[str, float]:
         return N2K_OUTPUTS | self.rates
 

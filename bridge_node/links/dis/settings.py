@@ -47,3 +47,7 @@ class DisLinkSettings(LinkSettingsBase):
     def destinations(self) -> list[tuple[str, int]]:
         """(host, port) of each entry of ``send_to``."""
         return [(h.strip("[]"), int(p)) for h, p in (entry.rsplit(":", 1) for entry in self.send_to)]
+
+    def resources(self) -> list[str]:
+        return [f"the DIS port {self.listen_host}:{self.listen_port}",
+                f"the DIS entity {self.site}.{self.application}.{self.entity}"]

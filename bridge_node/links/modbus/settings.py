@@ -75,3 +75,8 @@ class ModbusLinkSettings(LinkSettingsBase):
         else:
             serial_port_unless(self.serial_port, self.allow_network, "serial_port")
         return self
+
+    def resources(self) -> list[str]:
+        if self.transport == "rtu":
+            return [f"the serial port {self.serial_port}"]
+        return [f"the Modbus server {self.host}:{self.port}, device {self.device_id}"]

@@ -47,6 +47,9 @@ class NmeaLinkSettings(LinkSettingsBase):
                                  f"({BAUD_BUDGET_SHARE:.0%} of {self.baudrate} baud); lower rates or raise baudrate")
         return self
 
+    def resources(self) -> list[str]:
+        return [f"the serial port {self.port}"] if self.port else []
+
     def output_rates(self) -> dict[str, float]:
         return DEFAULT_RATES | self.rates
 

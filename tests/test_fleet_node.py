@@ -1,0 +1,249 @@
+"""Several own ships, each on its own bridge (issue 31): every ship obeys only its own
+console, sends its own state on its own links, sees the others in its traffic picture, and
+fails safe alone when its bridge loses its link. The consoles are python-can virtual buses
+in the test's threads; the node runs its real-time loop; AIS goes out on UDP loopback and
+is decoded with pyais. A config that gives two ships one link, a ship no links, or two ships
+one place is refused with the file, key and value."""
+import dataclasses
+import json
+import math
+import socket
+import subprocess
+import sys
+import threading
+
+import can
+import pytest
+from conftest import exercise_toml
+from links_helpers import console_frame
+from nmea2000.decoder import NMEA2000Decoder
+from pyais import decode as decode_ais
+
+from bridge_node.common.network import free_port
+from bridge_node.exercise.fleet import Bridge
+from bridge_node.links.hub import LinkHub
+from bridge_node.node.config import ConfigError, NodeConfig, load_config
+from bridge_node.node.realtime_loop import run_realtime
+from bridge_node.node.world_setup import build_world, start_world
+from bridge_node.stream.codec import CodecError, decode, encode
+from bridge_node.stream.follow import FollowedShip, followed_model
+from sim_core.frames.geodesy import local_to_geodetic
+from sim_core.frames.units import KNOT
+from sim_core.world import Controls, snapshot, step
+
+MMSI_A, MMSI_B = 230000001, 230000002
+
+
+def _helm(name: str, channel: str) -> dict:
+    return {"type": "can", "name": name, "channel": channel, "allowed_sources": [0x42], "timeout_s": 0.3}
+
+
+def _fleet_config(tmp_path, ais_port: int, second_east: float | None = None) -> NodeConfig:
+    """Two ships 150 m apart at the ice edge, each steered over its own virtual CAN bus;
+    the first also sends AIS on UDP ``ais_port``."""
+    base = load_config()
+    cfg = base.model_dump() | {
+        "ice_field": base.ice_field.model_dump() | {"width": 400.0, "height": 400.0},
+        "paths": base.paths.model_dump() | {"cache_dir": str(tmp_path / "tiles")}, "console": None,
+        "ship": {"name": base.ship.name, "mmsi": MMSI_A},
+        "exercise": base.exercise.model_dump() | {"start_north": -60.0, "start_east": 100.0},
+        "links": [_helm("helm_a", "fleet-a"),
+                  {"type": "nmea0183", "name": "ais_a", "udp_port": ais_port,
+                   "ais": {"mmsi": MMSI_A, "to_bow": 80, "to_stern": 70, "to_port": 11, "to_starboard": 11}}],
+        "arbitration": {"rudder": ["helm_a"], "engine": ["helm_a"], "fail_safe_after_s": 0.5},
+        "ships": [{"name": base.ship.name, "mmsi": MMSI_B, "ais_name": "FOLLOWER",
+                   "start_north": -60.0, "start_east": 250.0 if second_east is None else second_east,
+                   "start_speed_kn": 4.0, "links": [_helm("helm_b", "fleet-b")],
+                   "arbitration": {"rudder": ["helm_b"], "engine": ["helm_b"], "fail_safe_after_s": 0.5}}]}
+    return NodeConfig.model_validate(cfg)
+
+
+def _console(channel: str, rudder: float, lever: float, until, stop: threading.Event) -> threading.Thread:
+    """A console thread giving ``rudder`` deg and ``lever`` % every 0.1 s while ``until()``."""
+    bus = can.Bus(interface="virtual", channel=channel)
+
+    def give() -> None:
+        with bus:
+            while not stop.is_set() and until():
+                bus.send(console_frame("HelmOrder", RudderOrder=rudder, Status=1, Counter=0))
+                bus.send(console_frame("EngineOrder", Engine=0, Lever=lever, TelegraphPosition=0, Mode=0))
+                stop.wait(0.1)
+    return threading.Thread(target=give, daemon=True)
+
+
+_HEARD: dict[str, float | None] = {}  # channel -> the last heading (PGN 127250, rad) the node sent on it
+
+
+def _listen(channel: str, stop: threading.Event) -> threading.Thread:
+    """A listener on a console's bus, noting the headings the node sends there."""
+    bus, dec = can.Bus(interface="virtual", channel=channel), NMEA2000Decoder()
+    _HEARD[channel] = None
+
+    def hear() -> None:
+        with bus:
+            while not stop.is_set():
+                msg = bus.recv(timeout=0.05)
+                m = dec.decode(msg) if msg is not None else None
+                if m is not None and m.PGN == 127250:
+                    _HEARD[channel] = {f.id: f.value for f in m.fields}["heading"]
+    return threading.Thread(target=hear, daemon=True)
+
+
+def test_each_bridge_steers_its_own_ship_and_only_the_silent_one_fails_safe(tmp_path):
+    ais = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    ais.bind(("127.0.0.1", 0))
+    ais.settimeout(0.2)
+    cfg = _fleet_config(tmp_path, ais.getsockname()[1])
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    stop = threading.Event()
+    threads = [_console("fleet-a", 35.0, 80.0, lambda: data.time < 2.0, stop),  # bridge A's link goes at 2 s
+               _console("fleet-b", -20.0, 50.0, lambda: True, stop), _listen("fleet-a", stop), _listen("fleet-b", stop)]
+    with LinkHub(cfg.links, cfg.arbitration) as hub_a, \
+            LinkHub(cfg.ships[0].links, cfg.ships[0].arbitration) as hub_b:
+        fleet = [Bridge(hub_a, MMSI_A, "LEADER"), Bridge(hub_b, MMSI_B, "FOLLOWER")]
+        for t in threads:
+            t.start()
+        try:
+            run_realtime(model, data, hub_a, 30.0, None, should_stop=lambda: data.time >= 4.0 - 1e-9, fleet=fleet)
+        finally:
+            stop.set()
+            for t in threads:
+                t.join(2.0)
+        alarms_a, alarms_b = set(hub_a.active_alarms), set(hub_b.active_alarms)
+        picture_a, picture_b = list(hub_a.traffic.current), list(hub_b.traffic.current)
+    a, b = data.ships
+    # bridge B's orders steer ship B alone; bridge A lost its link and its ship failed safe
+    assert b.rudder_order == pytest.approx(math.radians(-20.0)) and b.rps_order > 0.0
+    assert a.rudder_order == 0.0 and a.rps_order == 0.0  # midships and stop
+    assert {111, 112} <= alarms_a and not alarms_b  # the fail-safe alarms are A's alone
+    assert a.eta[5] % (2 * math.pi) < math.pi < b.eta[5] % (2 * math.pi)  # A swung to starboard, B to port
+    # each ship's own state on its own bus
+    assert _HEARD["fleet-a"] == pytest.approx(a.eta[5] % (2 * math.pi), abs=0.01)
+    assert _HEARD["fleet-b"] == pytest.approx(b.eta[5] % (2 * math.pi), abs=0.01)
+    # each ship's traffic picture holds the other, where it is
+    assert [v.mmsi for v in picture_a] == [MMSI_B] and [v.mmsi for v in picture_b] == [MMSI_A]
+    assert picture_a[0].name == "FOLLOWER" and picture_a[0].speed_over_ground > 1.0 * KNOT
+    # and ship A's AIS sends ship B, decoded by pyais
+    reports = []
+    while True:
+        try:
+            text = ais.recv(4096).decode()
+        except TimeoutError:
+            break
+        reports += [decode_ais(line).asdict() for line in text.splitlines() if line.startswith("!AIVDM")
+                    and line.split(",")[1] == "1"]
+    ais.close()
+    mine = [r for r in reports if r["mmsi"] == MMSI_B and r["msg_type"] == 1]
+    assert mine, f"no position report of ship B among {len(reports)} AIS messages"
+    b_lat, b_lon = local_to_geodetic(b.eta[0], b.eta[1], *model.origin)
+    assert (mine[-1]["lat"], mine[-1]["lon"]) == pytest.approx((math.degrees(b_lat), math.degrees(b_lon)), abs=0.001)
+    # two ships at one place: refused, naming the keys
+    with pytest.raises(ConfigError, match=r"ships\.0\.start_north/start_east = north -60 m, east 110 m: .*overlaps"):
+        start_world(model, _fleet_config(tmp_path, 10199, second_east=110.0))
+
+
+def _config_error(tmp_path, text: str) -> str:
+    path = tmp_path / "fleet.toml"
+    default = (load_config.__globals__["DEFAULT_CONFIG"]).read_text()
+    path.write_text(default.replace('name = "polar_cargo"      # config/ships/<name>.toml',
+                                    'name = "polar_cargo"\nmmsi = 230000001') + text)
+    with pytest.raises(ConfigError) as caught:
+        load_config(path)
+    return str(caught.value)
+
+
+SECOND = '''
+[[ships]]
+name = "polar_cargo"
+mmsi = 230000002
+start_north = -600.0
+start_east = 3250.0
+'''
+
+
+def test_two_ships_on_one_link_are_refused(tmp_path):
+    shared = SECOND + '[[ships.links]]\nname = "helm_b"\ntype = "can"\ninterface = "slcan"\nchannel = "/dev/pts/7"\n' \
+        'allowed_sources = "any"\n'
+    # the default config's console is slcan on a pty the run makes; give the first ship a fixed one
+    first = '\n[[links]]\nname = "helm_a"\ntype = "can"\ninterface = "slcan"\nchannel = "/dev/pts/7"\n' \
+        'allowed_sources = "any"\n'
+    text = _config_error(tmp_path, first + shared)
+    assert "ships.0.links.0 ('helm_b'): the CAN bus slcan:/dev/pts/7 is also link 'helm_a''s, of ship" in text
+    same_name = SECOND + '[[ships.links]]\nname = "instruments"\ntype = "nmea0183"\nudp_port = 10111\n'
+    assert "link name 'instruments' is also link 'instruments''s, of ship" in _config_error(tmp_path, same_name)
+    same_udp = SECOND + '[[ships.links]]\nname = "b"\ntype = "nmea0183"\nudp_port = 10110\n'
+    assert "ships.0.links.0.udp_port = 10110: UDP 127.0.0.1:10110 is also link 'instruments''s" in \
+        _config_error(tmp_path, same_udp)
+
+
+def test_a_ship_without_links_or_an_mmsi_is_refused(tmp_path):
+    assert "ships.0.links: ship 230000002 has no links" in _config_error(tmp_path, SECOND)
+    path = tmp_path / "no_mmsi.toml"
+    path.write_text(load_config.__globals__["DEFAULT_CONFIG"].read_text() + SECOND
+                    + '[[ships.links]]\nname = "b"\ntype = "nmea0183"\nudp_port = 10111\n')
+    r = subprocess.run([sys.executable, "-m", "bridge_node", "run", "--config", str(path), "--duration", "1"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "ship.mmsi: required when [[ships]] lists other own ships" in r.stderr
+    assert str(path) in r.stderr and "Traceback" not in r.stderr
+
+
+def test_the_stream_carries_every_ship_and_a_bridge_renders_from_its_own_ship(tmp_path):
+    """``icebridge run`` with a second ship whose bridge is rendered too: each render process
+    rides its own ship, and the run's summary reports both ships."""
+    channel = '[[render.channels]]\nname = "bow"\nwidth = 160\nheight = 90\n'
+    path = exercise_toml(tmp_path, channel)
+    text = path.read_text().replace('[ship]\nname = "polar_cargo"\n', f'[ship]\nname = "polar_cargo"\nmmsi = {MMSI_A}\n')
+    path.write_text(text + f'[[links]]\nname = "a_instruments"\ntype = "nmea0183"\nudp_port = {free_port()}\n'
+                    f'[[ships]]\nname = "polar_cargo"\nmmsi = {MMSI_B}\nstart_north = -400.0\n'
+                    f'start_east = 250.0\nrender = true\n[[ships.links]]\nname = "b_instruments"\ntype = "nmea0183"\n'
+                    f'udp_port = {free_port()}\n')
+    r = subprocess.run([sys.executable, "-m", "bridge_node", "run", "--config", str(path), "--duration", "12",
+                        "--out", str(tmp_path / "out"), "--json", "--render", "local", "--no-record"],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    summary = json.loads(r.stdout)
+    (second,) = summary["other_ships"]
+    assert second["north_m"] > -400.0 and second["east_m"] == pytest.approx(250.0, abs=5.0)  # under way
+    rendered = {p["ship"]: p for p in summary["render_processes"]}
+    assert sorted(rendered) == [0, 1] and all(p["exit"] == 0 and p["frames"] > 0 for p in rendered.values())
+    # each process's eyes rode its own ship to the end (a step behind, blended: within a few metres)
+    assert rendered[0]["eye_ship"]["north_m"] == pytest.approx(summary["north_m"], abs=3.0)
+    assert rendered[1]["eye_ship"]["north_m"] == pytest.approx(second["north_m"], abs=3.0)
+    assert (tmp_path / "out" / "ship1" / "panorama.png").is_file()
+
+
+def test_a_follower_sees_the_first_ship_as_traffic_and_bad_ship_reports_are_refused(tmp_path):
+    cfg = _fleet_config(tmp_path, 10199)
+    model = build_world(cfg, None)
+    data = start_world(model, cfg)
+    for _ in range(5):
+        step(model, data, 0.1, [Controls(rudder=0.1), Controls(rudder=-0.2)])
+    events, _, traffic = decode(encode(snapshot(model, data)))
+    (b,) = events.others
+    assert (b.outputs.north, b.outputs.east) == pytest.approx((data.ships[1].eta[0], data.ships[1].eta[1]))
+    follow = FollowedShip(1, MMSI_B, (MMSI_A, 150.0, 22.0))
+    seen, rows = follow(events, traffic)
+    assert seen.ship == b.outputs and seen.others[0].outputs == events.ship
+    assert rows.tolist() == [(MMSI_A, events.ship.east, events.ship.north, events.ship.heading,
+                              events.ship.speed_over_ground, 150.0, 22.0)]
+    assert followed_model(model, 1).ships[0] is model.ships[1]
+    with pytest.raises(ValueError, match="the stream carries 1 ships; ship 1 is none"):
+        follow(dataclasses.replace(events, others=()), traffic)
+    frames = encode(events)
+    header = json.loads(frames[1])
+    for bad in ({"ice_load": [1.0]}, {"outputs": header["others"][0]["outputs"] | {"north": float("nan")}},
+                {"outputs": {"north": 1.0}}):
+        others = [header["others"][0] | bad]
+        with pytest.raises(CodecError):
+            decode([frames[0], json.dumps(header | {"others": others}).encode(), *frames[2:]])
+
+
+def test_a_record_of_several_ships_is_refused_by_replay_with_the_reason(tmp_path):
+    record = tmp_path / "20261128T100000Z"
+    (record / "ships" / "1").mkdir(parents=True)
+    (record / "ticks.log").write_text("")
+    r = subprocess.run([sys.executable, "-m", "bridge_node", "replay", str(record), "--render", "none"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "a record of several own ships ([[ships]])" in r.stderr, r.stderr[-1000:]
+    assert "Traceback" not in r.stderr
