@@ -11,20 +11,28 @@ import socket
 import subprocess
 import sys
 import threading
+from types import SimpleNamespace
 
 import can
+import numpy as np
 import pytest
 from conftest import exercise_toml
 from links_helpers import console_frame
 from nmea2000.decoder import NMEA2000Decoder
 from pyais import decode as decode_ais
 
+from bridge_node.common.errors import UserError
 from bridge_node.common.network import free_port
+from bridge_node.exercise.tick_record import TICKS_FILE
 from bridge_node.exercise.fleet import Bridge
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import ConfigError, NodeConfig, load_config
 from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.world_setup import build_world, start_world
+from bridge_node.replay.engine import Playback, run_replay
+from bridge_node.replay.fleet_session import session_source
+from bridge_node.replay.inputs import load_inputs
+from bridge_node.replay.session import FLEET_FOLDER, RecordedSession
 from bridge_node.stream.codec import CodecError, decode, encode
 from bridge_node.stream.follow import FollowedShip, followed_model
 from sim_core.frames.geodesy import local_to_geodetic
@@ -89,18 +97,23 @@ def _listen(channel: str, stop: threading.Event) -> threading.Thread:
     return threading.Thread(target=hear, daemon=True)
 
 
-def test_each_bridge_steers_its_own_ship_and_only_the_silent_one_fails_safe(tmp_path):
+@pytest.fixture(scope="module")
+def live_fleet(tmp_path_factory):
+    """Four seconds of two ships on their bridges, recorded: bridge A's console falls silent
+    at 2 s. The config, model, world at the end, record folder, each hub's alarms and
+    traffic picture, and the AIS ship A sent."""
+    tmp_path = tmp_path_factory.mktemp("fleet")
     ais = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     ais.bind(("127.0.0.1", 0))
     ais.settimeout(0.2)
     cfg = _fleet_config(tmp_path, ais.getsockname()[1])
     model = build_world(cfg, None)
     data = start_world(model, cfg)
-    stop = threading.Event()
+    stop, record = threading.Event(), tmp_path / "session"
     threads = [_console("fleet-a", 35.0, 80.0, lambda: data.time < 2.0, stop),  # bridge A's link goes at 2 s
                _console("fleet-b", -20.0, 50.0, lambda: True, stop), _listen("fleet-a", stop), _listen("fleet-b", stop)]
-    with LinkHub(cfg.links, cfg.arbitration) as hub_a, \
-            LinkHub(cfg.ships[0].links, cfg.ships[0].arbitration) as hub_b:
+    with LinkHub(cfg.links, cfg.arbitration, record) as hub_a, \
+            LinkHub(cfg.ships[0].links, cfg.ships[0].arbitration, record / FLEET_FOLDER / "1") as hub_b:
         fleet = [Bridge(hub_a, MMSI_A, "LEADER"), Bridge(hub_b, MMSI_B, "FOLLOWER")]
         for t in threads:
             t.start()
@@ -110,9 +123,22 @@ def test_each_bridge_steers_its_own_ship_and_only_the_silent_one_fails_safe(tmp_
             stop.set()
             for t in threads:
                 t.join(2.0)
-        alarms_a, alarms_b = set(hub_a.active_alarms), set(hub_b.active_alarms)
-        picture_a, picture_b = list(hub_a.traffic.current), list(hub_b.traffic.current)
-    a, b = data.ships
+        hubs = [(set(h.active_alarms), list(h.traffic.current)) for h in (hub_a, hub_b)]
+    reports = []
+    while True:
+        try:
+            text = ais.recv(4096).decode()
+        except TimeoutError:
+            break
+        reports += [decode_ais(line).asdict() for line in text.splitlines() if line.startswith("!AIVDM")
+                    and line.split(",")[1] == "1"]
+    ais.close()
+    return SimpleNamespace(cfg=cfg, model=model, data=data, record=record, hubs=hubs, ais=reports, tmp=tmp_path)
+
+
+def test_each_bridge_steers_its_own_ship_and_only_the_silent_one_fails_safe(live_fleet):
+    (alarms_a, picture_a), (alarms_b, picture_b) = live_fleet.hubs
+    a, b = live_fleet.data.ships
     # bridge B's orders steer ship B alone; bridge A lost its link and its ship failed safe
     assert b.rudder_order == pytest.approx(math.radians(-20.0)) and b.rps_order > 0.0
     assert a.rudder_order == 0.0 and a.rps_order == 0.0  # midships and stop
@@ -125,22 +151,30 @@ def test_each_bridge_steers_its_own_ship_and_only_the_silent_one_fails_safe(tmp_
     assert [v.mmsi for v in picture_a] == [MMSI_B] and [v.mmsi for v in picture_b] == [MMSI_A]
     assert picture_a[0].name == "FOLLOWER" and picture_a[0].speed_over_ground > 1.0 * KNOT
     # and ship A's AIS sends ship B, decoded by pyais
-    reports = []
-    while True:
-        try:
-            text = ais.recv(4096).decode()
-        except TimeoutError:
-            break
-        reports += [decode_ais(line).asdict() for line in text.splitlines() if line.startswith("!AIVDM")
-                    and line.split(",")[1] == "1"]
-    ais.close()
-    mine = [r for r in reports if r["mmsi"] == MMSI_B and r["msg_type"] == 1]
-    assert mine, f"no position report of ship B among {len(reports)} AIS messages"
-    b_lat, b_lon = local_to_geodetic(b.eta[0], b.eta[1], *model.origin)
+    mine = [r for r in live_fleet.ais if r["mmsi"] == MMSI_B and r["msg_type"] == 1]
+    assert mine, f"no position report of ship B among {len(live_fleet.ais)} AIS messages"
+    b_lat, b_lon = local_to_geodetic(b.eta[0], b.eta[1], *live_fleet.model.origin)
     assert (mine[-1]["lat"], mine[-1]["lon"]) == pytest.approx((math.degrees(b_lat), math.degrees(b_lon)), abs=0.001)
     # two ships at one place: refused, naming the keys
     with pytest.raises(ConfigError, match=r"ships\.0\.start_north/start_east = north -60 m, east 110 m: .*overlaps"):
-        start_world(model, _fleet_config(tmp_path, 10199, second_east=110.0))
+        start_world(live_fleet.model, _fleet_config(live_fleet.tmp, 10199, second_east=110.0))
+
+
+def test_a_record_of_two_bridges_replays_each_ship_on_its_own_orders(live_fleet):
+    cfg, model, live, record = live_fleet.cfg, live_fleet.model, live_fleet.data, live_fleet.record
+    assert (record / FLEET_FOLDER / "1" / TICKS_FILE).is_file()  # ship B's tick log, beside its link traffic
+    session = load_inputs([str(record)], None, {}, 1.0 / 30.0)
+    assert isinstance(session, RecordedSession) and session.exact
+    again = start_world(model, cfg)
+    with session_source(cfg, session) as source, LinkHub([], cfg.arbitration) as out:
+        stats = run_replay(model, again, source, Playback(None), out, None)
+    assert stats.steps == 120 and again.time == live.time
+    for replayed, ship in zip(again.ships, live.ships):  # each ship on its own bridge's orders, exactly
+        np.testing.assert_allclose(replayed.eta, ship.eta, rtol=0.0, atol=1e-9)
+        assert (replayed.rudder_order, replayed.rps_order) == (ship.rudder_order, ship.rps_order)
+    one_ship = cfg.model_copy(update={"ships": []})
+    with pytest.raises(UserError, match="a record of 2 own ship\\(s\\), replayed on an exercise of 1"):
+        session_source(one_ship, session)
 
 
 def _config_error(tmp_path, text: str) -> str:
@@ -190,7 +224,7 @@ def test_a_ship_without_links_or_an_mmsi_is_refused(tmp_path):
 
 def test_the_stream_carries_every_ship_and_a_bridge_renders_from_its_own_ship(tmp_path):
     """``icebridge run`` with a second ship whose bridge is rendered too: each render process
-    rides its own ship, and the run's summary reports both ships."""
+    rides its own ship, the run's summary reports both ships, and its record replays both."""
     channel = '[[render.channels]]\nname = "bow"\nwidth = 160\nheight = 90\n'
     path = exercise_toml(tmp_path, channel)
     text = path.read_text().replace('[ship]\nname = "polar_cargo"\n', f'[ship]\nname = "polar_cargo"\nmmsi = {MMSI_A}\n')
@@ -199,7 +233,7 @@ def test_the_stream_carries_every_ship_and_a_bridge_renders_from_its_own_ship(tm
                     f'start_east = 250.0\nrender = true\n[[ships.links]]\nname = "b_instruments"\ntype = "nmea0183"\n'
                     f'udp_port = {free_port()}\n')
     r = subprocess.run([sys.executable, "-m", "bridge_node", "run", "--config", str(path), "--duration", "12",
-                        "--out", str(tmp_path / "out"), "--json", "--render", "local", "--no-record"],
+                        "--out", str(tmp_path / "out"), "--json", "--render", "local"],
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
     summary = json.loads(r.stdout)
@@ -211,6 +245,13 @@ def test_the_stream_carries_every_ship_and_a_bridge_renders_from_its_own_ship(tm
     assert rendered[0]["eye_ship"]["north_m"] == pytest.approx(summary["north_m"], abs=3.0)
     assert rendered[1]["eye_ship"]["north_m"] == pytest.approx(second["north_m"], abs=3.0)
     assert (tmp_path / "out" / "ship1" / "panorama.png").is_file()
+    # the record replays both ships to where the run left them (its own node.toml: exact)
+    r = subprocess.run([sys.executable, "-m", "bridge_node", "replay", summary["record"], "--max", "--render", "none",
+                        "--json", "--out", str(tmp_path / "replay")], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    replayed = json.loads(r.stdout)
+    assert replayed["end"] == {"north_m": summary["north_m"], "east_m": summary["east_m"]}
+    assert replayed["other_ships"] == [{"north_m": second["north_m"], "east_m": second["east_m"]}]
 
 
 def test_a_follower_sees_the_first_ship_as_traffic_and_bad_ship_reports_are_refused(tmp_path):
@@ -238,12 +279,3 @@ def test_a_follower_sees_the_first_ship_as_traffic_and_bad_ship_reports_are_refu
         with pytest.raises(CodecError):
             decode([frames[0], json.dumps(header | {"others": others}).encode(), *frames[2:]])
 
-
-def test_a_record_of_several_ships_is_refused_by_replay_with_the_reason(tmp_path):
-    record = tmp_path / "20261128T100000Z"
-    (record / "ships" / "1").mkdir(parents=True)
-    (record / "ticks.log").write_text("")
-    r = subprocess.run([sys.executable, "-m", "bridge_node", "replay", str(record), "--render", "none"],
-                       capture_output=True, text=True, timeout=120)
-    assert r.returncode == 2 and "a record of several own ships ([[ships]])" in r.stderr, r.stderr[-1000:]
-    assert "Traceback" not in r.stderr

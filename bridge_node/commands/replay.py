@@ -33,6 +33,7 @@ from bridge_node.replay.csv_track import parse_mapping
 from bridge_node.replay.engine import MAX_SPEED, MIN_SPEED, Playback, ReplayStats, Source, run_replay
 from bridge_node.replay.inputs import LOOKED_FOR, VesselChoice, check_span, load_inputs
 from bridge_node.node.fork import resimulate_shown
+from bridge_node.replay.fleet_session import session_source
 from bridge_node.replay.session import RecordedSession, SessionSource, recorded_config
 from bridge_node.replay.track import Track, TrackLog, TrackPath, TrackSource, clean_for, origin_under
 from bridge_node.reports.replay import gap_summary, plot_replay
@@ -165,7 +166,7 @@ def _session_replay(cfg: NodeConfig, args: argparse.Namespace, session: Recorded
     if not session.ticks:
         raise UserError(f"{session.folder}: no usable track: the session record holds no tick and no input "
                         f"(looked for {LOOKED_FOR})")
-    source = SessionSource(cfg.links, cfg.arbitration, session)
+    source = session_source(cfg, session)
     first, last = session.ticks[0].unix, session.ticks[-1].unix + session.period
     seek = 0
     if args.start:
@@ -198,6 +199,8 @@ def _summary(prep: _Prepared, stats: ReplayStats, playback: Playback) -> dict:
         "off_field": [{"from": logged_text(a - s.dt, s.absolute), "to": logged_text(b, s.absolute)}
                       for a, b in stats.off_field],
         "end": {"north_m": round(float(rows[-1, 1]), 1), "east_m": round(float(rows[-1, 2]), 1)} if len(rows) else {},
+        "other_ships": [{"north_m": round(float(ship.eta[0]), 1), "east_m": round(float(ship.eta[1]), 1)}
+                        for ship in prep.data.ships[1:]],
         "wall_s": round(stats.wall_s, 2), "speed_x": round(stats.sim_s / max(stats.wall_s, 1e-9), 2),
         "pace": "max" if playback.speed is None else playback.speed,
         "orders_rejected": dict(stats.refusals.counts), "console_orders_ignored": stats.console_orders_ignored,

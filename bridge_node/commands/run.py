@@ -41,6 +41,7 @@ from bridge_node.node.station_process import StationProcess
 from bridge_node.node.world_setup import build_world, start_world, warm_up
 from bridge_node.node.fork import resimulate_shown
 from bridge_node.node.run_report import plot_run
+from bridge_node.replay.session import FLEET_FOLDER
 from bridge_node.reports.summary import print_summary
 from bridge_node.stream.publisher import StatePublisher
 from bridge_node.links.traffic_picture import TrafficPicture
@@ -144,7 +145,7 @@ def _fleet(cfg, hub: LinkHub, record: Path | None, stack: ExitStack) -> list[Bri
         return []
     bridges = [Bridge(hub, cfg.ship.mmsi, cfg.ship.shown_name())]
     for k, ship in enumerate(cfg.ships, start=1):
-        other = LinkHub(ship.links, ship.arbitration, record / "ships" / str(k) if record else None,
+        other = LinkHub(ship.links, ship.arbitration, record / FLEET_FOLDER / str(k) if record else None,
                         TrafficPicture(hub.traffic.sources), convoy=ship.convoy)
         bridges.append(Bridge(stack.enter_context(other), ship.mmsi, ship.shown_name()))
     return bridges

@@ -31,8 +31,8 @@ class RunConsole:
     """The run's console process and its link, in ``folder`` (config, log, results); a
     context manager. ``cfg``: the node config with the console's link (unchanged where the
     config has no ``[console]``). With a session ``record`` folder, the node config the run
-    uses goes there as ``node.toml`` (the console's link as the node saw it, pty path and
-    all): ``icebridge replay RECORD --config RECORD/node.toml`` re-simulates the run exactly."""
+    uses goes there as ``node.toml`` (the console's link, where it has one, as the node saw
+    it, pty path and all): ``icebridge replay RECORD`` re-simulates the run exactly."""
 
     def __init__(self, cfg: NodeConfig, config_path: str | Path | None, folder: Path,
                  record: Path | None = None) -> None:
@@ -51,6 +51,8 @@ class RunConsole:
 
     def __enter__(self) -> RunConsole:
         if self.settings is None:
+            if self.record is not None:  # a run of its own links alone is replayed exactly too
+                self._keep_node_config()
             return self
         load_scenario(self.settings.script)  # a mistake in the script stops the run before it starts
         try:

@@ -14,7 +14,8 @@ from bridge_node.exercise.tick import ExerciseTick
 from bridge_node.node.config import NodeConfig, load_config
 from bridge_node.common.errors import UserError
 from bridge_node.replay.engine import StepOrders
-from bridge_node.replay.session import NODE_CONFIG, SessionSource, read_session, record_files, refuse_fleet_record
+from bridge_node.replay.fleet_session import session_source
+from bridge_node.replay.session import NODE_CONFIG, read_session, record_files
 from sim_core.world import WorldData, WorldModel
 
 MAX_FORK_DEPTH = 32  # forks of forks followed back at most (a loop of fork files ends here)
@@ -31,7 +32,6 @@ def resimulate(model: WorldModel, data: WorldData, cfg: NodeConfig, point: SaveP
         raise UserError(f"{folder}: forked from more than {MAX_FORK_DEPTH} records in a row (a loop of fork files?)")
     if (folder / FORK_FILE).is_file():
         resimulate(model, data, cfg, read_save(folder / FORK_FILE), progress, depth + 1)
-    refuse_fleet_record(folder)
     recorded = folder / NODE_CONFIG
     record_cfg = load_config(recorded) if recorded.is_file() else cfg
     try:
@@ -40,7 +40,7 @@ def resimulate(model: WorldModel, data: WorldData, cfg: NodeConfig, point: SaveP
     except ValueError as exc:
         raise UserError(f"{folder}: {exc}") from None
     outcome = None
-    with SessionSource(record_cfg.links, record_cfg.arbitration, session) as source:
+    with session_source(record_cfg, session) as source:
         orders = StepOrders(source)
         tick = ExerciseTick(model, data, orders, (), orders)
         while data.seq < point.seq and orders.k < source.steps:

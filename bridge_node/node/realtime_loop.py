@@ -205,15 +205,21 @@ def live_tick(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float,
     points (where the hub records), the links, then ``listeners``. With ``fleet`` (every
     own ship's bridge, the first's hub ``hub``), each ship obeys its own bridge's links and
     sends on them (``bridge_node.exercise.fleet``)."""
-    records = []
-    if hub.record is not None:
-        ticks = TickRecord(hub.record.folder, 1.0 / rate_hz)
-        hub.add_listener(ticks)  # it counts the links' reads; stopped with the hub's other listeners
-        records = [ticks, CommandLog(hub.record.folder), SaveWriter(hub.record.folder)]
     hubs = [b.hub for b in fleet] or [hub]
+    records = [_tick_record(h, rate_hz) for h in hubs if h.record is not None]  # each ship's in its own folder
+    if hub.record is not None:
+        records += [CommandLog(hub.record.folder), SaveWriter(hub.record.folder)]
     return ExerciseTick(model, data, FleetOrders(fleet) if fleet else hub,
                         [*records, *(WorldTraffic(h.traffic, model.origin) for h in hubs),
                          *(fleet_listeners(model, fleet) if fleet else ()), LinkOutputs(hub), *listeners], commands)
+
+
+def _tick_record(hub: LinkHub, rate_hz: float) -> TickRecord:
+    """The tick log of a hub's session record: a listener of the hub too, counting its links'
+    reads (stopped with the hub's other listeners)."""
+    ticks = TickRecord(hub.record.folder, 1.0 / rate_hz)
+    hub.add_listener(ticks)
+    return ticks
 
 
 def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float, duration: float | None,

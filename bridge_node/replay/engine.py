@@ -14,7 +14,7 @@ import csv
 import math
 import time
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Protocol
@@ -47,7 +47,7 @@ CONDITIONS = {LEVEL_ICE: "level_ice", BROKEN_CHANNEL: "broken_channel", OPEN_WAT
 class Source(Protocol):
     """What a replay steps along: ``steps`` steps of ``dt`` s; logged time (s: unix when
     ``absolute``) at the start of step k; the orders for step k (a kinematic pose, or the
-    console's), alarm changes, and the links' clock (s)."""
+    console's; one per ship in a record of several), alarm changes, and the links' clock (s)."""
 
     dt: float
     steps: int
@@ -55,7 +55,7 @@ class Source(Protocol):
 
     def logged_time(self, k: int) -> float: ...
 
-    def inputs(self, k: int) -> tuple[Controls | None, list[Alarm], float]: ...
+    def inputs(self, k: int) -> tuple[Controls | Sequence[Controls] | None, list[Alarm], float]: ...
 
     def commands(self, k: int) -> tuple[Command, ...]: ...
 

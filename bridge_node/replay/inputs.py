@@ -26,7 +26,7 @@ from bridge_node.exercise.tick_record import HEADER as TICKS_HEADER
 from bridge_node.exercise.tick_record import TICKS_FILE
 from bridge_node.replay.csv_track import looks_like_csv_track, read_csv_track, read_gpx
 from bridge_node.replay.sentences import SentenceLog
-from bridge_node.replay.session import RecordedSession, read_session, record_files, refuse_fleet_record
+from bridge_node.replay.session import RecordedSession, read_session, record_files
 from bridge_node.replay.track import TrackLog
 
 _CANDUMP = re.compile(r"^\(\d+\.\d+\)\s+\S+\s+[0-9A-Fa-f]+#")
@@ -73,9 +73,7 @@ def read_text(path: Path) -> str:
 
 
 def _session_folder(path: Path) -> tuple[Path, set[str]]:
-    """A session folder and the record files in it; UserError if it is not one, or one of
-    several own ships."""
-    refuse_fleet_record(path)
+    """A session folder and the record files in it; UserError if it is not one."""
     names = {name for name in record_files().values() if (path / name).is_file()}
     if not names and not (path / TICKS_FILE).is_file():
         raise UserError(f"{path}: a folder, but not a session record (looked for {TICKS_FILE}, "

@@ -22,7 +22,6 @@ from bridge_node.exercise.command_log import COMMANDS_FILE, read_commands
 from bridge_node.control.commands import NODE_COMMANDS
 from bridge_node.links.faults import LinkFault
 from bridge_node.links.hub import LinkHub
-from bridge_node.common.errors import UserError
 from bridge_node.links.kind import LINK_KINDS, ReplayFeed
 from bridge_node.links.messages import Alarm
 from bridge_node.links.record_reader import check_tick_count
@@ -33,15 +32,6 @@ from sim_core.world import Controls
 
 NODE_CONFIG = "node.toml"  # the node config a run used, kept in its session record
 FLEET_FOLDER = "ships"  # the other own ships' link traffic in a session record, one folder each (ships/1, ...)
-
-
-def refuse_fleet_record(folder: Path) -> None:
-    """UserError for a record of several own ships (a ``ships/`` folder): its other ships'
-    link traffic is recorded, but a replay or a fork feeds one ship's links only, and would
-    re-simulate another exercise."""
-    if (folder / FLEET_FOLDER).is_dir():
-        raise UserError(f"{folder}: a record of several own ships ([[ships]]): their link traffic is kept "
-                        f"({FLEET_FOLDER}/), but replaying or forking such a record is not supported yet")
 
 
 def record_files() -> dict[str, str]:
