@@ -68,16 +68,20 @@ class SetClock:
 
 @dataclass(frozen=True)
 class SteeringFailure:
-    """The steering gear's pumps that work: 2 all, 1 (half the rate), 0 (the rudder stuck)."""
+    """The steering gear's pumps that work: 2 all, 1 (half the rate), 0 (the rudder stuck);
+    of the world's ``ship``-th ship (0: the own ship)."""
 
     pumps: int
+    ship: int = 0
 
 
 @dataclass(frozen=True)
 class EngineFailure:
-    """The share of the engine's power available: 1 all, 0 a blackout."""
+    """The share of the engine's power available: 1 all, 0 a blackout; of the world's
+    ``ship``-th ship (0: the own ship)."""
 
     power_share: float
+    ship: int = 0
 
 
 @dataclass
@@ -157,10 +161,12 @@ def apply_command(model: WorldModel, data: WorldData, command: Command) -> Comma
         data.environment = dataclasses.replace(data.environment, **dict(command.changes))
     elif isinstance(command, SetClock):
         data.epoch = command.utc - data.time
+    elif isinstance(command, (SteeringFailure, EngineFailure)) and not 0 <= command.ship < len(data.ships):
+        return None  # a ship the world lacks (a record replayed on another exercise)
     elif isinstance(command, SteeringFailure):
-        ship.steering_pumps = command.pumps
+        data.ships[command.ship].steering_pumps = command.pumps
     elif isinstance(command, EngineFailure):
-        ship.power_share = command.power_share
+        data.ships[command.ship].power_share = command.power_share
     elif isinstance(command, SensorFailure):
         data.sensors = fail_sensor(data.sensors, command, ship)
     elif isinstance(command, VESSEL_COMMANDS):

@@ -17,6 +17,7 @@ import can
 import numpy as np
 import pytest
 from conftest import exercise_toml
+from station_helpers import canvas_pixel, near, screenshot
 from links_helpers import console_frame
 from nmea2000.decoder import NMEA2000Decoder
 from pyais import decode as decode_ais
@@ -24,6 +25,12 @@ from pyais import decode as decode_ais
 from bridge_node.common.errors import UserError
 from bridge_node.common.network import free_port
 from bridge_node.exercise.tick_record import TICKS_FILE
+from bridge_node.control.client import request
+from bridge_node.control.commands import command_from_record, command_record
+from bridge_node.control.endpoint import ControlEndpoint
+from bridge_node.control.queue import CommandQueue
+from bridge_node.control.settings import ControlSettings
+from bridge_node.control.status import exercise_status
 from bridge_node.exercise.fleet import Bridge
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import ConfigError, NodeConfig, load_config
@@ -33,6 +40,7 @@ from bridge_node.replay.engine import Playback, run_replay
 from bridge_node.replay.fleet_session import session_source
 from bridge_node.replay.inputs import load_inputs
 from bridge_node.replay.session import FLEET_FOLDER, RecordedSession
+from bridge_node.station.harness import chromium, http, start, stop, wait_until
 from bridge_node.stream.codec import CodecError, decode, encode
 from bridge_node.stream.follow import FollowedShip, followed_model
 from sim_core.frames.geodesy import local_to_geodetic
@@ -40,28 +48,30 @@ from sim_core.frames.units import KNOT
 from sim_core.world import Controls, snapshot, step
 
 MMSI_A, MMSI_B = 230000001, 230000002
+TRAFFIC_RGB = (47, 210, 122)  # MAP_COLORS.traffic in the station's map.js
 
 
-def _helm(name: str, channel: str) -> dict:
-    return {"type": "can", "name": name, "channel": channel, "allowed_sources": [0x42], "timeout_s": 0.3}
+def _helm(name: str, channel: str, timeout_s: float) -> dict:
+    return {"type": "can", "name": name, "channel": channel, "allowed_sources": [0x42], "timeout_s": timeout_s}
 
 
 def _fleet_config(tmp_path, ais_port: int, second_east: float | None = None) -> NodeConfig:
-    """Two ships 150 m apart at the ice edge, each steered over its own virtual CAN bus;
-    the first also sends AIS on UDP ``ais_port``."""
+    """Two ships 150 m apart at the ice edge, each steered over its own virtual CAN bus
+    (the first's console stale after 0.3 s, the second's after 1 s: a loaded machine's
+    pauses do not fail it); the first also sends AIS on UDP ``ais_port``."""
     base = load_config()
     cfg = base.model_dump() | {
         "ice_field": base.ice_field.model_dump() | {"width": 400.0, "height": 400.0},
         "paths": base.paths.model_dump() | {"cache_dir": str(tmp_path / "tiles")}, "console": None,
         "ship": {"name": base.ship.name, "mmsi": MMSI_A},
         "exercise": base.exercise.model_dump() | {"start_north": -60.0, "start_east": 100.0},
-        "links": [_helm("helm_a", "fleet-a"),
+        "links": [_helm("helm_a", "fleet-a", 0.3),
                   {"type": "nmea0183", "name": "ais_a", "udp_port": ais_port,
                    "ais": {"mmsi": MMSI_A, "to_bow": 80, "to_stern": 70, "to_port": 11, "to_starboard": 11}}],
         "arbitration": {"rudder": ["helm_a"], "engine": ["helm_a"], "fail_safe_after_s": 0.5},
         "ships": [{"name": base.ship.name, "mmsi": MMSI_B, "ais_name": "FOLLOWER",
                    "start_north": -60.0, "start_east": 250.0 if second_east is None else second_east,
-                   "start_speed_kn": 4.0, "links": [_helm("helm_b", "fleet-b")],
+                   "start_speed_kn": 4.0, "links": [_helm("helm_b", "fleet-b", 1.0)],
                    "arbitration": {"rudder": ["helm_b"], "engine": ["helm_b"], "fail_safe_after_s": 0.5}}]}
     return NodeConfig.model_validate(cfg)
 
@@ -222,9 +232,11 @@ def test_a_ship_without_links_or_an_mmsi_is_refused(tmp_path):
     assert str(path) in r.stderr and "Traceback" not in r.stderr
 
 
-def test_the_stream_carries_every_ship_and_a_bridge_renders_from_its_own_ship(tmp_path):
-    """``icebridge run`` with a second ship whose bridge is rendered too: each render process
-    rides its own ship, the run's summary reports both ships, and its record replays both."""
+@pytest.fixture(scope="module")
+def fleet_run(tmp_path_factory):
+    """``icebridge run`` for 12 s, recorded, with a second ship whose bridge is rendered too;
+    each ship's instruments on NMEA 0183 (UDP). The config, the summary and the folder."""
+    tmp_path = tmp_path_factory.mktemp("fleet_run")
     channel = '[[render.channels]]\nname = "bow"\nwidth = 160\nheight = 90\n'
     path = exercise_toml(tmp_path, channel)
     text = path.read_text().replace('[ship]\nname = "polar_cargo"\n', f'[ship]\nname = "polar_cargo"\nmmsi = {MMSI_A}\n')
@@ -236,7 +248,13 @@ def test_the_stream_carries_every_ship_and_a_bridge_renders_from_its_own_ship(tm
                         "--out", str(tmp_path / "out"), "--json", "--render", "local"],
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
-    summary = json.loads(r.stdout)
+    return path, json.loads(r.stdout), tmp_path
+
+
+def test_each_bridge_renders_from_its_own_ship_and_the_record_replays_both(fleet_run):
+    """Each render process rides its own ship, the run's summary reports both ships, and its
+    record replays both."""
+    _, summary, tmp_path = fleet_run
     (second,) = summary["other_ships"]
     assert second["north_m"] > -400.0 and second["east_m"] == pytest.approx(250.0, abs=5.0)  # under way
     rendered = {p["ship"]: p for p in summary["render_processes"]}
@@ -254,9 +272,40 @@ def test_the_stream_carries_every_ship_and_a_bridge_renders_from_its_own_ship(tm
     assert replayed["other_ships"] == [{"north_m": second["north_m"], "east_m": second["east_m"]}]
 
 
-def test_a_follower_sees_the_first_ship_as_traffic_and_bad_ship_reports_are_refused(tmp_path):
-    cfg = _fleet_config(tmp_path, 10199)
-    model = build_world(cfg, None)
+def test_the_debrief_map_plays_back_every_ship(fleet_run):
+    config, summary, tmp_path = fleet_run
+    (second,) = summary["other_ships"]
+    port = free_port()
+    station = start(tmp_path, "debrief", "instructor", "--config", str(config), "--record", summary["record"],
+                    "--port", str(port))
+    try:
+        url = f"http://127.0.0.1:{port}/"
+        wait_until(lambda: station.poll() is None and http(url)[0] == 200, 120, "the debrief page")
+        with chromium() as browser:
+            browser.get(url)
+            wait_until(lambda: browser.execute_script("return !!(playback.data && map.frame)"), 30, "the record played")
+            assert browser.execute_script("return playback.data.ships") == [1]
+            browser.execute_script("seekTo(playback.data.duration); map.setFollow(false); map.cx = arguments[0];"
+                                   "map.cy = arguments[1]; map.scale = 1; map.dirty = true;",
+                                   second["east_m"], second["north_m"])
+            (ship,) = wait_until(lambda: browser.execute_script("return map.frame.traffic"), 10, "the other ship")
+            # where its instruments were last told it was (the last RMC, sent up to a second before the end)
+            assert math.dist((ship["x"], ship["y"]), (second["east_m"], second["north_m"])) < 8.0
+            x, y = (round(v) for v in canvas_pixel(browser, ship["x"], ship["y"]))
+            assert near(screenshot(browser)[y - 3:y + 4, x - 3:x + 4], TRAFFIC_RGB, 20).mean() > 0.5
+    finally:
+        stop(station)
+
+
+@pytest.fixture(scope="module")
+def fleet_world(tmp_path_factory):
+    """The two-ship config and its compiled world."""
+    cfg = _fleet_config(tmp_path_factory.mktemp("fleet_world"), 10199)
+    return cfg, build_world(cfg, None)
+
+
+def test_a_follower_sees_the_first_ship_as_traffic_and_bad_ship_reports_are_refused(fleet_world):
+    cfg, model = fleet_world
     data = start_world(model, cfg)
     for _ in range(5):
         step(model, data, 0.1, [Controls(rudder=0.1), Controls(rudder=-0.2)])
@@ -269,6 +318,7 @@ def test_a_follower_sees_the_first_ship_as_traffic_and_bad_ship_reports_are_refu
     assert rows.tolist() == [(MMSI_A, events.ship.east, events.ship.north, events.ship.heading,
                               events.ship.speed_over_ground, 150.0, 22.0)]
     assert followed_model(model, 1).ships[0] is model.ships[1]
+    assert exercise_status(events)["other_ships"][0]["north_m"] == pytest.approx(b.outputs.north, abs=1e-3)
     with pytest.raises(ValueError, match="the stream carries 1 ships; ship 1 is none"):
         follow(dataclasses.replace(events, others=()), traffic)
     frames = encode(events)
@@ -278,4 +328,24 @@ def test_a_follower_sees_the_first_ship_as_traffic_and_bad_ship_reports_are_refu
         others = [header["others"][0] | bad]
         with pytest.raises(CodecError):
             decode([frames[0], json.dumps(header | {"others": others}).encode(), *frames[2:]])
+
+
+def test_the_instructor_fails_one_ships_steering_and_engine(fleet_world):
+    cfg, model = fleet_world
+    data = start_world(model, cfg)
+    settings = ControlSettings(endpoint=f"tcp://127.0.0.1:{free_port()}")
+    queue = CommandQueue(settings.queue, settings.per_tick)
+    with ControlEndpoint(settings, queue, dict, ships=2):
+        for command in ({"command": "steering_failure", "pumps_failed": 2, "ship": 1},
+                        {"command": "engine_failure", "power_percent": 30.0, "ship": 1}):
+            assert request(settings.endpoint, {"command": command}, None)["ok"]
+        refused = request(settings.endpoint, {"command": {"command": "engine_failure", "power_percent": 0.0,
+                                                          "ship": 2}}, None)
+    assert not refused["ok"] and "ship = 2: this exercise has 2 own ship(s): 0 ([ship]) to 1" in refused["error"]
+    applied = queue.take(model, data)
+    step(model, data, 0.1, None, applied)
+    (a, b), records = data.ships, [command_record(c) for c in applied]
+    assert (b.steering_pumps, b.power_share) == (0, 0.3) and (a.steering_pumps, a.power_share) == (2, 1.0)
+    assert [r["ship"] for r in records] == [1, 1]  # the session record's command log keeps the ship
+    assert command_from_record(records[0]) == applied[0]
 

@@ -44,10 +44,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         one = actions.add_parser(name, help=help_text)
         one.add_argument("speed_kn", type=float)
         one.add_argument(direction, type=float, help="deg true (the wind: where from; the current: where to)")
-    actions.add_parser("steering-failure", help="steering gear pumps failed: 0 (repaired), 1 (half rate), "
-                                                "2 (rudder stuck)").add_argument("pumps_failed", type=int)
-    actions.add_parser("engine-failure", help="engine power left, percent: 100 (repaired) .. 0 "
-                                              "(blackout)").add_argument("power_percent", type=float)
+    for name, (help_text, value, kind) in {
+            "steering-failure": ("steering gear pumps failed: 0 (repaired), 1 (half rate), 2 (rudder stuck)",
+                                 "pumps_failed", int),
+            "engine-failure": ("engine power left, percent: 100 (repaired) .. 0 (blackout)", "power_percent",
+                               float)}.items():
+        failure = actions.add_parser(name, help=help_text)
+        failure.add_argument(value, type=kind)
+        failure.add_argument("--ship", type=int, default=0, metavar="K",
+                             help="the K-th ship of [[ships]] (default 0: the first ship, [ship])")
     _failure_actions(actions)
     actions.add_parser("save", help="a save point of the exercise now, in its session record (icebridge run "
                                     "--fork it)").add_argument("name", help="letters, digits, - and _ (1-40)")
@@ -137,9 +142,9 @@ def command_of(args: argparse.Namespace) -> dict:
     if a == "current":
         return {"command": "current", "speed_kn": args.speed_kn, "to_deg": args.to_deg}
     if a == "steering-failure":
-        return {"command": "steering_failure", "pumps_failed": args.pumps_failed}
+        return {"command": "steering_failure", "pumps_failed": args.pumps_failed, "ship": args.ship}
     if a == "engine-failure":
-        return {"command": "engine_failure", "power_percent": args.power_percent}
+        return {"command": "engine_failure", "power_percent": args.power_percent, "ship": args.ship}
     if a in ("sensor-failure", "link-fault"):
         return _failure_command(args)
     if a == "save":

@@ -42,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
     console = Console(stderr=args.json)
     with Progress(console=console, transient=True) as progress:
         model = build_world(cfg, args.config, progress)
-        data = start_world(model, cfg)
+        data = start_world(model, cfg, args.config)
         task = progress.add_task(f"transit, {'with' if reverse else 'without'} reverse replacement",
                                  total=args.distance)
         series = run_transit(model, data, args.distance, args.dt, lambda d: progress.update(task, completed=d))

@@ -36,7 +36,7 @@ def run(args: argparse.Namespace) -> int:
     console = Console()
     with Progress(console=console, transient=True) as progress:
         model = build_world(cfg, args.config, progress)
-        data = start_world(model, cfg)
+        data = start_world(model, cfg, args.config)
         steps = round(args.time / DT)
         task = progress.add_task(f"running the exercise to t = {args.time:g} s", total=steps)
         for _ in range(steps):

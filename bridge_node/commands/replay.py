@@ -180,7 +180,7 @@ def _session_replay(cfg: NodeConfig, args: argparse.Namespace, session: Recorded
     info = {"kind": "session", "files": [str(session.folder / f) for f in session.files],
             "ticks": len(session.ticks), "exact": session.exact, "inputs_read": dict(session.reads),
             "bad_data": dict(session.bad)}
-    data = start_world(model, cfg)  # the recorded run's exercise clock and environment (its node.toml)
+    data = start_world(model, cfg, args.config)  # the recorded run's exercise clock and environment (its node.toml)
     return _Prepared(model, data, source, seek, info)
 
 

@@ -125,7 +125,7 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
         ice = {"ice": list(model.scene.class_names)}  # what set_ice may lay
         with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last, data, hub) | ice,
                              [link.name for h in hubs for link in h.links], record,
-                             model.scene.class_names) as control, station:
+                             model.scene.class_names, len(model.ships)) as control, station:
             stats = run_realtime(model, data, hub, rate, args.duration,
                                  [StreamOutput(publisher, traffic, model.origin), status], commands=queue,
                                  scheduler=(cfg.realtime.scheduler, cfg.realtime.priority), fleet=fleet)

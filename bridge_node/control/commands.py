@@ -59,6 +59,7 @@ from bridge_node.control.save_point import SAVE_NAME, SaveRequest
 from bridge_node.links.nmea0183.ais import SIX_BIT_TEXT
 from bridge_node.links.faults import LINK_FAULT_KINDS, LinkFault
 from sim_core.frames.units import KNOT
+from sim_core.ice.hull_bodies import MAX_HULLS
 from sim_core.instructor import (
     AddVessel,
     Command,
@@ -191,20 +192,26 @@ class CurrentCommand(CommandBase):
         return SetEnvironment((("current_speed", self.speed_kn * KNOT), ("current_to", math.radians(self.to_deg))))
 
 
-class SteeringFailureCommand(CommandBase):
+class ShipCommand(CommandBase):
+    """A command to one own ship: ``ship`` 0 the first (``[ship]``), k the k-th of ``[[ships]]``."""
+
+    ship: int = Field(0, ge=0, le=MAX_HULLS - 1)
+
+
+class SteeringFailureCommand(ShipCommand):
     command: Literal["steering_failure"]
     pumps_failed: int = Field(ge=0, le=2)
 
     def to_world(self, model: WorldModel, data: WorldData) -> Command:
-        return SteeringFailure(2 - self.pumps_failed)
+        return SteeringFailure(2 - self.pumps_failed, self.ship)
 
 
-class EngineFailureCommand(CommandBase):
+class EngineFailureCommand(ShipCommand):
     command: Literal["engine_failure"]
     power_percent: float = Field(ge=0.0, le=100.0)
 
     def to_world(self, model: WorldModel, data: WorldData) -> Command:
-        return EngineFailure(self.power_percent / 100.0)
+        return EngineFailure(self.power_percent / 100.0, self.ship)
 
 
 class SensorFailureCommand(CommandBase):

@@ -29,6 +29,7 @@ from bridge_node.control.commands import (
     CommandError,
     LinkFaultCommand,
     SaveCommand,
+    ShipCommand,
     WireCommand,
     parse_command,
 )
@@ -49,8 +50,10 @@ class ControlEndpoint:
     for status requests. A context manager; stopping twice is safe."""
 
     def __init__(self, settings: ControlSettings, queue: CommandQueue, status: Callable[[], dict],
-                 links: Sequence[str] = (), record: Path | None = None, ice: Sequence[str] = ()) -> None:
+                 links: Sequence[str] = (), record: Path | None = None, ice: Sequence[str] = (),
+                 ships: int = 1) -> None:
         self.settings, self.queue, self.status = settings, queue, status
+        self.ships = ships  # the exercise's own ships
         self.links, self.record = tuple(links), record  # the links' names; the session record's folder
         self.ice = tuple(ice)  # the names of the ice the exercise can lay (``SceneModel.class_names``)
         self._save_names: set[str] = set()  # save points asked for (a file is written at its tick)
@@ -153,6 +156,9 @@ class ControlEndpoint:
         if isinstance(command, SetIceCommand) and command.ice not in self.ice:
             raise CommandError(f"ice = {json.dumps(command.ice)}: this exercise has no such ice; it has: "
                                f"{', '.join(json.dumps(name) for name in self.ice) or 'none'}")
+        if isinstance(command, ShipCommand) and command.ship >= self.ships:
+            raise CommandError(f"ship = {command.ship}: this exercise has {self.ships} own ship(s): 0 ([ship])"
+                               + (f" to {self.ships - 1} ([[ships]])" if self.ships > 1 else ""))
         if not isinstance(command, SaveCommand):
             return {}
         if self.record is None:

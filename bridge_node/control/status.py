@@ -9,21 +9,28 @@ import math
 
 from bridge_node.links.hub import LinkHub
 from sim_core.frames.units import KNOT
+from sim_core.ship.outputs import ShipOutputs
 from sim_core.world import WorldData, WorldEvents
 
 
+def _ship_fields(s: ShipOutputs) -> dict:
+    """A ship's position, heading, speed, rudder and shaft in the bridge's units."""
+    return {"latitude_deg": round(math.degrees(s.latitude), 7), "longitude_deg": round(math.degrees(s.longitude), 7),
+            "north_m": round(s.north, 3), "east_m": round(s.east, 3),
+            "heading_deg": round(math.degrees(s.heading), 2), "sog_kn": round(s.speed_over_ground / KNOT, 2),
+            "rudder_deg": round(math.degrees(s.rudder_angle), 2), "shaft_rpm": round(s.shaft_rps * 60.0, 1)}
+
+
 def exercise_status(events: WorldEvents, data: WorldData | None = None, hub: LinkHub | None = None) -> dict:
-    """Time, exercise clock, freeze, the own ship and the environment of a step's events;
+    """Time, exercise clock, freeze, the own ship (and the other own ships, ``other_ships``)
+    and the environment of a step's events;
     with the world's data, the ship's orders and failures; with the hub, link health and
     active alarms."""
     s, e = events.ship, events.environment
     status = {
         "seq": events.seq, "time_s": round(events.time, 3), "frozen": e.frozen,
         "utc": dt.datetime.fromtimestamp(s.utc, dt.timezone.utc).isoformat(timespec="seconds"),
-        "latitude_deg": round(math.degrees(s.latitude), 7), "longitude_deg": round(math.degrees(s.longitude), 7),
-        "north_m": round(s.north, 3), "east_m": round(s.east, 3),
-        "heading_deg": round(math.degrees(s.heading), 2), "sog_kn": round(s.speed_over_ground / KNOT, 2),
-        "rudder_deg": round(math.degrees(s.rudder_angle), 2), "shaft_rpm": round(s.shaft_rps * 60.0, 1),
+        **_ship_fields(s), "other_ships": [_ship_fields(o.outputs) for o in events.others],
         "visibility_m": e.visibility, "wind_kn": round(e.wind_speed / KNOT, 2),
         "wind_from_deg": round(math.degrees(e.wind_from), 1), "current_kn": round(e.current_speed / KNOT, 2),
         "current_to_deg": round(math.degrees(e.current_to), 1), "vessels": len(events.vessels),

@@ -2,7 +2,8 @@
 tx sentences: RMC position, speed and course; HDT heading; RSA rudder; RPM shaft; XDR ice
 resistance; ALR alarms) and the instructor's commands (``commands.log``, timed by
 ``ticks.log``; the areas where the instructor laid ice with them), as time series the page
-plays back on the map, and as time plots (PNG)."""
+plays back on the map, and as time plots (PNG). A record of several own ships adds each
+other ship's track and heading from what its own instruments were sent (``ships/<k>/``)."""
 from __future__ import annotations
 
 import io
@@ -19,6 +20,7 @@ from bridge_node.control.commands import CommandError, command_from_record
 from bridge_node.links.record_reader import complete_lines, read_nmea_log
 from bridge_node.common.errors import UserError
 from bridge_node.exercise.tick_record import TICKS_FILE, read_ticks
+from bridge_node.replay.session import FLEET_FOLDER
 from bridge_node.station.events import describe
 from bridge_node.station.wire import pack
 from sim_core.frames.geodesy import geodetic_to_local
@@ -40,6 +42,7 @@ class Debrief:
     position: tuple[list[float], list[float], list[float]] = field(default_factory=lambda: ([], [], []))
     events: list[dict] = field(default_factory=list)
     skipped: int = 0  # tx sentences that did not parse
+    others: dict[int, Debrief] = field(default_factory=dict)  # k -> the k-th other own ship's (ships/<k>/)
 
     @property
     def start(self) -> float:
@@ -99,11 +102,29 @@ def _commands(d: Debrief) -> None:
 
 
 def load_debrief(folder: Path, origin: tuple[float, float]) -> Debrief:
-    """The debrief of a session record folder; UserError if it is no record or holds no
-    position sent. ``origin``: the exercise's (latitude, longitude), rad."""
+    """The debrief of a session record folder, with the other own ships' tracks where it has
+    them; UserError if it is no record or holds no position sent. ``origin``: the
+    exercise's (latitude, longitude), rad."""
     folder = Path(folder)
     if not (folder / "nmea.log").is_file():
         raise UserError(f"--record {folder}: no nmea.log there (is it a session record folder?)")
+    d = _sent(folder, origin)
+    if not d.position[0]:
+        raise UserError(f"--record {folder}: its nmea.log holds no position the node sent (RMC); was an NMEA "
+                        "0183 output link configured?")
+    _commands(d)
+    d.events.sort(key=lambda e: e["t"] if math.isfinite(e["t"]) else math.inf)
+    ships = folder / FLEET_FOLDER
+    for path in sorted(ships.iterdir() if ships.is_dir() else [], key=lambda p: p.name):
+        if path.name.isdigit() and (path / "nmea.log").is_file():  # a ship without NMEA outputs has no track here
+            other = _sent(path, origin)
+            d.others[int(path.name)] = other
+            d.skipped += other.skipped
+    return d
+
+
+def _sent(folder: Path, origin: tuple[float, float]) -> Debrief:
+    """What the node sent on the NMEA links recorded in ``folder``."""
     d = Debrief(folder)
     records, _ = read_nmea_log(folder / "nmea.log")
     for r in records:
@@ -113,11 +134,6 @@ def load_debrief(folder: Path, origin: tuple[float, float]) -> Debrief:
             _add(d, r.unix_time, r.sentence, origin)
         except (pynmea2.ParseError, ValueError, TypeError, IndexError, AttributeError):
             d.skipped += 1
-    if not d.position[0]:
-        raise UserError(f"--record {folder}: its nmea.log holds no position the node sent (RMC); was an NMEA "
-                        "0183 output link configured?")
-    _commands(d)
-    d.events.sort(key=lambda e: e["t"] if math.isfinite(e["t"]) else math.inf)
     return d
 
 
@@ -127,9 +143,14 @@ def debrief_message(d: Debrief) -> bytes:
     arrays = {"pos_t": np.array(d.position[0]) - t0, "pos_east": d.position[1], "pos_north": d.position[2]}
     for name, (t, v) in d.series.items():
         arrays[f"{name}_t"], arrays[name] = np.array(t) - t0, np.array(v, dtype=float)
+    for k, other in d.others.items():  # "ship<k>_t", "ship<k>_east"...: its positions and headings
+        arrays |= {f"ship{k}_t": np.array(other.position[0]) - t0, f"ship{k}_east": other.position[1],
+                   f"ship{k}_north": other.position[2], f"ship{k}_heading_t": np.array(other.series["heading"][0]) - t0,
+                   f"ship{k}_heading": other.series["heading"][1], f"ship{k}_sog": other.series["sog"][1]}
     events = [{**e, "t": e["t"] - t0} for e in d.events if math.isfinite(e["t"])]
     return pack({"type": "debrief", "record": str(d.folder), "start_unix": t0, "duration": d.end - t0,
-                 "events": events, "skipped": d.skipped}, {k: np.asarray(v, dtype=np.float64) for k, v in arrays.items()})
+                 "events": events, "skipped": d.skipped, "ships": sorted(d.others)},
+                {k: np.asarray(v, dtype=np.float64) for k, v in arrays.items()})
 
 
 def plot_png(d: Debrief) -> bytes:

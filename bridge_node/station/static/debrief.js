@@ -1,6 +1,7 @@
 // The debrief of a session record on the same map: the ship played back from what the node
-// sent the instruments (play, pause, seek, 1-1000x), the commands and alarms in the event
-// log as the time passes them, and the record's time plots (exported as PNG).
+// sent the instruments (play, pause, seek, 1-1000x), the other own ships of a record of
+// several beside it, the commands and alarms in the event log as the time passes them, and
+// the record's time plots (exported as PNG).
 "use strict";
 
 const playback = { data: null, t: 0, playing: false, last: 0, shownEvents: -1 };
@@ -49,6 +50,20 @@ function tick(now) {
   requestAnimationFrame(tick);
 }
 
+// the record's other own ships at time t, as the map draws traffic (their sizes are not in
+// the record: drawn at the map's default)
+function otherShips(d, t) {
+  const a = d.a;
+  return (d.ships || []).map((k) => {
+    const heading = sample(a[`ship${k}_heading_t`], a[`ship${k}_heading`], t, true);
+    return {
+      id: `ship ${k}`, x: sample(a[`ship${k}_t`], a[`ship${k}_east`], t), y: sample(a[`ship${k}_t`], a[`ship${k}_north`], t),
+      heading: Number.isFinite(heading) ? heading * Math.PI / 180 : 0, speed_kn: sample(a[`ship${k}_t`], a[`ship${k}_sog`], t),
+      length: 0, beam: 0,
+    };
+  });
+}
+
 function seekTo(t, playing) {
   const d = playback.data, a = d.a;
   playback.t = t;
@@ -66,7 +81,7 @@ function seekTo(t, playing) {
   };
   const travelled = [];
   for (let i = 0; i < a.pos_t.length && a.pos_t[i] <= t; i++) travelled.push([a.pos_east[i], a.pos_north[i]]);
-  map.showDebrief(ship, travelled);
+  map.showDebrief(ship, travelled, otherShips(d, t));
   shipPanel({ ship });
   $("utc").textContent = utc.slice(11, 19);
   $("sim-time").textContent = `${t.toFixed(1)} s`;

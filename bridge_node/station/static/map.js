@@ -124,10 +124,11 @@ class MapView {
     this.dirty = true;
   }
 
-  // a debrief's state: the ship as a frame header's ship, the track travelled so far; the
-  // field as it was laid (the record holds what the instruments got, not the ice's drift)
-  showDebrief(ship, travelled) {
-    this.frame = { ship, traffic: [] };
+  // a debrief's state: the ship as a frame header's ship, the track travelled so far, the
+  // other own ships as traffic; the field as it was laid (the record holds what the
+  // instruments got, not the ice's drift)
+  showDebrief(ship, travelled, traffic = []) {
+    this.frame = { ship, traffic };
     this.iceOffset = [0, 0];
     this.track = travelled;
     if (this.follow) { this.cx = ship.east; this.cy = ship.north; }
