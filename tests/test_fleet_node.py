@@ -25,6 +25,7 @@ from pyais import decode as decode_ais
 from bridge_node.common.errors import UserError
 from bridge_node.common.network import free_port
 from bridge_node.exercise.tick_record import TICKS_FILE
+from bridge_node.hil.run_console import RunConsole
 from bridge_node.control.client import request
 from bridge_node.control.commands import command_from_record, command_record
 from bridge_node.control.endpoint import ControlEndpoint
@@ -219,6 +220,15 @@ def test_two_ships_on_one_link_are_refused(tmp_path):
     same_udp = SECOND + '[[ships.links]]\nname = "b"\ntype = "nmea0183"\nudp_port = 10110\n'
     assert "ships.0.links.0.udp_port = 10110: UDP 127.0.0.1:10110 is also link 'instruments''s" in \
         _config_error(tmp_path, same_udp)
+
+
+def test_a_ships_link_named_as_the_run_console_is_refused(tmp_path):
+    path = tmp_path / "console_named.toml"
+    path.write_text(load_config.__globals__["DEFAULT_CONFIG"].read_text().replace(
+        'name = "polar_cargo"      # config/ships/<name>.toml', 'name = "polar_cargo"\nmmsi = 230000001')
+        + SECOND + '[[ships.links]]\nname = "console"\ntype = "nmea0183"\nudp_port = 10111\n')
+    with pytest.raises(UserError, match="the console's link is named 'console', as a link of links \\(or of a ship"):
+        RunConsole(load_config(path), str(path), tmp_path)
 
 
 def test_a_ship_without_links_or_an_mmsi_is_refused(tmp_path):

@@ -45,9 +45,10 @@ class RunConsole:
         self._process: subprocess.Popen | None = None
         self._stopped = False  # the run stopped the console (else it exited on its own)
         self._stack = ExitStack()
-        if self.settings is not None and LINK_NAME in {link.name for link in cfg.links}:
+        names = {link.name for links in [cfg.links, *(ship.links for ship in cfg.ships)] for link in links}
+        if self.settings is not None and LINK_NAME in names:
             raise UserError(f"{self.where}: the console's link is named {LINK_NAME!r}, as a link of "
-                            "links already is; rename that link")
+                            "links (or of a ship's links) already is; rename that link")
 
     def __enter__(self) -> RunConsole:
         if self.settings is None:

@@ -19,7 +19,6 @@ from sim_core.ship.particulars import TELEGRAPH_POSITIONS
 
 SHIP_NAME = r"^[A-Za-z0-9_\-]{1,64}$"  # ships/<name>.toml
 AIS_NAME = r"^[A-Z0-9 @\-.]*$"  # a name as AIS sends it (a subset of its 6-bit text)
-MMSI = Field(None, ge=100_000_000, le=999_999_999)
 
 
 class ShipChoice(Params):
@@ -27,7 +26,7 @@ class ShipChoice(Params):
     how the other own ships know it (required where ``[[ships]]`` lists any)."""
 
     name: str = Field(pattern=SHIP_NAME)
-    mmsi: int | None = Field(MMSI.default, ge=100_000_000, le=999_999_999,
+    mmsi: int | None = Field(None, ge=100_000_000, le=999_999_999,
                              description="its MMSI in the other own ships' AIS and DIS")
     ais_name: str = Field("", max_length=20, pattern=AIS_NAME, description="its name there; unset: the ship "
                           "file's name")
@@ -82,7 +81,8 @@ def check_fleet(own: ShipChoice, own_links: Sequence[LinkSettingsBase], has_cons
                 ships: Sequence[OtherShipSettings]) -> None:
     """The rules between the exercise's ships. Every ship has links of its own (the first
     may have its run console's), an MMSI of its own, and no link name, device, port or UDP
-    destination is two links' (a device or port may be two links' of one ship). ValueError naming the key, the value and the other holder."""
+    destination is two ships' (a device or port may be two links' of one ship; a UDP
+    destination is one link's). ValueError naming the key, the value and the other holder."""
     fleet = [("ship", "", own_links)] + [(f"ships.{i}", f"ships.{i}.", s.links) for i, s in enumerate(ships)]
     if ships:
         if own.mmsi is None:
