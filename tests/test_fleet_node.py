@@ -294,7 +294,8 @@ def test_the_debrief_map_plays_back_every_ship(fleet_run):
         with chromium() as browser:
             browser.get(url)
             wait_until(lambda: browser.execute_script("return !!(playback.data && map.frame)"), 30, "the record played")
-            assert browser.execute_script("return playback.data.ships") == [1]
+            (shown,) = browser.execute_script("return playback.data.ships")
+            assert (shown["k"], shown["name"], shown["length"], shown["beam"]) == (1, "POLAR CARGO", 150.0, 24.0)
             browser.execute_script("seekTo(playback.data.duration); map.setFollow(false); map.cx = arguments[0];"
                                    "map.cy = arguments[1]; map.scale = 1; map.dirty = true;",
                                    second["east_m"], second["north_m"])

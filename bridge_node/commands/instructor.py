@@ -134,9 +134,16 @@ def _debrief(args: argparse.Namespace, cfg, token: str | None) -> int:
     broadcast.waiting = None  # nothing live to wait for
     station = Station(_geometry(model, cfg), broadcast, None, token, not cfg.instructor.allow_network,
                       {"mode": "debrief", "ship": cfg.ship.name, "record": str(debrief.folder)},
-                      (debrief_message(debrief), plots))
+                      (debrief_message(debrief, _fleet(cfg, model)), plots))
     print(json.dumps({"url": _serve(station, sock, args, f"debrief of {debrief.folder}")}))
     return 0
+
+
+def _fleet(cfg, model) -> dict[int, tuple[str, float, float]]:
+    """The config's other own ships as the debrief names and draws them: k -> (name,
+    length m, beam m)."""
+    return {k: (ship.shown_name(), model.ships[k].particulars.length, model.ships[k].particulars.beam)
+            for k, ship in enumerate(cfg.ships, start=1)}
 
 
 def _serve(station: Station, sock: socket.socket, args: argparse.Namespace, what: str) -> str:

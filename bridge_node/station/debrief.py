@@ -137,8 +137,11 @@ def _sent(folder: Path, origin: tuple[float, float]) -> Debrief:
     return d
 
 
-def debrief_message(d: Debrief) -> bytes:
-    """The page's ``debrief`` message: times relative to the record's start (s)."""
+def debrief_message(d: Debrief, fleet: dict[int, tuple[str, float, float]] | None = None) -> bytes:
+    """The page's ``debrief`` message: times relative to the record's start (s). ``fleet``:
+    the other own ships' names, lengths and beams (m) by k, as the exercise's config gives
+    them; a ship it lacks is "ship k", drawn at the map's default size."""
+    fleet = fleet or {}
     t0 = d.start
     arrays = {"pos_t": np.array(d.position[0]) - t0, "pos_east": d.position[1], "pos_north": d.position[2]}
     for name, (t, v) in d.series.items():
@@ -149,7 +152,9 @@ def debrief_message(d: Debrief) -> bytes:
                    f"ship{k}_heading": other.series["heading"][1], f"ship{k}_sog": other.series["sog"][1]}
     events = [{**e, "t": e["t"] - t0} for e in d.events if math.isfinite(e["t"])]
     return pack({"type": "debrief", "record": str(d.folder), "start_unix": t0, "duration": d.end - t0,
-                 "events": events, "skipped": d.skipped, "ships": sorted(d.others)},
+                 "events": events, "skipped": d.skipped,
+                 "ships": [dict(zip(("k", "name", "length", "beam"), (k, *fleet.get(k, (f"ship {k}", 0.0, 0.0)))))
+                           for k in sorted(d.others)]},
                 {k: np.asarray(v, dtype=np.float64) for k, v in arrays.items()})
 
 

@@ -50,16 +50,16 @@ function tick(now) {
   requestAnimationFrame(tick);
 }
 
-// the record's other own ships at time t, as the map draws traffic (their sizes are not in
-// the record: drawn at the map's default)
+// the record's other own ships at time t, as the map draws traffic (named and sized as the
+// exercise's config gives them; a size of 0 is drawn at the map's default)
 function otherShips(d, t) {
   const a = d.a;
-  return (d.ships || []).map((k) => {
+  return (d.ships || []).map(({ k, name, length, beam }) => {
     const heading = sample(a[`ship${k}_heading_t`], a[`ship${k}_heading`], t, true);
     return {
-      id: `ship ${k}`, x: sample(a[`ship${k}_t`], a[`ship${k}_east`], t), y: sample(a[`ship${k}_t`], a[`ship${k}_north`], t),
+      id: name, x: sample(a[`ship${k}_t`], a[`ship${k}_east`], t), y: sample(a[`ship${k}_t`], a[`ship${k}_north`], t),
       heading: Number.isFinite(heading) ? heading * Math.PI / 180 : 0, speed_kn: sample(a[`ship${k}_t`], a[`ship${k}_sog`], t),
-      length: 0, beam: 0,
+      length, beam,
     };
   });
 }
