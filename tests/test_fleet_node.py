@@ -38,7 +38,7 @@ from bridge_node.node.config import ConfigError, NodeConfig, load_config
 from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.replay.engine import Playback, run_replay
-from bridge_node.replay.fleet_session import session_source
+from bridge_node.node.fleet_session import session_source
 from bridge_node.replay.inputs import load_inputs
 from bridge_node.replay.session import FLEET_FOLDER, RecordedSession
 from bridge_node.station.harness import chromium, http, start, stop, wait_until
@@ -293,7 +293,7 @@ def test_the_debrief_map_plays_back_every_ship(fleet_run):
         wait_until(lambda: station.poll() is None and http(url)[0] == 200, 120, "the debrief page")
         with chromium() as browser:
             browser.get(url)
-            wait_until(lambda: browser.execute_script("return !!(playback.data && map.frame)"), 30, "the record played")
+            wait_until(lambda: browser.execute_script("return !!(playback.data && map.frame)"), 90, "the record played")
             (shown,) = browser.execute_script("return playback.data.ships")
             assert (shown["k"], shown["name"], shown["length"], shown["beam"]) == (1, "POLAR CARGO", 150.0, 24.0)
             browser.execute_script("seekTo(playback.data.duration); map.setFollow(false); map.cx = arguments[0];"

@@ -360,7 +360,7 @@ def test_debrief_of_the_session_record(exercise, browser, tmp_path):
         wait_until(lambda: station.poll() is None and http(url)[0] == 200, 120, "the debrief page")
         assert http(url + "plots.png")[1][1:4] == "PNG"
         browser.get(url)
-        wait_until(lambda: browser.execute_script("return !!(playback.data && map.frame)"), 30, "the record played")
+        wait_until(lambda: browser.execute_script("return !!(playback.data && map.frame)"), 90, "the record played")
         assert browser.find_element("id", "debrief-card").is_displayed()
         assert not browser.find_element("id", "freeze").is_displayed()
         duration = browser.execute_script("return playback.data.duration")

@@ -33,7 +33,7 @@ from bridge_node.replay.csv_track import parse_mapping
 from bridge_node.replay.engine import MAX_SPEED, MIN_SPEED, Playback, ReplayStats, Source, run_replay
 from bridge_node.replay.inputs import LOOKED_FOR, VesselChoice, check_span, load_inputs
 from bridge_node.node.fork import resimulate_shown
-from bridge_node.replay.fleet_session import session_source
+from bridge_node.node.fleet_session import session_source
 from bridge_node.replay.session import RecordedSession, SessionSource, recorded_config
 from bridge_node.replay.track import Track, TrackLog, TrackPath, TrackSource, clean_for, origin_under
 from bridge_node.reports.replay import gap_summary, plot_replay

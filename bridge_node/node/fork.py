@@ -14,7 +14,7 @@ from bridge_node.exercise.tick import ExerciseTick
 from bridge_node.node.config import NodeConfig, load_config
 from bridge_node.common.errors import UserError
 from bridge_node.replay.engine import StepOrders
-from bridge_node.replay.fleet_session import session_source
+from bridge_node.node.fleet_session import session_source
 from bridge_node.replay.session import NODE_CONFIG, read_session, record_files
 from sim_core.world import WorldData, WorldModel
 
