@@ -21,6 +21,7 @@ import numpy as np
 from sim_core.frames.ship_frame import world_vector_to_ship
 from sim_core.ice.step import HullMotion, IceStepReport
 from sim_core.ship import model as ship_model
+from sim_core.ship.collision import ShipContact, ship_collisions
 from sim_core.ship.model import OrderRejection, ShipData, ShipModel
 from sim_core.ship.outputs import ShipOutputs
 from sim_core.ship.searchlights import SearchlightOrder
@@ -158,14 +159,26 @@ def hulls_in_ice(model: WorldModel, data: WorldData) -> tuple[list[np.ndarray], 
     return [c for c, _ in both], [h for _, h in both]
 
 
-def take_ice_loads(data: WorldData, report: IceStepReport, winds: list[np.ndarray]) -> np.ndarray:
-    """Give each ship the ice's contact load on its hull, with its wind load, as its
-    external load for the next step, and note the ships whose hulls broke cells; returns
-    the contact loads (ships, 3): X, Y N in each ship's frame; N N m (+ to starboard)."""
+def collisions(model: WorldModel, data: WorldData, orders: Sequence[Controls | None],
+               dt: float) -> tuple[np.ndarray, tuple[ShipContact, ...]]:
+    """The ships touching one another where this step's moves left them, and the loads
+    ((ships, 3): X, Y N; N N m) that give each its impulse over the next step
+    (``sim_core.ship.collision``); a ship on a logged track gives way to nothing."""
+    if len(model.ships) < 2:
+        return np.zeros((1, 3)), ()
+    kinematic = [c is not None and c.kinematic is not None for c in orders]
+    return ship_collisions(model.ships, data.ships, model.contours, kinematic, dt)
+
+
+def take_ice_loads(data: WorldData, report: IceStepReport, winds: list[np.ndarray], impacts: np.ndarray) -> np.ndarray:
+    """Give each ship the ice's contact load on its hull, with its wind load and the
+    other ships' impacts (``collisions``), as its external load for the next step, and note
+    the ships whose hulls broke cells; returns the ice's contact loads (ships, 3): X, Y N in
+    each ship's frame; N N m (+ to starboard)."""
     loads = np.zeros((len(data.ships), 3))
     for k, ship in enumerate(data.ships):
         loads[k] = (*world_vector_to_ship(report.hull_force[k], ship.eta[5]), -report.hull_moment[k])
-        ship.external[:] = loads[k] + winds[k]
+        ship.external[:] = loads[k] + winds[k] + impacts[k]
         if report.hull_broke[k]:
             data.hull_breaks[k] = data.time
     return loads

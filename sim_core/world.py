@@ -58,8 +58,9 @@ from sim_core.scene.switches import (
     prepare_ahead,
     prepare_switch,
 )
-from sim_core.fleet import (Controls, KinematicPose, ShipReport, ShipStart, apply_controls, fleet_contour, fleet_wash,
-                             hulls_in_ice, move_ship, new_ship, per_ship, take_ice_loads)
+from sim_core.fleet import (Controls, KinematicPose, ShipReport, ShipStart, apply_controls, collisions, fleet_contour,
+                             fleet_wash, hulls_in_ice, move_ship, new_ship, per_ship, take_ice_loads)
+from sim_core.ship.collision import ShipContact
 from sim_core.ship.model import OrderRejection, ShipData, ShipModel
 from sim_core.ship.outputs import ShipOutputs, ship_outputs
 from sim_core.regimes.rubble import RubbleModel, compile_rubble
@@ -175,6 +176,7 @@ class WorldEvents:
     ice_offset: tuple[float, float] = (0.0, 0.0)  # m, x east, y north: the ice's frame in the world
     retiled: np.ndarray = field(default_factory=lambda: NO_RETILED)  # tiles given other ice, their classes
     others: tuple[ShipReport, ...] = ()  # the exercise's other ships, in the model's order after the first
+    collisions: tuple[ShipContact, ...] = ()  # own ships touching at the step's end (``sim_core.ship.collision``)
 
     @property
     def readings(self) -> ShipOutputs:
@@ -302,6 +304,7 @@ def step(model: WorldModel, data: WorldData, dt: float,
     if data.environment.frozen:
         return dataclasses.replace(_held(model, data, rejected), **applied)
     winds = [move_ship(model, data, k, dt, c) for k, c in enumerate(orders)]
+    impacts, touching = collisions(model, data, orders, dt)
     water = drift_ice(model, data, dt)
     contours, hulls = hulls_in_ice(model, data)
     contour = np.concatenate(contours)
@@ -313,11 +316,11 @@ def step(model: WorldModel, data: WorldData, dt: float,
     move_vessels(data.vessels, dt)
     data.time += dt
     data.seq += 1
-    loads = take_ice_loads(data, report, winds)
+    loads = take_ice_loads(data, report, winds, impacts)
     rows = moved_rows(data, placed)
-    return _publish(model, data, rows, loads, rejected, placed=placed, thawed=thawed, frozen=frozen,
-                    frozen_floes=frozen_floes_of(data.ice, frozen.tolist()), broken_by_hull=report.broken_by_hull,
-                    broken_by_contact=report.broken_by_contact,
+    return _publish(model, data, rows, loads, rejected, collisions=touching, placed=placed, thawed=thawed,
+                    frozen=frozen, frozen_floes=frozen_floes_of(data.ice, frozen.tolist()),
+                    broken_by_hull=report.broken_by_hull, broken_by_contact=report.broken_by_contact,
                     cracked=cracks_published(data, placed, report.cracked),
                     frozen_cracks=frozen_cracks_of(data.ice, frozen.tolist()), **applied)
 

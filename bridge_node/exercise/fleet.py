@@ -14,6 +14,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from bridge_node.exercise.collision_alarms import CollisionAlarms
 from bridge_node.exercise.order_refusals import OrderRefusals
 from bridge_node.exercise.tick import StepListener, TickOutcome
 from bridge_node.links.arbiter import Decision
@@ -92,6 +93,7 @@ def _vessel(s: ShipOutputs, bridge: Bridge, length: float, beam: float, now: flo
 
 
 def fleet_listeners(model: WorldModel, bridges: Sequence[Bridge]) -> list[StepListener]:
-    """Every ship's traffic picture of the others, then the other ships' outputs."""
-    return [*(FleetTraffic(model, bridges, k) for k in range(len(bridges))),
+    """The collision alarms, every ship's traffic picture of the others, then the other
+    ships' outputs (before the first ship's, which the caller adds)."""
+    return [CollisionAlarms(bridges), *(FleetTraffic(model, bridges, k) for k in range(len(bridges))),
             *(OtherShipOutputs(b.hub, k) for k, b in enumerate(bridges) if k > 0)]
