@@ -2,8 +2,7 @@
 
 The default ship's world on a 400 m wide field of 1.0 m level ice. The same ship leads at
 full ahead and follows two ship lengths astern, keeping that distance on its engine lever
-(in the channel it would otherwise run into the leader: ships do not collide with each
-other here), every ship under its own model, stepped at the given rate (60 Hz; issue 31's
+(in the channel it would otherwise run into the leader and collide with it), every ship under its own model, stepped at the given rate (60 Hz; issue 31's
 second case is four ships at 30 Hz) for the given simulated time; the baseline, in the same
 run, is the leader alone. Printed:
 step median, p99 and max (ms), steps over one and two periods, the ratio of two ships to

@@ -37,9 +37,9 @@ class Freeze:
 
 @dataclass(frozen=True)
 class Reposition:
-    """The own ship to (north, east) m from the exercise origin (the field's corner as
-    laid), heading rad clockwise from north, speed m/s ahead through the water, engine
-    turning to hold it, rudder midships.
+    """The world's ``ship``-th ship (0: the own ship) to (north, east) m from the exercise
+    origin (the field's corner as laid), heading rad clockwise from north, speed m/s ahead
+    through the water, engine turning to hold it, rudder midships.
     Not ``at_once``: the ship moves at the first step by which the tiles around the new
     place have been prepared ahead (within the steps' budget, so that no step stalls);
     the step that moves it publishes the move ``at_once``, as a replay gives it."""
@@ -49,6 +49,7 @@ class Reposition:
     heading: float
     speed: float
     at_once: bool = False
+    ship: int = 0
 
 
 @dataclass(frozen=True)
@@ -161,7 +162,7 @@ def apply_command(model: WorldModel, data: WorldData, command: Command) -> Comma
         data.environment = dataclasses.replace(data.environment, **dict(command.changes))
     elif isinstance(command, SetClock):
         data.epoch = command.utc - data.time
-    elif isinstance(command, (SteeringFailure, EngineFailure)) and not 0 <= command.ship < len(data.ships):
+    elif isinstance(command, (SteeringFailure, EngineFailure, Reposition)) and not 0 <= command.ship < len(data.ships):
         return None  # a ship the world lacks (a record replayed on another exercise)
     elif isinstance(command, SteeringFailure):
         data.ships[command.ship].steering_pumps = command.pumps
@@ -231,14 +232,14 @@ def move_vessels(vessels: dict[int, OtherVessel], dt: float) -> None:
 
 
 def move_ship(model: WorldModel, data: WorldData, to: Reposition) -> None:
-    """Move the ship; its wake of broken ice stays where it was, and the scene switches the
-    tiles around the new place in at the step."""
-    ship = data.ship
+    """Move the ship ``to`` names; its wake of broken ice stays where it was, and the scene
+    switches the tiles around the new place in at the step."""
+    ship = data.ships[to.ship]
     ship.eta[:] = 0.0
     ship.nu[:] = 0.0
     ship.eta[0], ship.eta[1], ship.eta[5] = to.north, to.east, to.heading % (2.0 * math.pi)
     ship.nu[0] = to.speed
-    ship.rps = ship.rps_order = equilibrium_rps(model.ship, to.speed)
+    ship.rps = ship.rps_order = equilibrium_rps(model.ships[to.ship], to.speed)
     ship.rudder = ship.rudder_order = 0.0
     ship.external[:] = 0.0
-    data.hull_breaks[0] = -math.inf
+    data.hull_breaks[to.ship] = -math.inf

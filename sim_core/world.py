@@ -258,8 +258,10 @@ def _apply_commands(model: WorldModel, data: WorldData, commands: tuple[Command,
     applied = [done for c in commands if (done := apply_command(model, data, c)) is not None]
     to = data.moving_to
     if to is not None:
-        contour = fleet_contour(model, data)
-        contour[:len(model.contour)] = contour_in_ice(model, data, to.north, to.east, to.heading)
+        contour = fleet_contour(model, data)  # with the moving ship where it goes
+        start = sum(len(c) for c in model.contours[:to.ship])
+        contour[start:start + len(model.contours[to.ship])] = contour_in_ice(model, data, to.north, to.east,
+                                                                            to.heading, to.ship)
         if prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3):
             applied.append(apply_command(model, data, dataclasses.replace(to, at_once=True)))
     if laid is None:

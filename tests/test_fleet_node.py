@@ -4,6 +4,7 @@ fails safe alone when its bridge loses its link. The consoles are python-can vir
 in the test's threads; the node runs its real-time loop; AIS goes out on UDP loopback and
 is decoded with pyais. A config that gives two ships one link, a ship no links, or two ships
 one place is refused with the file, key and value."""
+import argparse
 import dataclasses
 import json
 import math
@@ -11,6 +12,8 @@ import socket
 import subprocess
 import sys
 import threading
+import time
+from contextlib import ExitStack
 from types import SimpleNamespace
 
 import can
@@ -22,6 +25,7 @@ from links_helpers import console_frame
 from nmea2000.decoder import NMEA2000Decoder
 from pyais import decode as decode_ais
 
+from bridge_node.commands import ctl
 from bridge_node.common.errors import UserError
 from bridge_node.common.network import free_port
 from bridge_node.exercise.tick_record import TICKS_FILE
@@ -35,17 +39,20 @@ from bridge_node.control.status import exercise_status
 from bridge_node.exercise.fleet import Bridge
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import ConfigError, NodeConfig, load_config
+from bridge_node.node.bridges import open_bridges
 from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.replay.engine import Playback, run_replay
 from bridge_node.node.fleet_session import session_source
 from bridge_node.replay.inputs import load_inputs
 from bridge_node.replay.session import FLEET_FOLDER, RecordedSession
+from bridge_node.station.events import describe
 from bridge_node.station.harness import chromium, http, start, stop, wait_until
 from bridge_node.stream.codec import CodecError, decode, encode
 from bridge_node.stream.follow import FollowedShip, followed_model
 from sim_core.frames.geodesy import local_to_geodetic
 from sim_core.frames.units import KNOT
+from sim_core.instructor import Reposition
 from sim_core.world import Controls, snapshot, step
 
 MMSI_A, MMSI_B = 230000001, 230000002
@@ -177,9 +184,17 @@ def test_a_record_of_two_bridges_replays_each_ship_on_its_own_orders(live_fleet)
     session = load_inputs([str(record)], None, {}, 1.0 / 30.0)
     assert isinstance(session, RecordedSession) and session.exact
     again = start_world(model, cfg)
-    with session_source(cfg, session) as source, LinkHub([], cfg.arbitration) as out:
-        stats = run_replay(model, again, source, Playback(None), out, None)
+    stop = threading.Event()
+    listener = _listen("fleet-b", stop)  # ship B's bus: the replay sends ship B's state there
+    listener.start()
+    with session_source(cfg, session) as source, LinkHub(cfg.links, cfg.arbitration) as out, ExitStack() as stack:
+        stats = run_replay(model, again, source, Playback(None), out, None, fleet=open_bridges(cfg, out, None, stack))
+    wait_until(lambda: _HEARD["fleet-b"] is not None, 5.0, "ship B's heading on its bus")
+    time.sleep(0.3)
+    stop.set()
+    listener.join(2.0)
     assert stats.steps == 120 and again.time == live.time
+    assert _HEARD["fleet-b"] == pytest.approx(again.ships[1].eta[5] % (2 * math.pi), abs=0.01)
     for replayed, ship in zip(again.ships, live.ships):  # each ship on its own bridge's orders, exactly
         np.testing.assert_allclose(replayed.eta, ship.eta, rtol=0.0, atol=1e-9)
         assert (replayed.rudder_order, replayed.rps_order) == (ship.rudder_order, ship.rps_order)
@@ -360,3 +375,34 @@ def test_the_instructor_fails_one_ships_steering_and_engine(fleet_world):
     assert [r["ship"] for r in records] == [1, 1]  # the session record's command log keeps the ship
     assert command_from_record(records[0]) == applied[0]
 
+
+
+def test_the_instructor_moves_one_ship_of_several(fleet_world):
+    """``icebridge ctl reposition --ship 1`` moves the second ship alone, once the tiles
+    about its new place are prepared; the command log keeps the ship and the instructor's
+    event list names it."""
+    cfg, model = fleet_world
+    data = start_world(model, cfg)
+    parser = argparse.ArgumentParser()
+    ctl.add_arguments(parser)
+    args = parser.parse_args(["reposition", "--north", "350", "--east", "60", "--heading", "90", "--speed", "2",
+                              "--ship", "1"])
+    settings = ControlSettings(endpoint=f"tcp://127.0.0.1:{free_port()}")
+    queue = CommandQueue(settings.queue, settings.per_tick)
+    with ControlEndpoint(settings, queue, dict, ships=2):
+        assert request(settings.endpoint, {"command": ctl.command_of(args)}, None)["ok"]
+    first = data.ships[0].eta.copy()
+    commands, moved = queue.take(model, data), None
+    for _ in range(200):
+        events = step(model, data, 0.1, None, commands)
+        commands = ()
+        moved = moved or next((c for c in events.commands if isinstance(c, Reposition)), None)
+        if moved:
+            break
+    assert moved is not None and moved.ship == 1 and moved.at_once
+    b = data.ships[1]
+    assert (b.eta[0], b.eta[1], math.degrees(b.eta[5])) == pytest.approx((350.0, 60.0, 90.0), abs=0.5)
+    assert b.nu[0] == pytest.approx(2.0 * KNOT, abs=0.05)
+    assert abs(data.ships[0].eta[0] - first[0]) < 50.0 and data.ships[0].eta[1] == pytest.approx(first[1], abs=1.0)
+    assert command_from_record(command_record(moved)) == moved
+    assert describe(moved) == ("command", "ship 1: ship repositioned to N 350 m, E 60 m, heading 90 deg, 2.0 kn")

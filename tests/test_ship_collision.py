@@ -13,6 +13,7 @@ from bridge_node.exercise.fleet import Bridge
 from bridge_node.exercise.tick import TickOutcome
 from bridge_node.links.hub import LinkHub
 from bridge_node.links.settings import ArbitrationSettings
+from bridge_node.node.bridges import bridges_summary
 from bridge_node.node.world_setup import build_world
 from sim_core.frames.ship_frame import ship_to_world, ship_vector_to_world, world_vector_to_ship
 from sim_core.ship.collision import MAX_PUSH_OUT, SLOP, ship_collisions, waterline_overlap
@@ -144,3 +145,6 @@ def test_both_bridges_hear_the_collision_alarm_until_the_ships_are_apart(two_shi
     assert len(raised) == len(cleared) == len(alarms.log)  # each raised once per collision, then cleared
     assert all(c >= r + CLEAR_S for r, c in zip(raised, cleared)) and cleared[-1] >= last + CLEAR_S
     assert not bridges[0].hub.active_alarms and not bridges[1].hub.active_alarms
+    summary = bridges_summary(bridges[0].hub, bridges)  # the run's summary: each collision once
+    assert summary["collisions"] == [a.text for a in first[:1]] + ["collision with ATLE 0.3 kn 0 MJ"]
+    assert summary["alarms"] == []

@@ -32,9 +32,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     actions.add_parser("freeze", help="hold the physics; the clock stops, the outputs go on")
     actions.add_parser("resume", help="run the physics again")
     actions.add_parser("status", help="the exercise's time, ship and environment")
-    move = _placed(actions.add_parser("reposition", help="move the own ship"))
+    move = _placed(actions.add_parser("reposition", help="move an own ship"))
     move.add_argument("--heading", type=float, required=True, help="true heading, deg")
     move.add_argument("--speed", type=float, default=0.0, help="speed through the water, kn (default 0)")
+    _ship_option(move)
     _vessel_actions(actions)
     actions.add_parser("visibility", help="meteorological visibility").add_argument("metres", type=float)
     actions.add_parser("clock", help="the exercise's time: HH:MM[:SS] (UTC, today) or an ISO 8601 date and "
@@ -51,8 +52,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                                float)}.items():
         failure = actions.add_parser(name, help=help_text)
         failure.add_argument(value, type=kind)
-        failure.add_argument("--ship", type=int, default=0, metavar="K",
-                             help="the K-th ship of [[ships]] (default 0: the first ship, [ship])")
+        _ship_option(failure)
     _failure_actions(actions)
     actions.add_parser("save", help="a save point of the exercise now, in its session record (icebridge run "
                                     "--fork it)").add_argument("name", help="letters, digits, - and _ (1-40)")
@@ -80,6 +80,12 @@ def _failure_command(args: argparse.Namespace) -> dict:
                 **{k: v for k, v in extra.items() if v is not None}}
     fault = {"command": "link_fault", "link": args.link, "fault": args.fault, "probability": args.probability}
     return fault | ({"delay_s": args.delay} if args.delay is not None else {})
+
+
+def _ship_option(p: argparse.ArgumentParser) -> None:
+    """The own ship a command is for: --ship K."""
+    p.add_argument("--ship", type=int, default=0, metavar="K",
+                   help="the K-th ship of [[ships]] (default 0: the first ship, [ship])")
 
 
 def _placed(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -130,7 +136,8 @@ def command_of(args: argparse.Namespace) -> dict:
     if a in ("freeze", "resume"):
         return {"command": a}
     if a == "reposition":
-        return {"command": "reposition", **_position(args), "heading_deg": args.heading, "speed_kn": args.speed}
+        return {"command": "reposition", **_position(args), "heading_deg": args.heading, "speed_kn": args.speed,
+                "ship": args.ship}
     if a.endswith("-vessel"):
         return _vessel_command(args)
     if a == "visibility":

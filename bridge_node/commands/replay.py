@@ -15,7 +15,7 @@ import dataclasses
 import datetime as dt
 import json
 import math
-from contextlib import nullcontext
+from contextlib import ExitStack, nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +26,7 @@ from bridge_node.hil.run_console import LINK_NAME as RUN_CONSOLE_LINK
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import DEFAULT_CONFIG, NodeConfig, load_config
 from bridge_node.common.errors import UserError
+from bridge_node.node.bridges import bridges_summary, open_bridges
 from bridge_node.node.render_processes import RenderProcesses, open_stream, wait_for_renderers
 from bridge_node.node.world_setup import build_world, start_exercise, start_position, start_world, warm_up
 from bridge_node.replay.console import KeyReader, ReplayProgress, logged_text
@@ -233,18 +234,18 @@ def _play(cfg: NodeConfig, args: argparse.Namespace, prep: _Prepared, playback: 
             traffic = replay_traffic(prep.source, prep.seek_to, prep.model.origin, cfg.replay, cfg.links)
             # the run's software console was another process, gone now: its orders come from the record
             links = [s for s in cfg.links if not (args.recorded and s.name == RUN_CONSOLE_LINK)]
-            with LinkHub(links, cfg.arbitration, Path(args.record) if args.record else None, traffic,
-                         convoy=cfg.convoy) as hub, \
+            record = Path(args.record) if args.record else None
+            with LinkHub(links, cfg.arbitration, record, traffic, convoy=cfg.convoy) as hub, ExitStack() as others, \
                     session, KeyReader() as keys, ReplayProgress(console, prep.source, keys) as progress:
+                fleet = open_bridges(cfg, hub, record, others)
                 publisher.publish(snapshot(prep.model, prep.data))
                 wait_for_renderers(renderers, publisher, 300.0)
-                stats = run_replay(prep.model, prep.data, prep.source, playback, hub, publisher, progress)
-                links = [link.health().as_dict() for link in hub.links]
-                alarms = [a.text for a in hub.active_alarms.values()]
+                stats = run_replay(prep.model, prep.data, prep.source, playback, hub, publisher, progress, fleet)
+                bridges = bridges_summary(hub, fleet)
         finally:
             if renderers:
                 rendered = renderers.stop()
-    return stats, {"links": links, "alarms": alarms,
+    return stats, {**bridges,
                    "stream": {"sent": publisher.sent, "dropped": publisher.dropped, "error": publisher.error},
                    "render_processes": rendered, "video": [r["video"] for r in rendered if "video" in r],
                    "record": args.record}

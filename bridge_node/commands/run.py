@@ -26,7 +26,6 @@ from bridge_node.charts.field_regions import regions_not_in_the_world
 from bridge_node.control.endpoint import ControlEndpoint
 from bridge_node.control.queue import CommandQueue
 from bridge_node.control.status import exercise_status
-from bridge_node.exercise.fleet import Bridge
 from bridge_node.exercise.listeners import StreamOutput
 from bridge_node.control.save_point import FORK_FILE, SavePoint, read_save
 from bridge_node.exercise.tick import StepListener, TickOutcome
@@ -35,13 +34,13 @@ from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config, new_session_dir
 from bridge_node.common.errors import UserError
 from bridge_node.common.output_files import write_output
+from bridge_node.node.bridges import bridges_summary, open_bridges
 from bridge_node.node.realtime_loop import run_realtime
 from bridge_node.node.render_processes import RenderProcesses, open_stream, wait_for_renderers
 from bridge_node.node.station_process import StationProcess
 from bridge_node.node.world_setup import build_world, start_world, warm_up
 from bridge_node.node.fork import resimulate_shown
 from bridge_node.node.run_report import plot_run
-from bridge_node.replay.session import FLEET_FOLDER
 from bridge_node.reports.summary import print_summary
 from bridge_node.stream.publisher import StatePublisher
 from bridge_node.links.traffic_picture import TrafficPicture
@@ -110,11 +109,12 @@ class _StatusLine(StepListener):
 def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, renderers, record, console,
           traffic: TrafficPicture) -> tuple:
     """The real-time loop with its live status line; returns the statistics, the last
-    events, the links' health and the active alarms."""
+    events, the bridges' summary (``bridges_summary``), the control endpoint's counts and
+    the station's summary."""
     first = snapshot(model, data)
     with LinkHub(cfg.links, cfg.arbitration, record, traffic, convoy=cfg.convoy) as hub, ExitStack() as bridges, \
             Live(console=console, refresh_per_second=4, transient=True) as live:
-        fleet = _fleet(cfg, hub, record, bridges)
+        fleet = open_bridges(cfg, hub, record, bridges)
         hubs = [b.hub for b in fleet] or [hub]
         publisher.publish(first)
         live.update("starting the render processes")
@@ -129,26 +129,9 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
             stats = run_realtime(model, data, hub, rate, args.duration,
                                  [StreamOutput(publisher, traffic, model.origin), status], commands=queue,
                                  scheduler=(cfg.realtime.scheduler, cfg.realtime.priority), fleet=fleet)
-        return (stats, status.last, [link.health().as_dict() for h in hubs for link in h.links],
-                [(f"{b.name}: " if k else "") + a.text for k, b in enumerate(fleet or [None])
-                 for a in hubs[k].active_alarms.values()],
+        return (stats, status.last, bridges_summary(hub, fleet),
                 {"endpoint": cfg.control.endpoint, "requests": dict(control.counts)},
                 station.stop() if isinstance(station, StationProcess) else None)
-
-
-def _fleet(cfg, hub: LinkHub, record: Path | None, stack: ExitStack) -> list[Bridge]:
-    """Every own ship's bridge where ``[[ships]]`` lists other ships (none otherwise): the
-    first ship's ``hub``, then each other ship's links opened in ``stack``, with its own
-    traffic picture (the run's sources) and convoy watch; each records its links' traffic
-    under the session record's ``ships/N``."""
-    if not cfg.ships:
-        return []
-    bridges = [Bridge(hub, cfg.ship.mmsi, cfg.ship.shown_name())]
-    for k, ship in enumerate(cfg.ships, start=1):
-        other = LinkHub(ship.links, ship.arbitration, record / FLEET_FOLDER / str(k) if record else None,
-                        TrafficPicture(hub.traffic.sources), convoy=ship.convoy)
-        bridges.append(Bridge(stack.enter_context(other), ship.mmsi, ship.shown_name()))
-    return bridges
 
 
 def _fork(model, data, cfg, point: SavePoint, record: Path | None, console: Console) -> None:
@@ -187,13 +170,13 @@ def run(args: argparse.Namespace) -> int:
                 warm_up(model, cfg)
             if point is not None:
                 _fork(model, data, cfg, point, record, console)
-            stats, last, links, alarms, control, station = _loop(cfg, args, rate, model, data, publisher, renderers, record,
+            stats, last, bridges, control, station = _loop(cfg, args, rate, model, data, publisher, renderers, record,
                                                         console, traffic)
         finally:
             if renderers:  # before the stream closes, so that they draw the last state
                 rendered = renderers.stop()
     summary = stats.summary() | _end_state(last) | {
-        "rate_hz": rate, "late_tile_switches": data.late_switches, "alarms": alarms, "links": links,
+        "rate_hz": rate, "late_tile_switches": data.late_switches, **bridges,
         "stream": {"sent": publisher.sent, "dropped": publisher.dropped, "snapshots": publisher.snapshots,
                    "malformed": publisher.malformed, "error": publisher.error},
         "render_processes": rendered, "frames_rendered": sum(r.get("png_frames", 0) for r in rendered),

@@ -89,13 +89,20 @@ class FreezeCommand(CommandBase):
         return Freeze(self.command == "freeze")
 
 
-class RepositionCommand(PlacedCommand):
+class ShipCommand(CommandBase):
+    """A command to one own ship: ``ship`` 0 the first (``[ship]``), k the k-th of ``[[ships]]``."""
+
+    ship: int = Field(0, ge=0, le=MAX_HULLS - 1)
+
+
+class RepositionCommand(PlacedCommand, ShipCommand):
     command: Literal["reposition"]
     heading_deg: float = Field(ge=0.0, lt=360.0)
     speed_kn: float = Field(0.0, ge=0.0, le=25.0)
 
     def to_world(self, model: WorldModel, data: WorldData) -> Command:
-        return Reposition(*self.north_east(model), math.radians(self.heading_deg), self.speed_kn * KNOT)
+        return Reposition(*self.north_east(model), math.radians(self.heading_deg), self.speed_kn * KNOT,
+                          ship=self.ship)
 
 
 Mmsi = Annotated[int, Field(ge=100_000_000, le=999_999_999)]
@@ -190,12 +197,6 @@ class CurrentCommand(CommandBase):
 
     def to_world(self, model: WorldModel, data: WorldData) -> Command:
         return SetEnvironment((("current_speed", self.speed_kn * KNOT), ("current_to", math.radians(self.to_deg))))
-
-
-class ShipCommand(CommandBase):
-    """A command to one own ship: ``ship`` 0 the first (``[ship]``), k the k-th of ``[[ships]]``."""
-
-    ship: int = Field(0, ge=0, le=MAX_HULLS - 1)
 
 
 class SteeringFailureCommand(ShipCommand):

@@ -11,7 +11,7 @@ picture, where its AIS and DIS links send them and the state stream carries them
 """
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from bridge_node.exercise.collision_alarms import CollisionAlarms
@@ -92,8 +92,10 @@ def _vessel(s: ShipOutputs, bridge: Bridge, length: float, beam: float, now: flo
                   s.course_over_ground, s.speed_over_ground, s.rate_of_turn, length, beam)
 
 
-def fleet_listeners(model: WorldModel, bridges: Sequence[Bridge]) -> list[StepListener]:
+def fleet_listeners(model: WorldModel, bridges: Sequence[Bridge],
+                    outputs: Callable[[LinkHub, int], StepListener] = OtherShipOutputs) -> list[StepListener]:
     """The collision alarms, every ship's traffic picture of the others, then the other
-    ships' outputs (before the first ship's, which the caller adds)."""
+    ships' ``outputs`` (a listener of the k-th ship's hub, k >= 1; a replay's only send),
+    before the first ship's, which the caller adds."""
     return [CollisionAlarms(bridges), *(FleetTraffic(model, bridges, k) for k in range(len(bridges))),
-            *(OtherShipOutputs(b.hub, k) for k, b in enumerate(bridges) if k > 0)]
+            *(outputs(b.hub, k) for k, b in enumerate(bridges) if k > 0)]

@@ -58,10 +58,11 @@ class SaveWriter(StepListener):
 class LinkOutputs(StepListener):
     """Every alarm change of the step raised on the hub (announced with the next state sent),
     and the ship's state out on every link at the tick's clock: as its sensors read it to the
-    instruments, as it is to other simulators."""
+    instruments, as it is to other simulators. ``ship`` k > 0: the k-th other own ship's
+    state (its instruments read true) on its own hub; its alarms are its hub's own."""
 
-    def __init__(self, hub: LinkHub) -> None:
-        self.hub = hub
+    def __init__(self, hub: LinkHub, ship: int = 0) -> None:
+        self.hub, self.ship = hub, ship
 
     def clock(self, now: float) -> float:
         """The links' clock (monotonic s) at the tick's ``now``."""
@@ -69,8 +70,12 @@ class LinkOutputs(StepListener):
 
     def on_step(self, outcome: TickOutcome) -> None:
         events = outcome.events
-        self.hub.publish(events.readings if outcome.send else None, self.clock(outcome.now), outcome.alarms,
-                         truth=events.ship)
+        if self.ship:
+            state = truth = events.others[self.ship - 1].outputs
+            alarms = ()
+        else:
+            state, truth, alarms = events.readings, events.ship, outcome.alarms
+        self.hub.publish(state if outcome.send else None, self.clock(outcome.now), alarms, truth=truth)
 
 
 class ReplayLinkOutputs(LinkOutputs):
@@ -79,8 +84,8 @@ class ReplayLinkOutputs(LinkOutputs):
     it), and the links are polled only to keep them up: a live console's orders are
     counted (``console_orders_ignored``) and dropped."""
 
-    def __init__(self, hub: LinkHub) -> None:
-        super().__init__(hub)
+    def __init__(self, hub: LinkHub, ship: int = 0) -> None:
+        super().__init__(hub, ship)
         self.console_orders_ignored = 0
         self._offset: float | None = None  # monotonic s - source clock s
 

@@ -22,6 +22,7 @@ from typing import Protocol
 import numpy as np
 
 from bridge_node.exercise.listeners import ReplayLinkOutputs, StreamOutput, WorldTraffic
+from bridge_node.exercise.fleet import Bridge, fleet_listeners
 from bridge_node.exercise.pacer import Pacer
 from bridge_node.exercise.tick import ExerciseTick, TickOutcome
 from bridge_node.links.arbiter import Decision
@@ -175,18 +176,23 @@ def _note(stats: ReplayStats, model: WorldModel, data: WorldData, events: WorldE
 
 def run_replay(model: WorldModel, data: WorldData, source: Source, playback: Playback, hub: LinkHub | None,
                publisher: StatePublisher | None,
-               show: Callable[[int, ReplayStats, Playback], list[str]] | None = None) -> ReplayStats:
+               show: Callable[[int, ReplayStats, Playback], list[str]] | None = None,
+               fleet: Sequence[Bridge] = ()) -> ReplayStats:
     """Step the world along the source until its end, ``playback.stop`` or Ctrl-C, its
-    state out on ``hub``'s links and ``publisher``'s stream (either may be None). Steps
-    before ``playback.seek_to`` run ahead without outputs. ``show(k, stats, playback)``
-    is called about every 0.2 s of wall time (and while paused) and returns the keys
-    pressed since."""
+    state out on ``hub``'s links and ``publisher``'s stream (either may be None); with
+    ``fleet`` (every own ship's bridge, the first's hub ``hub``), each other ship's state
+    on its own links, each ship's traffic picture holding the others, and the collision
+    alarms. Steps before ``playback.seek_to`` run ahead without outputs.
+    ``show(k, stats, playback)`` is called about every 0.2 s of wall time (and while
+    paused) and returns the keys pressed since."""
     stats = ReplayStats()
     orders = StepOrders(source)
+    bridges = [*(WorldTraffic(b.hub.traffic, model.origin) for b in fleet[1:]),
+               *fleet_listeners(model, fleet, ReplayLinkOutputs)] if fleet else []
     links = ReplayLinkOutputs(hub) if hub is not None else None
     world_traffic = WorldTraffic(hub.traffic, model.origin) if hub is not None else None
     stream = StreamOutput(publisher, hub.traffic if hub else None, model.origin) if publisher is not None else None
-    tick = ExerciseTick(model, data, orders, [_stats_listener(stats, model, data, orders),
+    tick = ExerciseTick(model, data, orders, [_stats_listener(stats, model, data, orders), *bridges,
                                                *(x for x in (world_traffic, links, stream) if x is not None)], orders)
     stats.refusals = tick.refusals
     pacer = Pacer(source.dt / (playback.speed or 1.0), BEHIND_S)
@@ -217,7 +223,8 @@ def run_replay(model: WorldModel, data: WorldData, source: Source, playback: Pla
     except KeyboardInterrupt:
         pass
     stats.steps, stats.sim_s, stats.wall_s = orders.k, orders.k * source.dt, time.monotonic() - start
-    stats.console_orders_ignored = links.console_orders_ignored if links is not None else 0
+    stats.console_orders_ignored = sum(x.console_orders_ignored for x in (links, *bridges)
+                                       if isinstance(x, ReplayLinkOutputs))
     broken = broken_counts(data.ice)
     stats.broken_by_hull, stats.broken_by_contact = int(broken[BreakCause.HULL]), int(broken[BreakCause.CONTACT])
     return stats

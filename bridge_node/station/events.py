@@ -57,7 +57,14 @@ def _link_fault_text(fault: LinkFault) -> str:
 
 def describe(command: Command | LinkFault | SaveRequest) -> tuple[str, str]:
     """The kind ("command", "failure") and one line of text of an applied world command, or
-    of a node command of a session record (a link fault, a save point)."""
+    of a node command of a session record (a link fault, a save point); a command to
+    another own ship than the first names it (``ship 1: ...``)."""
+    kind, text = _describe(command)
+    ship = getattr(command, "ship", 0)
+    return kind, f"ship {ship}: {text}" if ship else text
+
+
+def _describe(command: Command | LinkFault | SaveRequest) -> tuple[str, str]:
     if isinstance(command, Freeze):
         return "command", "exercise frozen" if command.frozen else "exercise resumed"
     if isinstance(command, Reposition):
