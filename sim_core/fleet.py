@@ -75,12 +75,18 @@ class ShipStart:
 @dataclass(frozen=True)
 class ShipReport:
     """What a step publishes of a ship after the first: its outputs, the ice's contact load
-    on its hull (X, Y N in the ship's frame; N N m, + to starboard) and the orders it
-    clamped or refused."""
+    on its hull (X, Y N in the ship's frame; N N m, + to starboard), the orders it clamped
+    or refused, and what its sensors read (None: the outputs, every sensor well)."""
 
     outputs: ShipOutputs
     ice_load: np.ndarray
     rejected: tuple[OrderRejection, ...] = ()
+    instruments: ShipOutputs | None = None
+
+    @property
+    def readings(self) -> ShipOutputs:
+        """The ship as its bridge's instruments read it."""
+        return self.outputs if self.instruments is None else self.instruments
 
 
 def new_ship(model: ShipModel, start: ShipStart) -> ShipData:

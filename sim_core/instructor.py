@@ -150,26 +150,26 @@ class SetIce:
 Command = (Freeze | Reposition | SetEnvironment | SetClock | SteeringFailure | EngineFailure | SensorFailure
            | AddVessel | MoveVessel | SteerVessel | RemoveVessel | SetIce)
 VESSEL_COMMANDS = (AddVessel, MoveVessel, SteerVessel, RemoveVessel)
+SHIP_COMMANDS = (Reposition, SteeringFailure, EngineFailure, SensorFailure)  # to the world's ``ship``-th ship
 
 
 def apply_command(model: WorldModel, data: WorldData, command: Command) -> Command | None:
     """Carry one command out on the world, before its step; returns it as applied (None
     for a move that waits for its tiles: ``WorldData.moving_to``)."""
-    ship = data.ship
     if isinstance(command, Freeze):
         data.environment = dataclasses.replace(data.environment, frozen=command.frozen)
     elif isinstance(command, SetEnvironment):
         data.environment = dataclasses.replace(data.environment, **dict(command.changes))
     elif isinstance(command, SetClock):
         data.epoch = command.utc - data.time
-    elif isinstance(command, (SteeringFailure, EngineFailure, Reposition)) and not 0 <= command.ship < len(data.ships):
+    elif isinstance(command, SHIP_COMMANDS) and not 0 <= command.ship < len(data.ships):
         return None  # a ship the world lacks (a record replayed on another exercise)
     elif isinstance(command, SteeringFailure):
         data.ships[command.ship].steering_pumps = command.pumps
     elif isinstance(command, EngineFailure):
         data.ships[command.ship].power_share = command.power_share
     elif isinstance(command, SensorFailure):
-        data.sensors = fail_sensor(data.sensors, command, ship)
+        data.sensors[command.ship] = fail_sensor(data.sensors[command.ship], command, data.ships[command.ship])
     elif isinstance(command, VESSEL_COMMANDS):
         return command if _command_vessel(data.vessels, command) else None
     elif isinstance(command, Reposition) and not command.at_once:

@@ -116,7 +116,7 @@ class WorldData:
     environment: Environment = field(default_factory=Environment)  # as the instructor set it
     moving_to: Reposition | None = None  # a move of the ship waiting for its tiles
     vessels: dict[int, OtherVessel] = field(default_factory=dict)  # other vessels the instructor steers, by MMSI
-    sensors: SensorFaults = field(default_factory=SensorFaults)  # the instructor's sensor failures
+    sensors: list[SensorFaults] = field(default_factory=lambda: [SensorFaults()])  # each ship's sensor failures
     ice_frame: IceFrame = field(default_factory=IceFrame)  # where the drifting field has gone
 
     @property
@@ -210,7 +210,7 @@ def new_world_data(model: WorldModel, north: float, east: float, heading: float,
     for m, contour in zip(model.ships[1:], model.contours[1:]):
         add_hull(ice, contour, m.material.hull_friction)
     data = WorldData(ships, ice, new_scene_data(model.scene), hull_breaks=[-math.inf] * len(ships),
-                     searchlights=[m.default for m in model.searchlights])
+                     searchlights=[m.default for m in model.searchlights], sensors=[SensorFaults()] * len(ships))
     warm_up(model, data)
     return data
 
@@ -231,6 +231,14 @@ def warm_up(model: WorldModel, data: WorldData) -> None:
             advance(data.ice, prepared, 1 << 30)
 
 
+def _report(model: WorldModel, data: WorldData, k: int, load: np.ndarray,
+            rejected: list[OrderRejection]) -> ShipReport:
+    """The k-th ship's (k >= 1) report: its outputs, as its sensors read them too."""
+    truth = ship_outputs(data.ships[k], data.time, *model.origin, data.epoch + data.time, ())
+    readings = sensor_readings(truth, data.sensors[k], model.origin)
+    return ShipReport(truth, load, tuple(rejected), None if readings is truth else readings)
+
+
 def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, loads: np.ndarray,
              rejected: list[list[OrderRejection]], **fields) -> WorldEvents:
     """Events with the ships' outputs, ice loads ((ships, 3): X, Y N; N N m) and refused
@@ -239,9 +247,8 @@ def _publish(model: WorldModel, data: WorldData, rows: np.ndarray, loads: np.nda
     pose = np.column_stack([st.xy[rows], st.heave[rows], st.yaw[rows], st.roll[rows], st.pitch[rows]])
     utc = data.epoch + data.time
     ship = ship_outputs(data.ship, data.time, *model.origin, utc, tuple(data.searchlights))
-    others = tuple(ShipReport(ship_outputs(other, data.time, *model.origin, utc, ()), load, tuple(refused))
-                   for other, load, refused in zip(data.ships[1:], loads[1:], rejected[1:]))
-    readings = sensor_readings(ship, data.sensors, model.origin)
+    others = tuple(_report(model, data, k, loads[k], rejected[k]) for k in range(1, len(data.ships)))
+    readings = sensor_readings(ship, data.sensors[0], model.origin)
     return WorldEvents(seq=data.seq, time=data.time, ship=ship, instruments=None if readings is ship else readings,
                        ice_load=loads[0], rejected=tuple(rejected[0]), others=others,
                        floe_rows=rows, floe_pose=pose, floe_status=st.status[rows].copy(),

@@ -46,7 +46,7 @@ from bridge_node.replay.engine import Playback, run_replay
 from bridge_node.node.fleet_session import session_source
 from bridge_node.replay.inputs import load_inputs
 from bridge_node.replay.session import FLEET_FOLDER, RecordedSession
-from bridge_node.station.events import describe
+from bridge_node.station.events import EventLog, describe
 from bridge_node.station.harness import chromium, http, start, stop, wait_until
 from bridge_node.stream.codec import CodecError, decode, encode
 from bridge_node.stream.follow import FollowedShip, followed_model
@@ -356,24 +356,38 @@ def test_a_follower_sees_the_first_ship_as_traffic_and_bad_ship_reports_are_refu
             decode([frames[0], json.dumps(header | {"others": others}).encode(), *frames[2:]])
 
 
-def test_the_instructor_fails_one_ships_steering_and_engine(fleet_world):
+def test_the_instructor_fails_one_ships_steering_engine_and_gyro(fleet_world):
     cfg, model = fleet_world
     data = start_world(model, cfg)
     settings = ControlSettings(endpoint=f"tcp://127.0.0.1:{free_port()}")
     queue = CommandQueue(settings.queue, settings.per_tick)
+    parser = argparse.ArgumentParser()
+    ctl.add_arguments(parser)
+    gyro = ctl.command_of(parser.parse_args(["sensor-failure", "gyro", "offset", "--offset", "10", "--ship", "1"]))
     with ControlEndpoint(settings, queue, dict, ships=2):
         for command in ({"command": "steering_failure", "pumps_failed": 2, "ship": 1},
-                        {"command": "engine_failure", "power_percent": 30.0, "ship": 1}):
+                        {"command": "engine_failure", "power_percent": 30.0, "ship": 1}, gyro):
             assert request(settings.endpoint, {"command": command}, None)["ok"]
         refused = request(settings.endpoint, {"command": {"command": "engine_failure", "power_percent": 0.0,
                                                           "ship": 2}}, None)
     assert not refused["ok"] and "ship = 2: this exercise has 2 own ship(s): 0 ([ship]) to 1" in refused["error"]
     applied = queue.take(model, data)
-    step(model, data, 0.1, None, applied)
+    events = step(model, data, 0.1, None, applied)
     (a, b), records = data.ships, [command_record(c) for c in applied]
     assert (b.steering_pumps, b.power_share) == (0, 0.3) and (a.steering_pumps, a.power_share) == (2, 1.0)
-    assert [r["ship"] for r in records] == [1, 1]  # the session record's command log keeps the ship
-    assert command_from_record(records[0]) == applied[0]
+    assert [r["ship"] for r in records] == [1, 1, 1]  # the session record's command log keeps the ship
+    assert [command_from_record(r) for r in records] == list(applied)
+    # ship B's gyro reads 10 deg high on its instruments; ship A's read true
+    report = events.others[0]
+    assert report.readings.heading == pytest.approx((report.outputs.heading + math.radians(10.0)) % (2 * math.pi))
+    assert events.readings is events.ship
+    status = exercise_status(events, data)
+    assert status["sensors"]["gyro"] == "ok" and status["other_ships"][0]["sensors"]["gyro"] == "offset"
+    assert (status["other_ships"][0]["steering_pumps"], status["other_ships"][0]["power_percent"]) == (0, 30.0)
+    log = EventLog()  # the station's: ship B's failures named, the first ship's state untouched
+    log.on_events(events)
+    assert [e["text"] for e in log.since(0)][-1].startswith("ship 1: ")
+    assert (log.steering, log.power, log.sensors["gyro"]) == (2, 1.0, "ok")
 
 
 

@@ -66,6 +66,7 @@ def _failure_actions(actions) -> None:
     sensor.add_argument("mode", choices=("ok", "frozen", "offset", "lost", "jumping"))
     sensor.add_argument("--offset", type=float, help="the gyro's offset, deg (mode offset)")
     sensor.add_argument("--jump", type=float, help="the GNSS position's jumps, m (mode jumping; default 200)")
+    _ship_option(sensor)
     fault = actions.add_parser("link-fault", help="a fault on one of the node's links (none: cleared)")
     fault.add_argument("link", help="the link's name (icebridge ctl status lists them)")
     fault.add_argument("fault", choices=("none", "disconnect", "drop", "corrupt", "duplicate", "delay"))
@@ -76,7 +77,7 @@ def _failure_actions(actions) -> None:
 def _failure_command(args: argparse.Namespace) -> dict:
     if args.action == "sensor-failure":
         extra = {"offset_deg": args.offset, "jump_m": args.jump}
-        return {"command": "sensor_failure", "sensor": args.sensor, "mode": args.mode,
+        return {"command": "sensor_failure", "sensor": args.sensor, "mode": args.mode, "ship": args.ship,
                 **{k: v for k, v in extra.items() if v is not None}}
     fault = {"command": "link_fault", "link": args.link, "fault": args.fault, "probability": args.probability}
     return fault | ({"delay_s": args.delay} if args.delay is not None else {})

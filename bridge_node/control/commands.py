@@ -215,7 +215,7 @@ class EngineFailureCommand(ShipCommand):
         return EngineFailure(self.power_percent / 100.0, self.ship)
 
 
-class SensorFailureCommand(CommandBase):
+class SensorFailureCommand(ShipCommand):
     command: Literal["sensor_failure"]
     sensor: Literal["gyro", "gnss", "log"]
     mode: Literal["ok", "frozen", "offset", "lost", "jumping"]
@@ -236,10 +236,10 @@ class SensorFailureCommand(CommandBase):
 
     def to_world(self, model: WorldModel, data: WorldData) -> Command:
         if self.mode == "offset":
-            return SensorFailure(self.sensor, self.mode, math.radians(self.offset_deg))
+            return SensorFailure(self.sensor, self.mode, math.radians(self.offset_deg), self.ship)
         if self.mode == "jumping":
-            return SensorFailure(self.sensor, self.mode, 200.0 if self.jump_m is None else self.jump_m)
-        return SensorFailure(self.sensor, self.mode)
+            return SensorFailure(self.sensor, self.mode, 200.0 if self.jump_m is None else self.jump_m, self.ship)
+        return SensorFailure(self.sensor, self.mode, ship=self.ship)
 
 
 class LinkFaultCommand(CommandBase):

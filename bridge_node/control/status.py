@@ -39,7 +39,10 @@ def exercise_status(events: WorldEvents, data: WorldData | None = None, hub: Lin
         ship = data.ship
         status |= {"rudder_order_deg": round(math.degrees(ship.rudder_order), 2),
                    "shaft_rpm_order": round(ship.rps_order * 60.0, 1), "steering_pumps": ship.steering_pumps,
-                   "power_percent": round(ship.power_share * 100.0, 1), "sensors": data.sensors.modes()}
+                   "power_percent": round(ship.power_share * 100.0, 1), "sensors": data.sensors[0].modes()}
+        for other, ship, sensors in zip(status["other_ships"], data.ships[1:], data.sensors[1:]):
+            other |= {"steering_pumps": ship.steering_pumps, "power_percent": round(ship.power_share * 100.0, 1),
+                      "sensors": sensors.modes()}
     if hub is not None:
         status |= {"alarms": [{"number": a.number, "text": a.text} for a in list(hub.active_alarms.values())],
                    "links": [link.health().as_dict() for link in list(hub.links)]}

@@ -70,7 +70,7 @@ class OtherShipOutputs(StepListener):
     def on_step(self, outcome: TickOutcome) -> None:
         report = outcome.events.others[self.k - 1]
         alarms = (*outcome.others[self.k - 1].alarms, *self.refusals.note(report.rejected, outcome.now))
-        self.hub.publish(report.outputs if outcome.send else None, outcome.now, alarms, truth=report.outputs)
+        self.hub.publish(report.readings if outcome.send else None, outcome.now, alarms, truth=report.outputs)
 
 
 class FleetTraffic(StepListener):

@@ -59,7 +59,7 @@ class LinkOutputs(StepListener):
     """Every alarm change of the step raised on the hub (announced with the next state sent),
     and the ship's state out on every link at the tick's clock: as its sensors read it to the
     instruments, as it is to other simulators. ``ship`` k > 0: the k-th other own ship's
-    state (its instruments read true) on its own hub; its alarms are its hub's own."""
+    state on its own hub; its alarms are its hub's own."""
 
     def __init__(self, hub: LinkHub, ship: int = 0) -> None:
         self.hub, self.ship = hub, ship
@@ -71,8 +71,8 @@ class LinkOutputs(StepListener):
     def on_step(self, outcome: TickOutcome) -> None:
         events = outcome.events
         if self.ship:
-            state = truth = events.others[self.ship - 1].outputs
-            alarms = ()
+            report = events.others[self.ship - 1]
+            state, truth, alarms = report.readings, report.outputs, ()
         else:
             state, truth, alarms = events.readings, events.ship, outcome.alarms
         self.hub.publish(state if outcome.send else None, self.clock(outcome.now), alarms, truth=truth)

@@ -156,19 +156,24 @@ class EventLog:
         for command in events.commands:
             kind, text = describe(command)
             self.add(kind, text, events.time, events.ship.utc)
-            if isinstance(command, SteeringFailure):
-                self.steering = command.pumps
-            elif isinstance(command, EngineFailure):
-                self.power = command.power_share
-            elif isinstance(command, SensorFailure):
-                self.sensors = {**self.sensors, command.sensor: command.mode}
-            if isinstance(command, (SteeringFailure, EngineFailure, SensorFailure)):
-                self._failure_seq = events.seq
+            if getattr(command, "ship", 0) == 0:  # the failures shown are the first ship's
+                self._note_failure(command, events.seq)
         for rejection in events.rejected:
             text = f"{rejection.order} order {'refused' if rejection.refused else 'limited'}: {rejection.text}"
             if self._refused is None or self._refused[1] != text or time.monotonic() - self._refused[0] > 5.0:
                 self.add("order", text, events.time, events.ship.utc)
             self._refused = (time.monotonic(), text)
+
+    def _note_failure(self, command: Command | LinkFault | SaveRequest, seq: int) -> None:
+        """Keep the first ship's failure state a failure command leaves."""
+        if isinstance(command, SteeringFailure):
+            self.steering = command.pumps
+        elif isinstance(command, EngineFailure):
+            self.power = command.power_share
+        elif isinstance(command, SensorFailure):
+            self.sensors = {**self.sensors, command.sensor: command.mode}
+        if isinstance(command, (SteeringFailure, EngineFailure, SensorFailure)):
+            self._failure_seq = seq
 
     def on_status(self, status: dict | None, sim_time: float | None = None, utc: float | None = None) -> None:
         """Take a status reply of the node (each once): its failures where it is newer than the

@@ -25,11 +25,13 @@ _JUMP_SEED = 0x1CEB  # the jumps' random stream, with the jump's index (same in 
 @dataclass(frozen=True)
 class SensorFailure:
     """A sensor's new state: ``sensor`` and ``mode`` from ``SENSOR_MODES`` ("ok": repaired);
-    ``amount`` is the gyro's offset (rad, + clockwise) or the GNSS jump's size (m)."""
+    ``amount`` is the gyro's offset (rad, + clockwise) or the GNSS jump's size (m); of the
+    world's ``ship``-th ship (0: the own ship)."""
 
     sensor: str
     mode: str
     amount: float = 0.0
+    ship: int = 0
 
 
 @dataclass(frozen=True)
