@@ -11,6 +11,7 @@ own outputs; the instructor's environment, the ice field and the clock are share
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -18,6 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from sim_core.frames.hull_contour import waterline_contour
 from sim_core.frames.ship_frame import world_vector_to_ship
 from sim_core.ice.step import HullMotion, IceStepReport
 from sim_core.ship import model as ship_model
@@ -29,6 +31,7 @@ from sim_core.ship.wind import wind_load
 from sim_core.ship_in_ice import hull_in_ice, ice_condition, ice_through_water, rubble_loads, ship_contour_in_ice, wash
 
 if TYPE_CHECKING:
+    from sim_core.instructor import OtherVessel
     from sim_core.world import WorldData, WorldModel
 
 
@@ -167,13 +170,31 @@ def hulls_in_ice(model: WorldModel, data: WorldData) -> tuple[list[np.ndarray], 
 
 def collisions(model: WorldModel, data: WorldData, orders: Sequence[Controls | None],
                dt: float) -> tuple[np.ndarray, tuple[ShipContact, ...]]:
-    """The ships touching one another where this step's moves left them, and the loads
-    ((ships, 3): X, Y N; N N m) that give each its impulse over the next step
-    (``sim_core.ship.collision``); a ship on a logged track gives way to nothing."""
-    if len(model.ships) < 2:
-        return np.zeros((1, 3)), ()
-    kinematic = [c is not None and c.kinematic is not None for c in orders]
-    return ship_collisions(model.ships, data.ships, model.contours, kinematic, dt)
+    """The ships touching one another, or a vessel the instructor steers, where this step's
+    moves left them, and the loads ((ships, 3): X, Y N; N N m) that give each own ship its
+    impulse over the next step (``sim_core.ship.collision``). A ship on a logged track
+    and a scripted vessel give way to nothing; a vessel is drawn as a ship's waterline of
+    its length and beam (``waterline_contour``)."""
+    own = len(model.ships)
+    near = [(mmsi, v) for mmsi, v in data.vessels.items()
+            if any(math.dist((v.north, v.east), s.eta[:2]) < v.length + m.L for m, s in zip(model.ships, data.ships))]
+    if own < 2 and not near:
+        return np.zeros((own, 3)), ()
+    kinematic = [c is not None and c.kinematic is not None for c in orders] + [True] * len(near)
+    bodies = [*data.ships, *(_vessel_body(v) for _, v in near)]
+    contours = [*model.contours, *(waterline_contour(v.length, v.beam) for _, v in near)]
+    loads, touching = ship_collisions([*model.ships, *(None for _ in near)], bodies, contours, kinematic, dt, own)
+    return loads[:own], tuple(c if c.ships[1] < own else
+                              dataclasses.replace(c, ships=c.ships[:1], vessel=near[c.ships[1] - own][0])
+                              for c in touching)
+
+
+def _vessel_body(vessel: OtherVessel) -> ShipData:
+    """A scripted vessel as a ship's state: where it is, heading its course at its speed."""
+    body = ShipData()
+    body.eta[0], body.eta[1], body.eta[5] = vessel.north, vessel.east, vessel.course
+    body.nu[0] = vessel.speed
+    return body
 
 
 def take_ice_loads(data: WorldData, report: IceStepReport, winds: list[np.ndarray], impacts: np.ndarray) -> np.ndarray:

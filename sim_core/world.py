@@ -313,6 +313,7 @@ def step(model: WorldModel, data: WorldData, dt: float,
     if data.environment.frozen:
         return dataclasses.replace(_held(model, data, rejected), **applied)
     winds = [move_ship(model, data, k, dt, c) for k, c in enumerate(orders)]
+    move_vessels(data.vessels, dt)
     impacts, touching = collisions(model, data, orders, dt)
     water = drift_ice(model, data, dt)
     contours, hulls = hulls_in_ice(model, data)
@@ -322,7 +323,6 @@ def step(model: WorldModel, data: WorldData, dt: float,
     report = ice_step(model.ice, data.ice, hulls, dt, water, fleet_wash(model, data))
     if data.moving_to is None:  # (a move's tiles are prepared first)
         prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3)
-    move_vessels(data.vessels, dt)
     data.time += dt
     data.seq += 1
     loads = take_ice_loads(data, report, winds, impacts)

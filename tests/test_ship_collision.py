@@ -8,15 +8,17 @@ import numpy as np
 import pytest
 
 from conftest import exercise_config
-from bridge_node.exercise.collision_alarms import CLEAR_S, COLLISION_ALARM, CollisionAlarms
+from bridge_node.exercise.collision_alarms import CLEAR_S, COLLISION_ALARM, VESSEL_COLLISION_ALARM, CollisionAlarms
 from bridge_node.exercise.fleet import Bridge
 from bridge_node.exercise.tick import TickOutcome
 from bridge_node.links.hub import LinkHub
 from bridge_node.links.settings import ArbitrationSettings
 from bridge_node.node.bridges import bridges_summary
 from bridge_node.node.world_setup import build_world
+from sim_core.frames.hull_contour import waterline_contour
 from sim_core.frames.ship_frame import ship_to_world, ship_vector_to_world, world_vector_to_ship
 from sim_core.ship.collision import MAX_PUSH_OUT, SLOP, ship_collisions, waterline_overlap
+from sim_core.instructor import AddVessel, OtherVessel
 from sim_core.world import Controls, KinematicPose, ShipStart, compile_world, new_world_data, step
 
 DT = 1.0 / 60.0
@@ -129,7 +131,7 @@ def test_both_bridges_hear_the_collision_alarm_until_the_ships_are_apart(two_shi
     data = _ram(model)
     bridges = [Bridge(LinkHub([], ArbitrationSettings()), 230_000_001 + k, name)
                for k, name in enumerate(("ODEN", "ATLE"))]
-    alarms = CollisionAlarms(bridges)
+    alarms = CollisionAlarms([b.hub for b in bridges], [b.name for b in bridges])
     now = 0.0
     for _ in range(int(80.0 / DT)):
         now += DT
@@ -148,3 +150,33 @@ def test_both_bridges_hear_the_collision_alarm_until_the_ships_are_apart(two_shi
     summary = bridges_summary(bridges[0].hub, bridges)  # the run's summary: each collision once
     assert summary["collisions"] == [a.text for a in first[:1]] + ["collision with ATLE 0.3 kn 0 MJ"]
     assert summary["alarms"] == []
+
+
+def test_a_ship_that_rams_the_instructors_vessel_stops_against_it(two_ships):
+    """A vessel the instructor steers follows its script whatever it meets: the own ship
+    that rams it amidships stops against it, with the energy of an impact against a body
+    that does not give way (the striker's surge mass alone), and its bridge gets alarm
+    VESSEL_COLLISION_ALARM naming the vessel."""
+    one = compile_world(two_ships.ship, two_ships.ice, two_ships.scene, two_ships.origin, (), two_ships.rubble)
+    p = one.ship.particulars
+    data = new_world_data(one, NORTH, -0.5 * (p.length + 20.0) - 5.0, 0.5 * math.pi, SPEED)
+    add = AddVessel(230_000_009, OtherVessel("ODEN", NORTH, 0.0, 0.0, 0.0, 100.0, 20.0))
+    hub = LinkHub([], ArbitrationSettings())
+    alarms = CollisionAlarms([hub], [""])
+    first, deepest, now = None, 0.0, 0.0
+    for k in range(int(20.0 / DT)):
+        now += DT
+        events = step(one, data, DT, Controls(telegraph="stop" if k else None), (add,) if k == 0 else ())
+        alarms.on_step(_outcome(events, now))
+        first = first or (events.collisions[0] if events.collisions else None)
+        vessel = ship_to_world(waterline_contour(100.0, 20.0), NORTH, 0.0, 0.0)
+        found = waterline_overlap(ship_to_world(one.contour, *data.ship.eta[[0, 1, 5]]), vessel)
+        deepest = max(deepest, 0.0 if found is None else found[2])
+    assert first is not None and first.ships == (0,) and first.vessel == 230_000_009
+    assert first.closing_speed == pytest.approx(SPEED, rel=0.05)
+    assert first.energy == pytest.approx(0.5 * SPEED**2 * one.ship.surge_mass, rel=0.05)
+    assert deepest < 0.2 and data.ship.nu[0] < 0.3  # stopped against it, not through its 20 m beam
+    assert (data.vessels[230_000_009].north, data.vessels[230_000_009].east) == (NORTH, 0.0)  # unmoved
+    raised = next(a for _, a in hub.alarm_log if a.active)
+    assert raised.number == VESSEL_COLLISION_ALARM and raised.text.startswith("collision with ODEN 5.8 kn")
+    assert bridges_summary(hub, [])["collisions"] == [raised.text]

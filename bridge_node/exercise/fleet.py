@@ -97,5 +97,6 @@ def fleet_listeners(model: WorldModel, bridges: Sequence[Bridge],
     """The collision alarms, every ship's traffic picture of the others, then the other
     ships' ``outputs`` (a listener of the k-th ship's hub, k >= 1; a replay's only send),
     before the first ship's, which the caller adds."""
-    return [CollisionAlarms(bridges), *(FleetTraffic(model, bridges, k) for k in range(len(bridges))),
+    return [CollisionAlarms([b.hub for b in bridges], [b.name for b in bridges]),
+            *(FleetTraffic(model, bridges, k) for k in range(len(bridges))),
             *(outputs(b.hub, k) for k, b in enumerate(bridges) if k > 0)]

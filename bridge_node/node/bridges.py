@@ -6,7 +6,7 @@ from __future__ import annotations
 from contextlib import ExitStack
 from pathlib import Path
 
-from bridge_node.exercise.collision_alarms import COLLISION_ALARM
+from bridge_node.exercise.collision_alarms import COLLISION_ALARM, VESSEL_COLLISION_ALARM
 from bridge_node.exercise.fleet import Bridge
 from bridge_node.links.hub import LinkHub
 from bridge_node.links.traffic_picture import TrafficPicture
@@ -31,11 +31,13 @@ def open_bridges(cfg: NodeConfig, hub: LinkHub, record: Path | None, stack: Exit
 
 def bridges_summary(hub: LinkHub, bridges: list[Bridge]) -> dict:
     """For a run's summary: every ship's links' health, its active alarms' texts, and every
-    collision between own ships (once per collision: on the bridge of the first ship of the
-    pair); another ship's texts start with its name. ``bridges`` as ``open_bridges`` gave them."""
+    collision (between own ships once: on the bridge of the first ship of the pair; with a
+    vessel the instructor steers); another ship's texts start with its name. ``bridges`` as
+    ``open_bridges`` gave them."""
     hubs = [b.hub for b in bridges] or [hub]
     names = [""] + [f"{b.name}: " for b in bridges[1:]]
     return {"links": [link.health().as_dict() for h in hubs for link in h.links],
             "alarms": [name + a.text for name, h in zip(names, hubs) for a in h.active_alarms.values()],
             "collisions": [name + a.text for k, (name, h) in enumerate(zip(names, hubs)) for _, a in h.alarm_log
-                           if a.active and k < a.number - COLLISION_ALARM < len(hubs)]}
+                           if a.active and (k < a.number - COLLISION_ALARM < len(hubs)
+                                            or a.number == VESSEL_COLLISION_ALARM)]}

@@ -49,11 +49,13 @@ MAX_PUSH_OUT = 0.5  # m/s: the fastest the push-out parts overlapping ships
 
 @dataclass(frozen=True)
 class ShipContact:
-    """Two own ships touching at the end of a step, and the impact between them. Ships by
-    their index in the world model (a < b); the point and the normal in the world (m from
-    the exercise origin; a unit vector from a into b), north and east components."""
+    """Two own ships touching at the end of a step, or an own ship and a vessel the
+    instructor steers, and the impact between them. Own ships by their index in the world
+    model (a < b; one index and the vessel's MMSI in ``vessel``); the point and the normal
+    in the world (m from the exercise origin; a unit vector from a into b, or into the
+    vessel), north and east components."""
 
-    ships: tuple[int, int]
+    ships: tuple[int, ...]
     north: float  # m
     east: float  # m
     normal: tuple[float, float]  # north, east
@@ -61,6 +63,7 @@ class ShipContact:
     closing_speed: float  # m/s along the normal before the impact (> 0: closing)
     impulse: float  # N s: the normal impulse each ship took
     energy: float  # J: lost in the impact, into the hulls' structure (Pedersen and Zhang's E)
+    vessel: int | None = None  # the instructor's vessel's MMSI, where it is the other body
 
 
 def waterline_overlap(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, float] | None:
@@ -90,14 +93,17 @@ def waterline_overlap(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndar
     return np.array([found.normal.x, found.normal.y]), middle, max(0.0, -min(p.distance for p in points))
 
 
-def _rows(ship: ShipModel, psi: float, arm: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _rows(ship: ShipModel | None, psi: float, arm: np.ndarray,
+          directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The world directions (k, 2; x east, y north) acting at arm (m from midship, world) as
     the ship's generalized loads W (k, 3: X, Y N; N N m, + to starboard, per unit force),
-    and W M^-1 (k, 3): the velocity changes (surge, sway m/s; yaw rad/s) per unit impulse."""
+    and W M^-1 (k, 3): the velocity changes (surge, sway m/s; yaw rad/s) per unit impulse
+    (zero for a body without a model, which gives way to nothing)."""
     px, py = world_vector_to_ship(tuple(arm), psi)
     w = np.array([[fx, fy, px * fy - py * fx] for fx, fy in (world_vector_to_ship(tuple(d), psi) for d in directions)])
     m_inv = np.zeros((3, 3))
-    m_inv[0, 0], m_inv[1:, 1:] = 1.0 / ship.surge_mass, ship.inv_sway_yaw
+    if ship is not None:
+        m_inv[0, 0], m_inv[1:, 1:] = 1.0 / ship.surge_mass, ship.inv_sway_yaw
     return w, w @ m_inv
 
 
@@ -130,7 +136,7 @@ def _midship(ship: ShipData) -> np.ndarray:
     return np.array([ship.eta[1], ship.eta[0]])
 
 
-def _impact(models: Sequence[ShipModel], ships: Sequence[ShipData], pair: tuple[int, int], kinematic: Sequence[bool],
+def _impact(models: Sequence[ShipModel | None], ships: Sequence[ShipData], pair: tuple[int, int], kinematic: Sequence[bool],
             overlap: tuple[np.ndarray, np.ndarray, float], dt: float) -> tuple[ShipContact, list[np.ndarray]]:
     """The contact of a pair of ships and the loads (X, Y N; N N m; one per ship of the
     pair) that give each its share of the impulse over dt s. The energy is the impact's
@@ -156,27 +162,31 @@ def _impact(models: Sequence[ShipModel], ships: Sequence[ShipData], pair: tuple[
     return contact, loads
 
 
-def ship_collisions(models: Sequence[ShipModel], ships: Sequence[ShipData], contours: Sequence[np.ndarray],
-                    kinematic: Sequence[bool], dt: float) -> tuple[np.ndarray, tuple[ShipContact, ...]]:
+def ship_collisions(models: Sequence[ShipModel | None], ships: Sequence[ShipData], contours: Sequence[np.ndarray],
+                    kinematic: Sequence[bool], dt: float,
+                    own: int | None = None) -> tuple[np.ndarray, tuple[ShipContact, ...]]:
     """The ships touching one another, and the contact loads that part them.
 
     Parameters
     ----------
-    models, ships : the exercise's ships, model and state, by index
-    contours : (34, 2) float each, the waterline in the ship's frame (x forward, y
+    models, ships : the bodies, model (None: one without, kinematic) and state, by index:
+        the exercise's own ships first, then any vessels the instructor steers
+    contours : (n, 2) float each, the waterline in the body's frame (x forward, y
         starboard), m
-    kinematic : per ship, whether it follows a logged track (and gives way to nothing)
+    kinematic : per body, whether it follows a logged track or a script (and gives way
+        to nothing)
     dt : float, the step over which the loads act, s
+    own : how many of the bodies are own ships (None: all); no pair of the others is tried
 
     Returns
     -------
-    The loads (ships, 3): X, Y N in each ship's frame, N N m (+ to starboard), at
+    The loads (bodies, 3): X, Y N in each body's frame, N N m (+ to starboard), at
     midship, over the next step; and every touching pair's ``ShipContact``.
     """
     loads = np.zeros((len(ships), 3))
     contacts = []
     reach = [float(np.hypot(*c.T).max()) for c in contours]
-    for a in range(len(ships)):
+    for a in range(len(ships) if own is None else own):
         for b in range(a + 1, len(ships)):
             if math.dist(ships[a].eta[:2], ships[b].eta[:2]) > reach[a] + reach[b]:
                 continue
