@@ -9,6 +9,7 @@ import pytest
 
 from conftest import exercise_config
 from bridge_node.exercise.collision_alarms import CLEAR_S, COLLISION_ALARM, VESSEL_COLLISION_ALARM, CollisionAlarms
+from bridge_node.control.status import exercise_status
 from bridge_node.exercise.fleet import Bridge
 from bridge_node.exercise.tick import TickOutcome
 from bridge_node.links.hub import LinkHub
@@ -132,13 +133,15 @@ def test_both_bridges_hear_the_collision_alarm_until_the_ships_are_apart(two_shi
     bridges = [Bridge(LinkHub([], ArbitrationSettings()), 230_000_001 + k, name)
                for k, name in enumerate(("ODEN", "ATLE"))]
     alarms = CollisionAlarms([b.hub for b in bridges], [b.name for b in bridges])
-    now = 0.0
+    now, seen = 0.0, None
     for _ in range(int(80.0 / DT)):
         now += DT
         events = step(model, data, DT, [Controls(telegraph="full_astern"), Controls()])
         alarms.on_step(_outcome(events, now))
         if events.collisions:
             last = now
+        if COLLISION_ALARM in bridges[1].hub.active_alarms and not seen:  # the instructor's status: every bridge's
+            seen = exercise_status(events, None, bridges[0].hub, [("ATLE", bridges[1].hub)])["alarms"]
     first = [next(a for _, a in h.hub.alarm_log if a.active) for h in bridges]
     assert [(a.number, a.text) for a in first] == [(COLLISION_ALARM + 1, "collision with ATLE 5.8 kn 78 MJ"),
                                                    (COLLISION_ALARM, "collision with ODEN 5.8 kn 78 MJ")]
@@ -147,6 +150,7 @@ def test_both_bridges_hear_the_collision_alarm_until_the_ships_are_apart(two_shi
     assert len(raised) == len(cleared) == len(alarms.log)  # each raised once per collision, then cleared
     assert all(c >= r + CLEAR_S for r, c in zip(raised, cleared)) and cleared[-1] >= last + CLEAR_S
     assert not bridges[0].hub.active_alarms and not bridges[1].hub.active_alarms
+    assert [a["text"] for a in seen] == [first[0].text, "ATLE: " + first[1].text]
     summary = bridges_summary(bridges[0].hub, bridges)  # the run's summary: each collision once
     assert summary["collisions"] == [a.text for a in first[:1]] + ["collision with ATLE 0.3 kn 0 MJ"]
     assert summary["alarms"] == []

@@ -123,7 +123,8 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
         status = _StatusLine(live, hub, first, station.address if cfg.instructor.start else None)
         queue = CommandQueue(cfg.control.queue, cfg.control.per_tick)
         ice = {"ice": list(model.scene.class_names)}  # what set_ice may lay
-        with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last, data, hub) | ice,
+        others = [(b.name, b.hub) for b in fleet[1:]]
+        with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last, data, hub, others) | ice,
                              [link.name for h in hubs for link in h.links], record,
                              model.scene.class_names, len(model.ships)) as control, station:
             stats = run_realtime(model, data, hub, rate, args.duration,

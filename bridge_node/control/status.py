@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import datetime as dt
 import math
+from collections.abc import Sequence
 
 from bridge_node.links.hub import LinkHub
 from sim_core.frames.units import KNOT
@@ -21,11 +22,13 @@ def _ship_fields(s: ShipOutputs) -> dict:
             "rudder_deg": round(math.degrees(s.rudder_angle), 2), "shaft_rpm": round(s.shaft_rps * 60.0, 1)}
 
 
-def exercise_status(events: WorldEvents, data: WorldData | None = None, hub: LinkHub | None = None) -> dict:
+def exercise_status(events: WorldEvents, data: WorldData | None = None, hub: LinkHub | None = None,
+                    others: Sequence[tuple[str, LinkHub]] = ()) -> dict:
     """Time, exercise clock, freeze, the own ship (and the other own ships, ``other_ships``)
     and the environment of a step's events;
     with the world's data, the ship's orders and failures; with the hub, link health and
-    active alarms."""
+    active alarms, and with ``others`` (each other own ship's name and hub) theirs too, an
+    alarm's text after the ship's name."""
     s, e = events.ship, events.environment
     status = {
         "seq": events.seq, "time_s": round(events.time, 3), "frozen": e.frozen,
@@ -44,6 +47,8 @@ def exercise_status(events: WorldEvents, data: WorldData | None = None, hub: Lin
             other |= {"steering_pumps": ship.steering_pumps, "power_percent": round(ship.power_share * 100.0, 1),
                       "sensors": sensors.modes()}
     if hub is not None:
-        status |= {"alarms": [{"number": a.number, "text": a.text} for a in list(hub.active_alarms.values())],
-                   "links": [link.health().as_dict() for link in list(hub.links)]}
+        hubs = [("", hub), *((f"{name}: ", h) for name, h in others)]
+        status |= {"alarms": [{"number": a.number, "text": prefix + a.text} for prefix, h in hubs
+                              for a in list(h.active_alarms.values())],
+                   "links": [link.health().as_dict() for _, h in hubs for link in list(h.links)]}
     return status
