@@ -26,6 +26,7 @@ from nmea2000.decoder import NMEA2000Decoder
 from pyais import decode as decode_ais
 
 from bridge_node.commands import ctl
+from bridge_node.commands.render_snapshot import other_ships
 from bridge_node.common.errors import UserError
 from bridge_node.common.network import free_port
 from bridge_node.exercise.tick_record import TICKS_FILE
@@ -344,6 +345,9 @@ def test_a_follower_sees_the_first_ship_as_traffic_and_bad_ship_reports_are_refu
     assert rows.tolist() == [(MMSI_A, events.ship.east, events.ship.north, events.ship.heading,
                               events.ship.speed_over_ground, 150.0, 22.0)]
     assert followed_model(model, 1).ships[0] is model.ships[1]
+    p = model.ships[1].particulars  # render-snapshot draws ship B as the stream's traffic does in a run
+    assert other_ships(cfg, model, events).tolist() == [(MMSI_B, b.outputs.east, b.outputs.north, b.outputs.heading,
+                                                         b.outputs.speed_over_ground, p.length, p.beam)]
     assert exercise_status(events)["other_ships"][0]["north_m"] == pytest.approx(b.outputs.north, abs=1e-3)
     with pytest.raises(ValueError, match="the stream carries 1 ships; ship 1 is none"):
         follow(dataclasses.replace(events, others=()), traffic)

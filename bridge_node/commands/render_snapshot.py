@@ -8,15 +8,17 @@ import argparse
 import time
 from pathlib import Path
 
+import numpy as np
 from rich.console import Console
 from rich.progress import Progress
 
-from bridge_node.node.config import load_config
+from bridge_node.links.traffic_picture import TRAFFIC_DTYPE
+from bridge_node.node.config import NodeConfig, load_config
 from bridge_node.common.errors import UserError
 from bridge_node.node.world_setup import build_world, start_world
 from bridge_node.render.open_channels import open_channels
 from bridge_node.stream.world_view import WorldView
-from sim_core.world import snapshot, step
+from sim_core.world import WorldEvents, WorldModel, snapshot, step
 
 DT = 1 / 30
 
@@ -27,6 +29,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--classes", action="store_true",
                    help="also write each channel's class mask (sky, water, level ice, crack, broken and submerged "
                         "floe, own ship, other vessel) as NAME_classes.png, with classes_legend.png")
+
+
+def other_ships(cfg: NodeConfig, model: WorldModel, events: WorldEvents) -> np.ndarray:
+    """The other own ships (``[[ships]]``) as the traffic rows (``TRAFFIC_DTYPE``) the
+    renderer draws: in a run the stream carries them so, from each ship's traffic picture."""
+    rows = [(ship.mmsi, r.outputs.east, r.outputs.north, r.outputs.heading, r.outputs.speed_over_ground,
+             m.particulars.length, m.particulars.beam) for ship, r, m in zip(cfg.ships, events.others, model.ships[1:])]
+    return np.array(rows, dtype=TRAFFIC_DTYPE).reshape(-1)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -44,7 +54,9 @@ def run(args: argparse.Namespace) -> int:
             progress.advance(task)
     channels = open_channels(cfg.render, model)
     view = WorldView()
-    view.apply(snapshot(model, data))
+    events = snapshot(model, data)
+    view.apply(events)
+    view.traffic = other_ships(cfg, model, events)
     channels.renderer.build_all(view)
     t0 = time.perf_counter()
     channels.render(view)
