@@ -32,6 +32,19 @@ def exchange(node: serial.Serial, terminal: int, seconds: float) -> tuple[bytes,
     return heard, screen
 
 
+def started(node: serial.Serial, terminal: int, proc: subprocess.Popen) -> tuple[bytes, bytes]:
+    """Play the node until the console's first rudder order comes (or it exits, or a
+    minute passes): its start imports the node's packages, seconds on a loaded machine
+    (a fixed 4 s window failed once, under a full test run beside a busy loop)."""
+    heard = screen = b""
+    end = time.monotonic() + 60.0
+    while b"$RCROR," not in heard and proc.poll() is None and time.monotonic() < end:
+        got = exchange(node, terminal, 0.5)
+        heard, screen = heard + got[0], screen + got[1]
+    got = exchange(node, terminal, 1.0)  # a second of orders after the first
+    return heard + got[0], screen + got[1]
+
+
 def test_keys_steer_and_the_echo_shows(tmp_path):
     with PtyPair(tmp_path, "nmea") as pair:
         cfg = tmp_path / "console.toml"
@@ -42,7 +55,7 @@ def test_keys_steer_and_the_echo_shows(tmp_path):
                                 stdin=slave, stdout=slave, stderr=slave, env=os.environ | {"COLUMNS": "200"})
         os.close(slave)
         try:
-            heard, screen = exchange(node, terminal, 4.0)  # started, and steering midships, stop
+            heard, screen = started(node, terminal, proc)  # steering midships, stop
             assert b"$RCROR,0.0,A,,V,B" in heard, screen.decode(errors="replace")
             phases = {}
             for key in b"ddwxxuug":
