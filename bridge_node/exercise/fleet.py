@@ -92,11 +92,14 @@ def _vessel(s: ShipOutputs, bridge: Bridge, length: float, beam: float, now: flo
                   s.course_over_ground, s.speed_over_ground, s.rate_of_turn, length, beam)
 
 
-def fleet_listeners(model: WorldModel, bridges: Sequence[Bridge],
+def fleet_listeners(model: WorldModel, hub: LinkHub | None, bridges: Sequence[Bridge],
                     outputs: Callable[[LinkHub, int], StepListener] = OtherShipOutputs) -> list[StepListener]:
     """The collision alarms, every ship's traffic picture of the others, then the other
     ships' ``outputs`` (a listener of the k-th ship's hub, k >= 1; a replay's only send),
-    before the first ship's, which the caller adds."""
+    before the first ship's, which the caller adds. Without ``bridges`` (one own ship):
+    the collision alarms on ``hub`` (with the instructor's vessels), none without a hub."""
+    if not bridges:
+        return [CollisionAlarms([hub], [""])] if hub is not None else []
     return [CollisionAlarms([b.hub for b in bridges], [b.name for b in bridges]),
             *(FleetTraffic(model, bridges, k) for k in range(len(bridges))),
             *(outputs(b.hub, k) for k, b in enumerate(bridges) if k > 0)]

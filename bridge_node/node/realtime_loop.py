@@ -30,7 +30,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bridge_node.exercise.command_log import CommandLog
-from bridge_node.exercise.collision_alarms import CollisionAlarms
 from bridge_node.exercise.fleet import Bridge, FleetOrders, fleet_listeners
 from bridge_node.control.queue import CommandSource
 from bridge_node.exercise.listeners import LinkOutputs, SaveWriter, WorldTraffic
@@ -210,7 +209,7 @@ def live_tick(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float,
     records = [_tick_record(h, rate_hz) for h in hubs if h.record is not None]  # each ship's in its own folder
     if hub.record is not None:
         records += [CommandLog(hub.record.folder), SaveWriter(hub.record.folder)]
-    ships = fleet_listeners(model, fleet) if fleet else [CollisionAlarms([hub], [""])]
+    ships = fleet_listeners(model, hub, fleet)
     return ExerciseTick(model, data, FleetOrders(fleet) if fleet else hub,
                         [*records, *(WorldTraffic(h.traffic, model.origin) for h in hubs), *ships, LinkOutputs(hub),
                          *listeners], commands)

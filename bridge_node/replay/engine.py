@@ -22,7 +22,6 @@ from typing import Protocol
 import numpy as np
 
 from bridge_node.exercise.listeners import ReplayLinkOutputs, StreamOutput, WorldTraffic
-from bridge_node.exercise.collision_alarms import CollisionAlarms
 from bridge_node.exercise.fleet import Bridge, fleet_listeners
 from bridge_node.exercise.pacer import Pacer
 from bridge_node.exercise.tick import ExerciseTick, TickOutcome
@@ -189,8 +188,7 @@ def run_replay(model: WorldModel, data: WorldData, source: Source, playback: Pla
     stats = ReplayStats()
     orders = StepOrders(source)
     bridges = [*(WorldTraffic(b.hub.traffic, model.origin) for b in fleet[1:]),
-               *fleet_listeners(model, fleet, ReplayLinkOutputs)] if fleet else \
-        [CollisionAlarms([hub], [""])] if hub is not None else []
+               *fleet_listeners(model, hub, fleet, ReplayLinkOutputs)]
     links = ReplayLinkOutputs(hub) if hub is not None else None
     world_traffic = WorldTraffic(hub.traffic, model.origin) if hub is not None else None
     stream = StreamOutput(publisher, hub.traffic if hub else None, model.origin) if publisher is not None else None
