@@ -7,6 +7,8 @@ from conftest import exercise_config
 
 from bridge_node.node.world_setup import build_world, start_world
 from sim_core.fracture.tile_template import FractureSettings, build_tile
+from sim_core.ice.chipmunk_bodies import TileBodies
+from sim_core.ice.contact import REMOVAL_OWN_COST
 from sim_core.frames.hull_contour import waterline_contour
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.model import compile_ice_model
@@ -117,3 +119,38 @@ def test_floes_that_leave_and_reenter_keep_pose_and_momentum(settle):
     np.testing.assert_allclose(st.yaw[back], pose[1], atol=1e-9)
     np.testing.assert_allclose(st.vel[back], momentum[0], rtol=1e-6)
     np.testing.assert_allclose(st.yaw_rate[back], momentum[1], rtol=1e-6)
+
+
+def test_a_freeze_takes_its_tile_out_within_the_removal_budget(monkeypatch):
+    """Each removal costs Chipmunk a walk over every cached contact and about
+    ``REMOVAL_OWN_COST`` such visits besides: a freezing tile among many contacts leaves over
+    several steps, each removing no more than ``swap_removal_work`` allows for the contacts
+    the space held, and in the end nothing of it is left in the space."""
+    tile = build_tile(0.5, 5, FractureSettings(tile_side=100.0, colliders="sphere"))
+    model = compile_ice_model([tile])
+    data = new_ice_data(model, waterline_contour(150.0, 24.0), 0.1)
+    far = HullMotion(np.array([0.0, -9000.0]), 0.0, np.zeros(2), 0.0)
+    rows = data.tiles.rows(place_tile(model, data, 0, (0.0, 0.0)))
+    loose = rows[::2]
+    break_cells(data, loose, BreakCause.HULL)  # half the cells loose among the rest, pushing: many contacts
+    rng = np.random.default_rng(5)
+    data.contacts.set_velocity(data.state, loose, rng.uniform(-0.5, 0.5, (len(loose), 2)), np.zeros(len(loose)))
+    for _ in range(5):
+        ice_step(model, data, (far,), 1 / 30)
+    removed = []
+    original = TileBodies.remove
+    monkeypatch.setattr(TileBodies, "remove", lambda self, space, offsets: removed.append(
+        original(self, space, offsets)) or removed[-1])
+    space, work = data.contacts, model.settings.swap_removal_work
+    floes = int((data.state.status[rows] == FloeStatus.FREE).sum())  # a body and a shape each, a cell one shape
+    freeze_tile(data, 0)
+    per_step = []
+    while space.swaps_pending:
+        allowed = max(8, work // (space._arbiters + REMOVAL_OWN_COST))
+        removed.clear()
+        ice_step(model, data, (far,), 1 / 30)
+        per_step.append((sum(removed), allowed))
+    assert space._arbiters == 0  # the tile's contacts went with it
+    assert len(per_step) > 2 and per_step[0][1] < 800  # the contacts held the share below the count cap
+    assert all(n <= allowed + 2 for n, allowed in per_step)  # (a chunk is whole cells: up to 3 objects)
+    assert sum(n for n, _ in per_step) == len(rows) + floes  # every object of the tile

@@ -2,7 +2,7 @@
 ``ContactSpace``): a floe at rest sheds its contacts, becomes a static body out of the
 space's body lists, and comes back as a dynamic body when it is struck. Split from
 ``sim_core.ice.contact`` by responsibility; the space's own attributes are used as they are
-there (``_shedding``, ``_tiles``, ``_cp``, ``_moving_at``, ``_removal_work``)."""
+there (``_shedding``, ``_tiles``, ``_cp``, ``_moving_at``, ``_rest_work``)."""
 from __future__ import annotations
 
 import numpy as np
@@ -19,12 +19,12 @@ class FloeRest:
         """How many of the moving floes at these places (ascending) in the last
         ``read_free`` a step may start taking out of the dynamic set. Each, as it settles,
         costs Chipmunk a search of its dynamic bodies from the first up to its own, so the
-        searches are counted (not timed) against the same work budget as tile removals; at
-        least one is taken. (Moving its shape into the static tree, which looks up the
+        searches are counted (not timed) against ``rest_search_work``; at least one is
+        taken. (Moving its shape into the static tree, which looks up the
         moving floes it overlaps, costs more, and grows with the moving floes as the engine
         step does: 16 us a floe with 8800 moving, 5 us with 3200, on 2 cores; the count
         ``rest_per_step`` bounds that.)"""
-        return max(1, int(np.searchsorted(np.cumsum(self._moving_at[picks]), self._removal_work, side="right")))
+        return max(1, int(np.searchsorted(np.cumsum(self._moving_at[picks]), self._rest_work, side="right")))
 
     def rest(self, state: FloeState, rows: np.ndarray) -> None:
         """Start taking free rows out of the dynamic set (no solver work; moving floes

@@ -58,9 +58,13 @@ class IceDynamicsSettings(Params):
     swap_objects_per_step: int = Field(
         800, ge=1, le=1_000_000, description="engine objects a step switches in for tile swaps")
     swap_removal_work: int = Field(
+        125_000, ge=1000, le=100_000_000,
+        description="removals x (cached contacts + 140) a step may spend switching tiles out: Chipmunk walks "
+                    "every cached contact for each removal, and a removal costs about 140 such visits besides")
+    rest_search_work: int = Field(
         600_000, ge=1000, le=100_000_000,
-        description="removals x cached contacts a step may spend switching tiles out (Chipmunk walks every "
-                    "cached contact for each removal)")
+        description="entries of the dynamic-body array Chipmunk may search in a step for floes coming to rest "
+                    "(each one that turns static is looked up there)")
 
 
 @dataclass(frozen=True)
