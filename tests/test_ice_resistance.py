@@ -2,7 +2,11 @@ import math
 
 import pytest
 
-from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, OPEN_WATER, ice_resistance, lindqvist_terms
+from ships import ship
+
+from sim_core.ship.model import ice_force, level_ice_terms, new_ship_data
+from sim_core.ship.resistance import BROKEN_CHANNEL, LEVEL_ICE, level_ice_resistance, lindqvist_terms
+from sim_core.ship.rubble_resistance import brash_channel_resistance, channel_speed_factor
 
 # Reference case: B = 24 m, L = 150 m, T = 9 m, stem phi = 25 deg, waterline alpha = 30 deg,
 # mu = 0.1, sigma_f = 500 kPa, E = 3 GPa, nu = 0.33, rho_i = 900, rho_w = 1027, g = 9.826,
@@ -28,7 +32,7 @@ def test_terms_match_hand_computation():
     assert t.crushing == pytest.approx(100230, rel=1e-3)
     assert t.bending == pytest.approx(60715, rel=1e-3)
     assert t.submersion == pytest.approx(391774, rel=1e-3)
-    total = ice_resistance(t, 2.0, 0.8, 150.0, 9.826, LEVEL_ICE)
+    total = level_ice_resistance(t, 2.0, 0.8, 150.0, 9.826)
     assert total == pytest.approx(905299, rel=1e-3)
 
 
@@ -50,13 +54,31 @@ def test_bending_factor_multiplies_whole_term_and_submersion_keeps_its_root():
     assert extra == pytest.approx(expected, rel=1e-9)
 
 
-def test_speed_factors_condition_and_thickness():
+def test_speed_factors_and_thickness():
     t = lindqvist_terms(**CASE)
-    assert ice_resistance(t, 0.0, 0.8, 150.0, 9.826, LEVEL_ICE) == pytest.approx(t.crushing + t.bending + t.submersion)
-    assert ice_resistance(t, 3.0, 0.8, 150.0, 9.826, LEVEL_ICE) > ice_resistance(t, 1.0, 0.8, 150.0, 9.826, LEVEL_ICE)
-    level = ice_resistance(t, 2.0, 0.8, 150.0, 9.826, LEVEL_ICE)
-    channel = ice_resistance(t, 2.0, 0.8, 150.0, 9.826, BROKEN_CHANNEL, concentration=0.8)
-    assert 0.0 < channel < level
-    assert ice_resistance(t, 2.0, 0.8, 150.0, 9.826, OPEN_WATER) == 0.0
+    assert level_ice_resistance(t, 0.0, 0.8, 150.0, 9.826) == pytest.approx(t.crushing + t.bending + t.submersion)
+    assert level_ice_resistance(t, 3.0, 0.8, 150.0, 9.826) > level_ice_resistance(t, 1.0, 0.8, 150.0, 9.826)
+    level = level_ice_resistance(t, 2.0, 0.8, 150.0, 9.826)
+    assert level_ice_resistance(t, 2.0, 0.0, 150.0, 9.826) == 0.0
     thin = lindqvist_terms(**{**CASE, "h": 0.3})
-    assert ice_resistance(thin, 2.0, 0.3, 150.0, 9.826, LEVEL_ICE) < level
+    assert level_ice_resistance(thin, 2.0, 0.3, 150.0, 9.826) < level
+
+
+@pytest.mark.parametrize("h", [0.5, 1.0])
+def test_a_broken_channel_resists_as_brash_of_its_pieces_by_the_rules(h):
+    """In a channel another hull broke, the ship meets the Finnish-Swedish rules' channel
+    resistance of its pieces as brash, H_M = the channel's concentration times their
+    thickness, with the channel's speed factor; and the bow's share is all of it, as brash."""
+    m = ship("polar_cargo")
+    speed = 2.5
+    d = new_ship_data(m, speed)
+    d.ice_h, d.ice_condition = h, BROKEN_CHANNEL
+    surge, bow = ice_force(m, d, speed)
+    g = m.material.gravity
+    hm = m.particulars.ice.channel_concentration * h
+    expected = brash_channel_resistance(hm, m.bow) * channel_speed_factor(speed, m.L, g)
+    assert -surge == pytest.approx(expected, rel=1e-12) and bow == pytest.approx(expected, rel=1e-12)
+    level = level_ice_resistance(level_ice_terms(m, h), speed, h, m.L, g)
+    assert expected < 0.5 * level
+    d.ice_condition = LEVEL_ICE  # the same ship breaking the ice meets Lindqvist's resistance
+    assert -ice_force(m, d, speed)[0] == pytest.approx(level, rel=1e-12)

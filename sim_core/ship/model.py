@@ -26,8 +26,8 @@ from sim_core.frames.hull_contour import BOW_FRACTION, STERN_FRACTION
 from sim_core.material import IceMaterial
 from sim_core.ship.particulars import TELEGRAPH_POSITIONS, ShipParticulars
 from sim_core.ship.resistance import LEVEL_ICE, OPEN_WATER, LindqvistTerms, bow_normal_angle, breaking_resistance, \
-    ice_resistance, lindqvist_terms
-from sim_core.ship.rubble_resistance import BowForm, channel_speed_factor
+    level_ice_resistance, lindqvist_terms
+from sim_core.ship.rubble_resistance import BowForm, brash_channel_resistance, channel_speed_factor
 from sim_core.ship.motions import MotionsModel, compile_motions, heeling_moment, step_motions
 
 MAX_SUBSTEP = 0.1  # s
@@ -94,7 +94,7 @@ class ShipData:
     ice_resistance: float = 0.0  # N, last step (>= 0, opposing the motion)
     brash_resistance: float = 0.0  # N at 5 knots: the brash at the bow (``rubble_resistance``)
     keel_load: float = 0.0  # N: the ridge keel at the bow
-    _ice_terms: tuple = (None, None)  # (h, LindqvistTerms) cache
+    _ice_terms: tuple = (None, None, 0.0)  # cache: (h, LindqvistTerms, channel resistance N at 5 knots)
 
 
 def compile_ship(p: ShipParticulars, material: IceMaterial | None = None) -> ShipModel:
@@ -141,11 +141,8 @@ def bow_form(p: ShipParticulars) -> BowForm:
 def level_ice_terms(model: ShipModel, h: float) -> LindqvistTerms:
     """Lindqvist's static terms for this ship in level ice of thickness h (m)."""
     m = model.material
-    return lindqvist_terms(
-        h, model.B, model.L, model.d, model.stem_angle, model.waterline_angle,
-        m.flexural_strength, m.youngs_modulus, m.poisson_ratio, m.density, model.rho,
-        m.hull_friction, m.gravity,
-    )
+    return lindqvist_terms(h, model.B, model.L, model.d, model.stem_angle, model.waterline_angle, m.flexural_strength,
+                           m.youngs_modulus, m.poisson_ratio, m.density, model.rho, m.hull_friction, m.gravity)
 
 
 def propeller_thrust(model: ShipModel, u: float, v: float, r: float, n: float) -> tuple[float, float, float]:
@@ -228,23 +225,26 @@ def state_derivatives(model: ShipModel, state: tuple, delta: float, n: float, ex
 
 def ice_force(model: ShipModel, data: ShipData, u: float) -> tuple[float, float]:
     """Surge force (N) of the ice resistance, against u, faded in near rest so that it can
-    stop the ship but never drive it backwards: Lindqvist's for the level ice or channel,
-    plus the brash's and a ridge keel's at the bow; and the bow's share of the resistance
-    (N, >= 0, faded in alike: it lifts the bow)."""
+    stop the ship but never drive it backwards: Lindqvist's in level ice; in a broken channel
+    its pieces as brash (the concentration times their thickness) by the rules' channel
+    resistance; plus the brash's and a ridge keel's at the bow. And the bow's share (N, >= 0,
+    faded in alike: it lifts the bow): level ice's crushing and bending, the brash, the keel."""
     g = model.material.gravity
-    bow = data.keel_load
-    if data.brash_resistance > 0.0:
-        bow += data.brash_resistance * channel_speed_factor(u, model.L, g)
-    r = bow
+    r, bow, brash = data.keel_load, data.keel_load, data.brash_resistance
     if data.ice_condition != OPEN_WATER and data.ice_h > 0.0:
-        h_cached, terms = data._ice_terms
-        if h_cached != data.ice_h:
-            terms = level_ice_terms(model, data.ice_h)
-            data._ice_terms = (data.ice_h, terms)
-        r += ice_resistance(terms, abs(u), data.ice_h, model.L, g, data.ice_condition,
-                            model.particulars.ice.channel_concentration)
+        if data._ice_terms[0] != data.ice_h:
+            channel_brash = model.particulars.ice.channel_concentration * data.ice_h
+            data._ice_terms = (data.ice_h, level_ice_terms(model, data.ice_h),
+                               brash_channel_resistance(channel_brash, model.bow))
+        _, terms, channel = data._ice_terms
         if data.ice_condition == LEVEL_ICE:
+            r += level_ice_resistance(terms, abs(u), data.ice_h, model.L, g)
             bow += breaking_resistance(terms, abs(u), data.ice_h, g)
+        else:
+            brash += channel
+    if brash > 0.0:
+        pushed = brash * channel_speed_factor(u, model.L, g)
+        r, bow = r + pushed, bow + pushed
     data.ice_resistance = r
     fade = min(1.0, abs(u) / _U_ICE)
     return -math.copysign(r, u) * fade, bow * fade

@@ -119,7 +119,8 @@ class IceHull(Params):
     stem_angle_deg: float = Field(gt=10.0, lt=90.0, description="phi, stem angle to the waterline")
     waterline_angle_deg: float = Field(gt=5.0, lt=90.0, description="alpha, waterline entrance half-angle")
     channel_concentration: float = Field(
-        0.8, ge=0.0, le=1.0, description="share of the channel covered by broken ice")
+        0.8, ge=0.0, le=1.0, description="share of a broken channel its pieces cover; times their thickness, the "
+                                         "brash in mid channel (the Finnish-Swedish rules' H_M) it resists by")
 
 
 class ShipLook(Params):

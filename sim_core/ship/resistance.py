@@ -1,4 +1,4 @@
-"""Ice resistance on the hull: Lindqvist (1989) for level ice, and a broken-channel term.
+"""Ice resistance on the hull in level ice: Lindqvist (1989).
 
 Lindqvist, G. (1989), "A straightforward method for calculation of ice resistance of
 ships", POAC'89. With stem angle phi, waterline entrance half-angle alpha, and the normal
@@ -15,8 +15,8 @@ angle psi = arctan(tan phi / sin alpha):
 Two mistakes found in public codes are avoided on purpose and tested: the (1 + 1/cos psi)
 factor multiplies the whole bending term, and the submersion term keeps its square root.
 
-A broken channel needs no breaking: only the submersion of the broken pieces remains,
-scaled by the channel's ice concentration. Open water gives no ice resistance.
+A broken channel needs no breaking: its resistance is the Finnish-Swedish rules' channel
+formula (``rubble_resistance.brash_channel_resistance``). Open water gives no ice resistance.
 """
 from __future__ import annotations
 
@@ -69,14 +69,11 @@ def lindqvist_terms(
     return LindqvistTerms(crushing, bending, submersion)
 
 
-def ice_resistance(terms: LindqvistTerms, speed: float, h: float, length: float, g: float,
-                   condition: int, concentration: float = 1.0) -> float:
-    """Ice resistance (N, >= 0) at ship speed (m/s, >= 0) for the given ice condition."""
-    if condition == OPEN_WATER or h <= 0.0:
+def level_ice_resistance(terms: LindqvistTerms, speed: float, h: float, length: float, g: float) -> float:
+    """Level-ice resistance (N, >= 0) at ship speed (m/s, >= 0) in ice h m thick (0 for none)."""
+    if h <= 0.0:
         return 0.0
     submersion = terms.submersion * (1.0 + 9.4 * speed / math.sqrt(g * length))
-    if condition == BROKEN_CHANNEL:
-        return concentration * submersion
     return breaking_resistance(terms, speed, h, g) + submersion
 
 

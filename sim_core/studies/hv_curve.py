@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from sim_core.ship.model import ShipModel, level_ice_terms, mmg_forces
-from sim_core.ship.resistance import LEVEL_ICE, LindqvistTerms, ice_resistance
+from sim_core.ship.resistance import LindqvistTerms, level_ice_resistance
 
 MAX_THICKNESS = 3.0  # m: Lindqvist's method is used up to here
 _BISECTIONS = 60
@@ -30,8 +30,8 @@ def surge_balance(model: ShipModel, speed: float, thickness: float, rps: float,
     ``terms``: Lindqvist's static terms at that thickness, where the caller has them."""
     ice = 0.0
     if thickness > 0.0:
-        ice = ice_resistance(terms or level_ice_terms(model, thickness), speed, thickness, model.L,
-                             model.material.gravity, LEVEL_ICE)
+        ice = level_ice_resistance(terms or level_ice_terms(model, thickness), speed, thickness, model.L,
+                                   model.material.gravity)
     return mmg_forces(model, speed, 0.0, 0.0, 0.0, rps)[0] - ice
 
 
