@@ -388,10 +388,21 @@ def test_the_instructor_fails_one_ships_steering_engine_and_gyro(fleet_world):
     status = exercise_status(events, data)
     assert status["sensors"]["gyro"] == "ok" and status["other_ships"][0]["sensors"]["gyro"] == "offset"
     assert (status["other_ships"][0]["steering_pumps"], status["other_ships"][0]["power_percent"]) == (0, 30.0)
-    log = EventLog()  # the station's: ship B's failures named, the first ship's state untouched
+    log = EventLog()  # the station's: ship B's failures named and kept, the first ship's untouched
     log.on_events(events)
     assert [e["text"] for e in log.since(0)][-1].startswith("ship 1: ")
-    assert (log.steering, log.power, log.sensors["gyro"]) == (2, 1.0, "ok")
+    first, second = log.failures.ships
+    assert (first.steering, first.power, first.sensors["gyro"]) == (2, 1.0, "ok")
+    assert (second.steering, second.power, second.sensors["gyro"]) == (0, 0.3, "offset")
+    assert log.alarms(0.0, None) == ["ship 1: steering gear: rudder stuck (both pumps failed)",
+                                     "ship 1: engine: 30 % power", "ship 1: sensor: gyro offset"]
+    repaired = dict(status, seq=status["seq"] + 1, other_ships=[status["other_ships"][0] | {
+        "steering_pumps": 2, "power_percent": 100.0, "sensors": {"gyro": "ok", "gnss": "ok", "log": "ok"}}])
+    log.on_status(status | {"seq": status["seq"] - 1, "other_ships": repaired["other_ships"]})
+    assert log.failures.panel()[1]["pumps_failed"] == 2  # a reply older than the stream's failure is not taken
+    log.on_status(repaired)
+    assert log.failures.panel() == [{"pumps_failed": 0, "power_percent": 100.0, "sensors": first.sensors}] * 2
+    assert log.alarms(0.0, None) == []
 
 
 

@@ -269,6 +269,7 @@ def test_links_sensor_failures_and_a_save_point_from_the_page(exercise, browser)
         return wait_until(lambda: what in (t := text("log")) and t, 15, f"{what!r} in the event log")
 
     assert wait_until(state, 20, "the link in the Links card")[0] == "up"
+    assert not browser.find_element("id", "failure-ship-row").is_displayed()  # one own ship: no choice
     try:
         apply("link-fault-form", **{"lf-link": "instruments", "lf-fault": "disconnect"})
         wait_until(lambda: (h := ctl_status(config)["links"][0])["fault"] == "disconnect" and not h["connected"], 20,

@@ -117,7 +117,8 @@ def run(args: argparse.Namespace) -> int:
 def _geometry(model, cfg) -> bytes:
     """The station's geometry message of the configured exercise, with its ice regions."""
     return geometry_message(model, cfg.ship.name, cfg.instructor.rate_hz,
-                            configured_regions(cfg.ice_field, cfg.exercise.origin_deg()), cfg.convoy)
+                            configured_regions(cfg.ice_field, cfg.exercise.origin_deg()), cfg.convoy,
+                            [cfg.ship.shown_name(), *(ship.shown_name() for ship in cfg.ships)])
 
 
 def _debrief(args: argparse.Namespace, cfg, token: str | None) -> int:

@@ -12,6 +12,7 @@ import numpy as np
 
 from bridge_node.control.save_point import SaveRequest
 from bridge_node.links.faults import LinkFault
+from bridge_node.station.failures import SENSOR_TEXT, FleetFailures
 from sim_core.frames.units import KNOT
 from sim_core.instructor import (
     Command,
@@ -31,10 +32,7 @@ REFUSED_SHOWN_S = 10.0  # s a refused order stays among the alarms
 _ENVIRONMENT = {"visibility": ("visibility", 1.0, "m"), "wind_speed": ("wind", 1.0 / KNOT, "kn"),
                 "wind_from": ("wind from", 180.0 / math.pi, "deg"), "current_speed": ("current", 1.0 / KNOT, "kn"),
                 "current_to": ("current to", 180.0 / math.pi, "deg")}
-# (sensor, mode) -> what the instruments show: an alarm's text, and a failure's with its amount
 SENSOR_NAMES = {"gyro": "gyro", "gnss": "GNSS", "log": "speed log"}
-SENSOR_TEXT = {("gyro", "frozen"): "gyro frozen", ("gyro", "offset"): "gyro offset", ("gnss", "lost"): "GNSS fix lost",
-               ("gnss", "jumping"): "GNSS position jumping", ("log", "frozen"): "speed log frozen"}
 
 
 def _sensor_text(failure: SensorFailure) -> str:
@@ -124,10 +122,7 @@ class EventLog:
     def __init__(self) -> None:
         self._events: deque[dict] = deque(maxlen=LOG_MAX)
         self._next = 1
-        self.steering = 2  # pumps working, as the last failure seen (stream or status) set them
-        self.power = 1.0
-        self.sensors = {"gyro": "ok", "gnss": "ok", "log": "ok"}
-        self._failure_seq = -1  # the step of the last failure seen on the stream
+        self.failures = FleetFailures()
         self._status: dict | None = None  # the last status reply taken
         self.links: dict[str, dict] = {}  # name -> health, as the last status reply gave it
         self._node_alarms: list[str] = []
@@ -144,7 +139,7 @@ class EventLog:
     def joined(self, seq: int, sim_time: float, utc: float) -> None:
         """The station joined a node's stream (anew: the node may have restarted): logged, and
         the node's next status reply is taken for its failures."""
-        self._failure_seq = -1
+        self.failures.rejoined()
         self.add("station", f"joined the state stream at step {seq}", sim_time, utc)
 
     def since(self, last_id: int) -> tuple[dict, ...]:
@@ -156,37 +151,21 @@ class EventLog:
         for command in events.commands:
             kind, text = describe(command)
             self.add(kind, text, events.time, events.ship.utc)
-            if getattr(command, "ship", 0) == 0:  # the failures shown are the first ship's
-                self._note_failure(command, events.seq)
+            self.failures.note(command, events.seq)
         for rejection in events.rejected:
             text = f"{rejection.order} order {'refused' if rejection.refused else 'limited'}: {rejection.text}"
             if self._refused is None or self._refused[1] != text or time.monotonic() - self._refused[0] > 5.0:
                 self.add("order", text, events.time, events.ship.utc)
             self._refused = (time.monotonic(), text)
 
-    def _note_failure(self, command: Command | LinkFault | SaveRequest, seq: int) -> None:
-        """Keep the first ship's failure state a failure command leaves."""
-        if isinstance(command, SteeringFailure):
-            self.steering = command.pumps
-        elif isinstance(command, EngineFailure):
-            self.power = command.power_share
-        elif isinstance(command, SensorFailure):
-            self.sensors = {**self.sensors, command.sensor: command.mode}
-        if isinstance(command, (SteeringFailure, EngineFailure, SensorFailure)):
-            self._failure_seq = seq
-
     def on_status(self, status: dict | None, sim_time: float | None = None, utc: float | None = None) -> None:
-        """Take a status reply of the node (each once): its failures where it is newer than the
-        last failure seen on the stream (the node knows those applied before this station
-        joined), its alarms, and its links' health, logging a link that went down or up or
+        """Take a status reply of the node (each once): its ships' failures (``FleetFailures``),
+        its alarms, and its links' health, logging a link that went down or up or
         whose fault changed. A node without some of these fields keeps what was known."""
         if status is None or status is self._status:
             return
         self._status = status
-        if status.get("seq", -1) >= self._failure_seq:
-            self.steering = status.get("steering_pumps", self.steering)
-            self.power = status.get("power_percent", self.power * 100.0) / 100.0
-            self.sensors = {**self.sensors, **status.get("sensors", {})}
+        self.failures.take(status)
         self._node_alarms = [f"node alarm {a.get('number')}: {a.get('text')}" for a in status.get("alarms", [])]
         links = {str(h.get("name")): h for h in status.get("links", [])}
         for name, health in links.items():
@@ -204,13 +183,7 @@ class EventLog:
             active.append("state stream silent")
         if control_error:
             active.append(f"control endpoint: {control_error}")
-        if self.steering < 2:
-            active.append("steering gear: " + ("rudder stuck (both pumps failed)" if self.steering == 0
-                                               else "one pump failed (half rate)"))
-        if self.power < 1.0:
-            active.append("engine: blackout" if self.power <= 0.0 else f"engine: {self.power * 100:.0f} % power")
-        active += ["sensor: " + SENSOR_TEXT.get((k, mode), f"{k} {mode}") for k, mode in self.sensors.items()
-                   if mode != "ok"]
+        active += self.failures.alarms()
         if self._refused is not None and time.monotonic() - self._refused[0] < REFUSED_SHOWN_S:
             active.append(f"order refused or limited: {self._refused[1]}")
         active += self._node_alarms

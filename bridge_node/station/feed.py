@@ -120,10 +120,8 @@ class Feed:
         log, view, status = self.picture.log, sub.view, self.control.status  # replaced whole by its thread
         log.on_status(status, view.time, view.ship.utc)
         alarms = log.alarms(age_s, self.control.error, view.time, view.ship.utc)
-        failures = {"pumps_failed": 2 - log.steering, "power_percent": round(log.power * 100.0, 1),
-                    "sensors": log.sensors}
         extra = {"alarms": alarms, "stream": {"age_s": round(age_s, 2), "resyncs": sub.resyncs, "lost": sub.lost},
-                 "failures": failures, "links": None if status is None else list(log.links.values()),
+                 "failures": log.failures.panel(), "links": None if status is None else list(log.links.values()),
                  "control": {"error": self.control.error, "rudder_order_deg": (status or {}).get("rudder_order_deg")}}
         frame = self.picture.frame(view, extra)
         self.build_ms = [*self.build_ms[-999:], (time.perf_counter() - started) * 1e3]

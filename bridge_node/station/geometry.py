@@ -4,6 +4,7 @@ waterline outline, and the local-plane scale of the latitude/longitude grid. Sen
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 import shapely
@@ -18,8 +19,9 @@ from sim_core.world import WorldModel
 
 
 def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions: list[IceRegion] = (),
-                     convoy: ConvoySettings | None = None) -> bytes:
-    """The ``geometry`` message: JSON for the field, ship (``ship_name``), templates and the
+                     convoy: ConvoySettings | None = None, fleet: Sequence[str] = ()) -> bytes:
+    """The ``geometry`` message: JSON for the field, ship (``ship_name``), the names of all
+    own ships, the first first (``fleet``; unset: the ship alone), templates and the
     station's update rate (``rate_hz``, Hz); arrays of every
     global cell's outline points (x, y about its centroid, m), outline starts (G + 1) and
     centroid in its template's tile frame (x, y, m), the open-water tiles (``water_runs``), the
@@ -41,6 +43,7 @@ def geometry_message(model: WorldModel, ship_name: str, rate_hz: float, regions:
                    "m_per_deg_lat": m * math.pi / 180.0, "m_per_deg_lon": n * math.cos(lat0) * math.pi / 180.0},
         "ship": {"name": ship_name, "length": float(ship.length), "beam": float(ship.beam),
                  "hull": np.round(model.contour, 3).tolist()},
+        "fleet": list(fleet) or [ship_name],
         "searchlights": len(model.searchlights),
         "templates": templates,
         "ice_names": list(scene.class_names), "ice_kinds": ice_kinds(model),

@@ -1,6 +1,7 @@
 // The instructor station's links and failures: the Links card (each link's state, counts,
 // errors by kind, fault and last error, from the node's status replies), the failures now,
-// and the controls for sensor failures, link faults and save points.
+// and the controls for steering, engine and sensor failures (to the own ship chosen), link
+// faults and save points.
 "use strict";
 
 const PROBABLE_FAULTS = ["drop", "corrupt", "duplicate", "delay"];  // the link faults with a probability
@@ -30,7 +31,19 @@ function linksPanel(links) {
   }
 }
 
-function failuresNow(f) {
+// the own ships the failures go to (the geometry's fleet, the first ship first): a choice
+// only where the exercise has several
+function failureShips(names) {
+  const select = $("failure-ship"), chosen = select.value;
+  select.replaceChildren(...names.map((n, k) => new Option(k ? `${n} (ship ${k})` : n, String(k), false, String(k) === chosen)));
+  $("failure-ship-row").hidden = names.length < 2;
+}
+
+const forShip = (command) => ({ ...command, ship: Number($("failure-ship").value || 0) });
+
+// failures: each own ship's, the first ship's first; the chosen ship's are shown
+function failuresNow(failures) {
+  const f = failures[Number($("failure-ship").value || 0)] || failures[0];
   const sensors = Object.entries(f.sensors || {}).map(([k, mode]) => `${SENSOR_SHOWN[k] || k} ${mode}`).join(", ");
   const text = `now: steering ${PUMPS_SHOWN[f.pumps_failed]}, engine ${f.power_percent} % power` + (sensors ? `; ${sensors}` : "");
   setText($("failures-now"), text);
@@ -41,7 +54,7 @@ function sensorCommand(form) {
   for (const input of form.querySelectorAll("input[data-for-mode]")) {
     if (input.dataset.forMode === mode) command[input.dataset.key] = Number(input.value);
   }
-  return command;
+  return forShip(command);
 }
 
 function linkFaultCommand() {
@@ -59,6 +72,11 @@ function enableFor(select, inputs, uses) {
 }
 
 function wireFailureControls() {
+  onSubmit("steering-form", () => forShip({ command: "steering_failure", pumps_failed: Number($("steering").value) }));
+  onSubmit("engine-form", () => forShip({ command: "engine_failure", power_percent: num("engine-power") }));
+  document.querySelectorAll("[data-power]").forEach((b) => {
+    b.onclick = () => { $("engine-power").value = b.dataset.power; send(forShip({ command: "engine_failure", power_percent: Number(b.dataset.power) })); };
+  });
   for (const form of document.querySelectorAll("form[data-sensor]")) {
     enableFor(form.querySelector("select"), [...form.querySelectorAll("input[data-for-mode]")],
       (mode, input) => input.dataset.forMode === mode);

@@ -35,7 +35,10 @@ function connect() {
   ws.onmessage = (e) => {
     if (typeof e.data === "string") return onText(JSON.parse(e.data));
     const [header, arrays] = unpack(e.data);
-    if (header.type === "geometry") { map.setGeometry(header, arrays); iceNames(header.ice_names); if (!lastFrame) map.zoom(1); }
+    if (header.type === "geometry") {
+      map.setGeometry(header, arrays); iceNames(header.ice_names); failureShips(header.fleet || []);
+      if (!lastFrame) map.zoom(1);
+    }
     else if (header.type === "frame") onFrame(header, arrays);
     else if (header.type === "debrief") startDebrief(header, arrays);
   };
@@ -187,10 +190,7 @@ function wireControls() {
   onSubmit("visibility-form", () => ({ command: "visibility", visibility_m: num("visibility") }));
   onSubmit("wind-form", () => ({ command: "wind", speed_kn: num("wind-speed"), from_deg: num("wind-from") }));
   onSubmit("current-form", () => ({ command: "current", speed_kn: num("current-speed"), to_deg: num("current-to") }));
-  onSubmit("steering-form", () => ({ command: "steering_failure", pumps_failed: Number($("steering").value) }));
-  onSubmit("engine-form", () => ({ command: "engine_failure", power_percent: num("engine-power") }));
   document.querySelectorAll("[data-visibility]").forEach((b) => { b.onclick = () => { $("visibility").value = b.dataset.visibility; send({ command: "visibility", visibility_m: Number(b.dataset.visibility) }); }; });
-  document.querySelectorAll("[data-power]").forEach((b) => { b.onclick = () => { $("engine-power").value = b.dataset.power; send({ command: "engine_failure", power_percent: Number(b.dataset.power) }); }; });
   $("pick").onclick = () => {
     $("pick-hint").hidden = false; $("map").classList.add("picking");
     map.pick = (x, y) => {
