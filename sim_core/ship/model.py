@@ -26,7 +26,7 @@ from sim_core.frames.hull_contour import BOW_FRACTION, STERN_FRACTION
 from sim_core.material import IceMaterial
 from sim_core.ship.particulars import TELEGRAPH_POSITIONS, ShipParticulars
 from sim_core.ship.resistance import LEVEL_ICE, OPEN_WATER, LindqvistTerms, bow_normal_angle, breaking_resistance, \
-    level_ice_resistance, lindqvist_terms
+    lindqvist_terms, submersion_resistance
 from sim_core.ship.rubble_resistance import BowForm, brash_channel_resistance, channel_speed_factor
 from sim_core.ship.motions import MotionsModel, compile_motions, heeling_moment, step_motions
 
@@ -238,8 +238,8 @@ def ice_force(model: ShipModel, data: ShipData, u: float) -> tuple[float, float]
                                brash_channel_resistance(channel_brash, model.bow))
         _, terms, channel = data._ice_terms
         if data.ice_condition == LEVEL_ICE:
-            r += level_ice_resistance(terms, abs(u), data.ice_h, model.L, g)
-            bow += breaking_resistance(terms, abs(u), data.ice_h, g)
+            breaking = breaking_resistance(terms, abs(u), data.ice_h, g)
+            r, bow = r + (breaking + submersion_resistance(terms, abs(u), model.L, g)), bow + breaking
         else:
             brash += channel
     if brash > 0.0:

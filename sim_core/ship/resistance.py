@@ -73,8 +73,13 @@ def level_ice_resistance(terms: LindqvistTerms, speed: float, h: float, length: 
     """Level-ice resistance (N, >= 0) at ship speed (m/s, >= 0) in ice h m thick (0 for none)."""
     if h <= 0.0:
         return 0.0
-    submersion = terms.submersion * (1.0 + 9.4 * speed / math.sqrt(g * length))
-    return breaking_resistance(terms, speed, h, g) + submersion
+    return breaking_resistance(terms, speed, h, g) + submersion_resistance(terms, speed, length, g)
+
+
+def submersion_resistance(terms: LindqvistTerms, speed: float, length: float, g: float) -> float:
+    """The hull's share of the level-ice resistance (N): the broken pieces' submersion at
+    speed (m/s) along a hull ``length`` m long."""
+    return terms.submersion * (1.0 + 9.4 * speed / math.sqrt(g * length))
 
 
 def breaking_resistance(terms: LindqvistTerms, speed: float, h: float, g: float) -> float:
