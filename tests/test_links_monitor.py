@@ -79,7 +79,8 @@ def test_searchlight_orders_act_under_the_monitor(tmp_path):
     """The monitor steps the exercise's one tick, so a searchlight order from the console
     reaches the ship's light (it used to be shown and dropped)."""
     body = "PICBSL,0,A,45.0,-5.0"
-    s = monitor_summary(tmp_path, "4", [f"${body}*{checksum(body):02X}\r\n".encode()], 10,
+    # 8 s for 1 s of orders: a loaded machine's slow start must not cut the last ones off
+    s = monitor_summary(tmp_path, "8", [f"${body}*{checksum(body):02X}\r\n".encode()], 10,
                         '[[render.searchlights]]\nposition = [20.0, 0.0, 30.0]\ndepression_deg = 10.0\n'
                         'train_range_deg = [-90.0, 90.0]\non = false\n')
     assert s["orders"]["console/searchlight/0"]["count"] == 10
