@@ -18,8 +18,10 @@ from bridge_node.render.settings import ChannelSettings, RenderSettings
 from bridge_node.stream.world_view import WorldView
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.tiles import broken_counts
+from sim_core.regimes.pack_tiles import MIN_FLOE_AREA
 from sim_core.regimes.regime import MIN_FLOE_SIZE
 from sim_core.regimes.settings import RegionSettings
+from sim_core.scene.scene import tile_layout
 from sim_core.world import snapshot, step
 
 PACK = {"name": "pack", "polygon_m": [[0.0, 0.0], [400.0, 0.0], [400.0, 600.0], [0.0, 600.0]],
@@ -53,7 +55,7 @@ def _outlines(t):
 def test_pack_templates_hold_the_floes_apart_within_the_tile(pack):
     model, _, _ = pack
     loose = [t for t in model.ice.templates if t.floe_field]
-    assert len(loose) == 2 and all(t.n_cells > 20 for t in loose)
+    assert len(loose) == 16 and all(t.n_cells > 20 for t in loose)  # the windows of a square of 4 x 4 tiles
     for t in loose:
         floes = _outlines(t)
         area = sum(f.area for f in floes)
@@ -62,8 +64,45 @@ def test_pack_templates_hold_the_floes_apart_within_the_tile(pack):
         assert 0.4 < area / t.side**2 < 0.95  # about 7/10 of the tile, leads between
         assert set(np.round(t.thicknesses, 3)) == {0.5, 0.225}  # each type its own thickness
         free = [f for f, loose in zip(floes, t.free_at_start) if loose]
-        assert len(free) > 10 and min(np.sqrt(f.area) for f in free) > 0.5 * MIN_FLOE_SIZE
+        inner = [f for f in free if shapely.box(0, 0, t.side, t.side).buffer(-1e-6).contains(f)]
+        assert len(inner) > 10 and min(np.sqrt(f.area) for f in inner) > 0.5 * MIN_FLOE_SIZE
+        assert min(f.area for f in free) >= MIN_FLOE_AREA  # what the tile's edge cuts off a floe: no slivers
         assert np.all(t.thicknesses[t.free_at_start] < 0.3)  # the cakes; the small floes are wider than the beam
+
+
+def _edge_ice(template, start, end, shift=(0.0, 0.0)):
+    """Where the template's floes meet its edge from ``start`` to ``end`` (tile m), moved by
+    ``shift`` (m): a line geometry along that edge."""
+    edge = shapely.LineString([start, end])
+    ice = shapely.union_all(_outlines(template)).buffer(1e-6).intersection(edge)
+    return shapely.affinity.translate(ice, *shift)
+
+
+def test_neighbouring_pack_tiles_continue_each_others_floes(pack):
+    """Tile edges do not cut the floes: where a floe reaches over a tile's east or north
+    edge, the tile beside it, as the scene lays it, continues the floe from the same stretch
+    of that edge. The pack's layout repeats in 4 x 4 tiles, so its fifth and sixth rows
+    continue the fourth as the second does the first."""
+    model, _, _ = pack
+    scene, templates = model.scene, model.ice.templates
+    klass = int(scene.tile_class[0])
+    assert scene.class_repeat[klass] == 4
+    side, ice, missed, pairs = scene.side, 0.0, 0.0, 0
+    for tile in range(scene.nx * scene.ny):
+        here, turns = tile_layout(scene, tile, klass)
+        assert turns == 0
+        column, row = tile % scene.nx, tile // scene.nx
+        east = tile + 1 if column + 1 < scene.nx else None
+        north = tile + scene.nx if row + 1 < scene.ny else None
+        for beside, ours, theirs in ((east, ((side, 0), (side, side), (-side, 0)), ((0, 0), (0, side))),
+                                     (north, ((0, side), (side, side), (0, -side)), ((0, 0), (side, 0)))):
+            if beside is None:
+                continue
+            mine = _edge_ice(templates[here], *ours)
+            next_to = _edge_ice(templates[tile_layout(scene, beside, klass)[0]], *theirs)
+            ice, missed, pairs = ice + mine.length, missed + mine.symmetric_difference(next_to).length, pairs + 1
+    assert pairs == 38 and ice > 0.3 * pairs * side
+    assert missed < 0.05 * ice  # what differs: slivers under MIN_FLOE_AREA the pre-fracture's cuts drop
 
 
 def test_a_pack_tile_lays_free_floes_that_nothing_broke(pack):
@@ -151,7 +190,7 @@ def test_regions_of_one_egg_code_share_a_class_and_its_templates(tmp_path):
     cfg = cfg.model_copy(update={"ice_field": cfg.ice_field.model_copy(update={"regions": regions})})
     laid = field_regions(cfg)
     level_class, level_h = field_tile_classes(cfg, None, laid)
-    tile_class, class_h, templates, _ = lay_floe_fields(cfg, None, laid, level_class, level_h, 24.0)
-    assert len(templates) == 2 and len(class_h) == len(level_h) + 2  # 7/10 pack, and 8/10 medium floes
-    assert set(np.unique(tile_class[1:])) == {len(level_h)}  # both halves north of 100 m: one class
-    assert set(np.unique(tile_class[0, :2])) == {len(level_h) + 1}  # the medium floes' corner
+    packs = lay_floe_fields(cfg, None, laid, level_class, level_h, 24.0)
+    assert len(packs.templates) == 2 and len(packs.class_h) == len(level_h) + 2  # 7/10 pack, 8/10 medium floes
+    assert set(np.unique(packs.tile_class[1:])) == {len(level_h)}  # both halves north of 100 m: one class
+    assert set(np.unique(packs.tile_class[0, :2])) == {len(level_h) + 1}  # the medium floes' corner

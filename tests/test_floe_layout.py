@@ -63,23 +63,47 @@ def _laid(model, side):
 
 
 def test_the_layout_does_not_depend_on_the_windows(pack):
-    def key(layout):
-        c = shapely.get_coordinates(shapely.centroid(layout.polygon))
-        return np.round(c[np.lexsort(c.T)], 6)
     big = _laid(pack, 400.0)
     assert len(big) > 100
     for side in (100.0, 230.0):  # 230 m windows: some miss the L-shaped region, but not its floes
-        np.testing.assert_array_equal(key(big), key(_laid(pack, side)))
+        np.testing.assert_array_equal(_centroids(big), _centroids(_laid(pack, side)))
 
 
-@pytest.mark.parametrize("total, types, short", [
-    (8, [(5, 91, 5), (3, 87, 4)], False),  # medium floes, small floes in their leads
-    (9, [(6, 93, 4), (3, 85, 2)], False),  # small floes, brash in their leads
-    (10, [(2, 93, 4), (3, 91, 3), (5, 85, 3)], True),  # ice cakes of two kinds cannot fill what small floes leave
+def _centroids(layout, shift=(0.0, 0.0)):
+    c = shapely.get_coordinates(shapely.centroid(layout.polygon)) + shift
+    return np.round(c[np.lexsort(c.T)], 6)
+
+
+def test_laid_for_tiles_a_layout_repeats_in_a_square_of_whole_tiles():
+    """7/10 pack of small floes and ice cakes on 100 m tiles repeats every 4 tiles: each
+    layer's grid divides 400 m, and a window 400 m east or north lays the same floes."""
+    regime = make_regime(7, [(4, 87, 4), (3, 85, 3)])
+    region = IceRegion("pack", shapely.box(-5000, -5000, 5000, 5000), "ice", regime)
+    model = compile_regimes([region], shapely.box(-5000, -5000, 5000, 5000), seed=3, tile_side=100.0)
+    assert model.repeat == (4,)
+    assert [round(layer.spacing * layer.period, 9) for layer in model.layers[0]] == [400.0, 400.0]
+    first = lay_out(model, (100.0, 200.0, 500.0, 600.0))
+    assert len(first) > 100
+    for dx, dy in ((400.0, 0.0), (0.0, -400.0), (-800.0, 1200.0)):
+        moved = lay_out(model, (100.0 + dx, 200.0 + dy, 500.0 + dx, 600.0 + dy))
+        np.testing.assert_allclose(_centroids(first, (dx, dy)), _centroids(moved), atol=1e-6)
+    aperiodic = compile_regimes([region], shapely.box(-5000, -5000, 5000, 5000), seed=3)
+    assert aperiodic.repeat == (0,) and all(layer.period == 0 for layer in aperiodic.layers[0])
+    huge = IceRegion("big floes", region.polygon, "ice", make_regime(8, [(None, 87, 6)]))  # 500-2000 m
+    assert compile_regimes([huge], huge.polygon, seed=3, tile_side=100.0).repeat == (0,)  # too large to repeat
+
+
+@pytest.mark.parametrize("tile_side", [None, 100.0])
+@pytest.mark.parametrize("total, types, short, repeat", [
+    (8, [(5, 91, 5), (3, 87, 4)], False, 0),  # medium floes (248 m apart: too large to repeat), small floes
+    (9, [(6, 93, 4), (3, 85, 2)], False, 4),  # small floes, brash in their leads
+    (10, [(2, 93, 4), (3, 91, 3), (5, 85, 3)], True, 4),  # ice cakes of two kinds cannot fill what small floes leave
 ])
-def test_later_types_fill_the_leads_or_the_survey_says_why_not(total, types, short):
+def test_later_types_fill_the_leads_or_the_survey_says_why_not(total, types, short, repeat, tile_side):
+    """Laid freely or for the world's tiles (repeating where the floes allow), alike."""
     region = IceRegion("r", shapely.box(0, 0, 1500, 1500), "ice", make_regime(total, types))
-    model = compile_regimes([region], shapely.box(0, 0, 1500, 1500), seed=0)
+    model = compile_regimes([region], shapely.box(0, 0, 1500, 1500), seed=0, tile_side=tile_side)
+    assert model.repeat[0] == (repeat if tile_side else 0)
     survey = survey_region(model, 0)
     assert all(t.within_range >= 0.95 for t in survey.types)
     assert (abs(survey.concentration - total) > 0.5) == short and bool(survey.note) == short, survey.concentration

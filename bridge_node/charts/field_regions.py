@@ -43,8 +43,10 @@ def chart_field(path: Path) -> tuple[list[IceRegion], shapely.Geometry, tuple[fl
     return regions, shapely.box(*shapely.total_bounds([r.polygon for r in regions])), (float(lat0), float(lon0))
 
 
-def regime_model(regions: list[IceRegion], field: shapely.Geometry, seed: int, where: str) -> RegimeModel:
-    """The compiled regimes; UserError naming ``where`` if no region lies in the field."""
+def regime_model(regions: list[IceRegion], field: shapely.Geometry, seed: int, where: str,
+                 tile_side: float) -> RegimeModel:
+    """The compiled regimes, laid as the world lays them on tiles of ``tile_side`` (m);
+    UserError naming ``where`` if no region lies in the field."""
     if not regions or not any(shapely.intersects(r.polygon, field) for r in regions):
         raise UserError(f"{where}: no ice region lies in the field (ice_field.chart or [[ice_field.regions]])")
-    return compile_regimes(regions, field, seed)
+    return compile_regimes(regions, field, seed, tile_side)

@@ -36,12 +36,12 @@ def run(args: argparse.Namespace) -> int:
         cfg = load_config(source)
         field = shapely.box(0.0, 0.0, cfg.ice_field.width, cfg.ice_field.height)
         model = regime_model(configured_regions(cfg.ice_field, cfg.exercise.origin_deg()), field, cfg.fracture.seed,
-                             str(source))
+                             str(source), cfg.fracture.tile_side)
         ridges = configured_ridges(cfg.ice_field, cfg.exercise.origin_deg())
     else:
         ridges = ()
         regions, field, _ = chart_field(source)
-        model = regime_model(regions, field, DEFAULT_SEED, str(source))
+        model = regime_model(regions, field, DEFAULT_SEED, str(source), FractureSettings().tile_side)
     with Progress(transient=True, disable=args.json) as progress:
         task = progress.add_task("laying out the regions", total=len(model.regions))
         surveys = []

@@ -13,7 +13,7 @@ from bridge_node.common.errors import UserError
 from bridge_node.node.config import NodeConfig
 from sim_core.fracture.tile_template import TileTemplate
 from sim_core.regimes.floe_layout import compile_regimes
-from sim_core.regimes.pack_tiles import pack_template
+from sim_core.regimes.pack_tiles import pack_template, template_count
 from sim_core.regimes.regime import IceRegion, tile_regions
 from sim_core.scene.field import tile_counts
 
@@ -39,23 +39,32 @@ def field_regions(cfg: NodeConfig) -> FieldRegions:
     return FieldRegions(regions, tile_regions(regions, nx, ny, cfg.fracture.tile_side))
 
 
+@dataclass(frozen=True)
+class FloeFieldClasses:
+    """A field's tile classes (ny, nx) and class thicknesses (m) with its floe fields'
+    classes added, and each added class's templates, name (its egg code's label) and the
+    tiles across the square its templates repeat in (0: they are variants)."""
+
+    tile_class: np.ndarray
+    class_h: np.ndarray
+    templates: list[list[TileTemplate]]
+    names: list[str]
+    repeat: list[int]
+
+
 def lay_floe_fields(cfg: NodeConfig, config_path: str | None, laid: FieldRegions, tile_class: np.ndarray,
-                    class_h: np.ndarray, beam: float) -> tuple[np.ndarray, np.ndarray, list[list[TileTemplate]],
-                                                              list[str]]:
-    """The field's tile classes (ny, nx) and class thicknesses (m) with a class added per
-    regime (egg code) of the floe-field regions that hold a tile's centre, and each added
-    class's templates (``fracture.variants`` of them, laid from the first such region; floes
-    wider than the ship's ``beam``, m, pre-fractured) and name (its egg code's label). Its
-    thickness is its thickest floes'."""
+                    class_h: np.ndarray, beam: float) -> FloeFieldClasses:
+    """The field's tile classes and class thicknesses with a class added per regime (egg
+    code) of the floe-field regions that hold a tile's centre, laid from the first such
+    region (``pack_tiles.template_count`` templates; floes wider than the ship's ``beam``,
+    m, pre-fractured). A class's thickness is its thickest floes'."""
     regions, index = laid.regions, laid.index
-    if index is None:
-        return tile_class, class_h, [], []
+    packs = [] if index is None else [r for r, region in enumerate(regions) if region.floe_field and np.any(index == r)]
+    if not packs:
+        return FloeFieldClasses(tile_class, class_h, [], [], [])
     side = cfg.fracture.tile_side
     nx, ny = tile_counts(cfg.ice_field, side)
-    packs = [r for r, region in enumerate(regions) if region.floe_field and np.any(index == r)]
-    if not packs:
-        return tile_class, class_h, [], []
-    regimes = compile_regimes(regions, shapely.box(0.0, 0.0, nx * side, ny * side), cfg.fracture.seed)
+    regimes = compile_regimes(regions, shapely.box(0.0, 0.0, nx * side, ny * side), cfg.fracture.seed, side)
     tile_class, classes = np.array(tile_class, dtype=np.uint8), {}  # regime -> its class's first region
     for r in packs:  # regions of one egg code share a class and its templates
         classes.setdefault(regions[r].regime, r)
@@ -66,6 +75,7 @@ def lay_floe_fields(cfg: NodeConfig, config_path: str | None, laid: FieldRegions
     for r in packs:
         tile_class[index == r] = len(class_h) + first.index(classes[regions[r].regime])
     templates = [[pack_template(regimes, r, v, cfg.fracture, cfg.ice_material, beam)
-                  for v in range(cfg.fracture.variants)] for r in first]
+                  for v in range(template_count(regimes, r, cfg.fracture.variants))] for r in first]
     thickness = [max(t.thickness for t in variants) for variants in templates]
-    return tile_class, np.concatenate([class_h, thickness]), templates, [regions[r].regime.label() for r in first]
+    return FloeFieldClasses(tile_class, np.concatenate([class_h, thickness]), templates,
+                            [regions[r].regime.label() for r in first], [regimes.repeat[r] for r in first])

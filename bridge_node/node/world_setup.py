@@ -64,8 +64,7 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
     ship = compile_ship(load_ship(cfg.ship.name, config_path), cfg.ice_material)
     laid = field_regions(cfg)
     tile_class, level_h = field_tile_classes(cfg, config_path, laid)
-    tile_class, class_h, packs, pack_names = lay_floe_fields(cfg, config_path, laid, tile_class, level_h,
-                                                             ship.particulars.beam)
+    packs = lay_floe_fields(cfg, config_path, laid, tile_class, level_h, ship.particulars.beam)
     cache = writable_dir(resolve_path(config_path, cfg.paths.cache_dir), f"{config_path or 'default config'}: "
                          "paths.cache_dir")
     jobs = [(h, v) for h in level_h[level_h > 0.0] for v in range(cfg.fracture.variants)]  # none for open water
@@ -78,17 +77,18 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
     first = np.cumsum(level_h > 0.0) - 1  # the first template of each class with ice
     per_class = [np.arange(first[k] * cfg.fracture.variants, (first[k] + 1) * cfg.fracture.variants) if h > 0.0
                  else np.zeros(0, dtype=np.int64) for k, h in enumerate(level_h)]
-    for variants in packs:  # a floe-field region's class: its own templates
+    for variants in packs.templates:  # a floe-field region's class: its own templates
         per_class.append(np.arange(len(templates), len(templates) + len(variants)))
         templates += variants
-    names = [level_ice_name(h) for h in level_h] + pack_names
+    class_h, names = packs.class_h, [level_ice_name(h) for h in level_h] + packs.names
+    repeat = [0] * len(level_h) + packs.repeat
     if not np.any(class_h <= 0.0) and len(class_h) < MAX_CLASSES:  # for the instructor to lay; no templates
-        class_h, names = np.append(class_h, 0.0), names + [level_ice_name(0.0)]
+        class_h, names, repeat = np.append(class_h, 0.0), names + [level_ice_name(0.0)], repeat + [0]
         per_class.append(np.zeros(0, dtype=np.int64))
     ice = compile_ice_model(templates, cfg.ice_material, cfg.ice_dynamics)
     try:
-        scene = compile_scene(cfg.scene, tile_class, class_h, per_class, cfg.fracture.tile_side,
-                              ship.particulars.length, names)
+        scene = compile_scene(cfg.scene, packs.tile_class, class_h, per_class, cfg.fracture.tile_side,
+                              ship.particulars.length, names, repeat)
     except ValueError as exc:
         raise UserError(f"{config_path}: scene: {exc}") from None
     origin = math.radians(cfg.exercise.origin_latitude_deg), math.radians(cfg.exercise.origin_longitude_deg)

@@ -20,9 +20,18 @@ The grid is anchored to the field and its jitter hashed from (seed, region, laye
 node), so a window's floes do not depend on which windows were laid before: a floe belongs
 to the window that holds its grid point. Floes are clipped to their region, so a region's
 border is an ice edge.
+
+Laid for the world's tiles (``compile_regimes`` given the tile side), a region's layout
+repeats: every layer's spacing divides a square of a few whole tiles, and its grid nodes
+are hashed modulo that square, so the floes repeat with it. Tiles laid from the square's
+windows then continue one another's floes across every tile edge, whichever of them lie
+side by side (``pack_tiles``). The repeat holds at least ``FLOES_PER_REPEAT`` of the
+largest floes across, within ``REPEAT_TILES`` (the tile templates it costs); a region whose
+largest floes are too large for that does not repeat.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -36,13 +45,16 @@ JITTER = 0.8  # grid points move up to +-0.4 spacing: cell sizes spread over abo
 MAX_SHRINK = 0.985  # the narrowest lead, as a share of the cell: floes never start in contact
 SIZE_SPREAD = 1.5  # the smallest of a layer's floes are about its median size over this
 CALIBRATION_CELLS = 200  # a later layer's reference patch is at most this many of its cells across
+FLOES_PER_REPEAT = 3  # the largest floes across a repeating layout's square, at least
+REPEAT_TILES = (4, 6)  # tiles across that square, fewest and most (its templates: the square of it)
 Window = tuple[float, float, float, float]  # x0, y0, x1, y1, m
 
 
 @dataclass(frozen=True)
 class Layer:
     """One ice type of one region as laid out: grid spacing (m), shrink of its cells, the
-    hash salt of its grid, and its nominal thickness (m)."""
+    hash salt of its grid, its nominal thickness (m), and the grid nodes across the layout's
+    repeat (0: it does not repeat)."""
 
     region: int
     ice_type: int
@@ -50,16 +62,20 @@ class Layer:
     shrink: float
     salt: int
     thickness: float
+    period: int = 0
 
 
 @dataclass(frozen=True)
 class RegimeModel:
     """Static floe-field data: the regions, the part of the field each holds (effective
-    polygons, m) and the layers of each, largest floes first."""
+    polygons, m), the layers of each (largest floes first), and, laid for tiles, the tile
+    side (m; 0: not) and how many tiles across each region's layout repeats (0: it does not)."""
 
     regions: tuple[IceRegion, ...]
     polygons: tuple[shapely.Geometry, ...]
     layers: tuple[tuple[Layer, ...], ...]
+    tile_side: float = 0.0
+    repeat: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -78,50 +94,89 @@ class FloeLayout:
         return len(self.polygon)
 
 
-def compile_regimes(regions: list[IceRegion], area: shapely.Geometry, seed: int) -> RegimeModel:
-    """The layers of every region within the area (the field, m), calibrated once."""
+def compile_regimes(regions: list[IceRegion], area: shapely.Geometry, seed: int,
+                    tile_side: float | None = None) -> RegimeModel:
+    """The layers of every region within the area (the field, m), calibrated once; given
+    the world's ``tile_side`` (m), each region's layout repeats in whole tiles where its
+    floes allow (``repeat_tiles``)."""
     polygons = effective_polygons(regions, area)
-    layers = tuple(_region_layers(r, region, seed) for r, region in enumerate(regions))
-    return RegimeModel(tuple(regions), tuple(polygons), layers)
+    side = tile_side or 0.0
+    repeat = tuple(repeat_tiles(_nominal_spacings(region)[:1], side) for region in regions)
+    layers = tuple(_region_layers(r, region, seed, n * side) for r, (region, n) in enumerate(zip(regions, repeat)))
+    return RegimeModel(tuple(regions), tuple(polygons), layers, side, repeat)
 
 
-def _region_layers(r: int, region: IceRegion, seed: int) -> tuple[Layer, ...]:
+def repeat_tiles(spacing: list[float], tile_side: float) -> int:
+    """Tiles across the square a layout repeats in, for its largest floes' grid ``spacing``
+    (m; none: no floes) and the tile side (m; 0: not laid for tiles): enough for
+    ``FLOES_PER_REPEAT`` floes within ``REPEAT_TILES``; 0 (no repeat) where they are too
+    large for that."""
+    if not spacing or tile_side <= 0.0:
+        return 0
+    fewest, most = REPEAT_TILES
+    tiles = max(math.ceil(FLOES_PER_REPEAT * spacing[0] / tile_side), fewest)
+    return tiles if tiles <= most else 0
+
+
+def _nominal_spacings(region: IceRegion) -> list[float]:
+    """Grid spacing (m) of each of the region's layers at its nominal shrink, largest floes
+    first; none for level ice or ice free."""
     regime = region.regime
     if regime.level or not regime.types:
-        return ()
+        return []
+    out, water = [], 1.0
+    for ice in sorted(regime.types, key=lambda t: -t.size_range.nominal):
+        size = math.sqrt(ice.size_range.low * ice.size_range.high)
+        out.append(math.pi * size / (4.0 * math.sqrt(min(ice.concentration / 10.0 / water, MAX_SHRINK**2))))
+        water = max(water - ice.concentration / 10.0, 1e-3)
+    return out
+
+
+def _region_layers(r: int, region: IceRegion, seed: int, period: float) -> tuple[Layer, ...]:
+    """The region's layers, largest floes first; their spacings dividing ``period`` (m; 0:
+    the layout does not repeat)."""
+    regime = region.regime
     order = sorted(range(len(regime.types)), key=lambda i: -regime.types[i].size_range.nominal)
     layers: list[Layer] = []
     water = 1.0
-    for k in order:
+    for k, spacing in zip(order, _nominal_spacings(region)):
         ice = regime.types[k]
-        fill = min(ice.concentration / 10.0 / water, MAX_SHRINK**2)
-        s_nominal = math.sqrt(fill)
-        size = math.sqrt(ice.size_range.low * ice.size_range.high)
-        spacing = math.pi * size / (4.0 * s_nominal)
+        s_nominal = math.sqrt(min(ice.concentration / 10.0 / water, MAX_SHRINK**2))
         salt = (seed * 1_000_003 + r * 101 + k) & 0xFFFFFFFF
-        layer = Layer(r, k, spacing, s_nominal, salt, ice.stage_range.nominal)
+        d, nodes = _fitted(spacing, period)
+        layer = Layer(r, k, d, s_nominal, salt, ice.stage_range.nominal, nodes)
         if layers:
-            layer = _calibrated(layer, layers, ice.concentration / 10.0, water, ice.size_range.low)
+            layer = _calibrated(layer, layers, ice.concentration / 10.0, water, ice.size_range.low, period)
         layers.append(layer)
         water = max(water - ice.concentration / 10.0, 1e-3)
     return tuple(layers)
 
 
-def _calibrated(layer: Layer, earlier: list[Layer], fraction: float, water: float, low_size: float) -> Layer:
+def _fitted(spacing: float, period: float, most: int | None = None) -> tuple[float, int]:
+    """The grid spacing nearest ``spacing`` (m) that divides ``period`` (m; 0: any), with
+    the nodes across the period (0 without one); at least ``most`` + 1 nodes if given."""
+    if period <= 0.0:
+        return spacing, 0
+    nodes = max(round(period / spacing), 1 if most is None else most + 1)
+    return period / nodes, nodes
+
+
+def _calibrated(layer: Layer, earlier: list[Layer], fraction: float, water: float, low_size: float,
+                period: float) -> Layer:
     """The later layer with the shrink that gives it its area fraction among the earlier
     layers' floes. Where its cells are too large to fill the leads to that fraction even at
-    the largest shrink, its spacing is made smaller, as long as its smallest floes stay in
-    the WMO size range (above ``low_size``, m); short of that the layer stays under its
-    fraction, and the survey shows it."""
-    spacing = layer.spacing
+    the largest shrink, its spacing is made smaller (still dividing ``period``, m), as long
+    as its smallest floes stay in the WMO size range (above ``low_size``, m); short of that
+    the layer stays under its fraction, and the survey shows it."""
+    trial = layer
     while True:
-        trial = Layer(layer.region, layer.ice_type, spacing, layer.shrink, layer.salt, layer.thickness)
         available = _available_share(trial, earlier, water)
         shrink = math.sqrt(fraction / available) if available > 0.0 else math.inf
-        size = min(shrink, MAX_SHRINK) * 4.0 * spacing / math.pi  # mean caliper diameter, m
+        size = min(shrink, MAX_SHRINK) * 4.0 * trial.spacing / math.pi  # mean caliper diameter, m
         if shrink <= MAX_SHRINK or 0.8 * size < SIZE_SPREAD * low_size:
-            return Layer(layer.region, layer.ice_type, spacing, min(shrink, MAX_SHRINK), layer.salt, layer.thickness)
-        spacing *= 0.8
+            return dataclasses.replace(trial, shrink=min(shrink, MAX_SHRINK))
+        spacing, nodes = _fitted(0.8 * trial.spacing, period, trial.period)
+        trial = dataclasses.replace(trial, spacing=spacing, period=nodes)
 
 
 def _available_share(layer: Layer, earlier: list[Layer], water: float) -> float:
@@ -197,7 +252,10 @@ def _cells(window: Window, layer: Layer) -> np.ndarray:
     i = np.arange(math.floor(x0 / d) - 2, math.ceil(x1 / d) + 2)
     j = np.arange(math.floor(y0 / d) - 2, math.ceil(y1 / d) + 2)
     ii, jj = (a.ravel() for a in np.meshgrid(i, j))
-    u, v = _hash_uniform(ii, jj, layer.salt)
+    if layer.period:  # a repeating layout: a node jitters as its twin in the first square does
+        u, v = _hash_uniform(ii % layer.period, jj % layer.period, layer.salt)
+    else:
+        u, v = _hash_uniform(ii, jj, layer.salt)
     points = np.column_stack([(ii + 0.5 + JITTER * (u - 0.5)) * d, (jj + 0.5 + JITTER * (v - 0.5)) * d])
     owned = np.flatnonzero((points[:, 0] >= x0) & (points[:, 0] < x1) & (points[:, 1] >= y0) & (points[:, 1] < y1))
     if not len(owned):

@@ -5,12 +5,16 @@ rather than pushes, are the paper's thickness-dependent pre-fracture (the level-
 of their thickness, §2.1) cut to the floe, cells that start intact and break free as level
 ice does (held together: such a floe does not move as a whole).
 
-A floe-field region's tiles are laid from a few such templates (variants, turned by
-quarter turns, as level ice's templates are), so the scene, the stream, freezing and
-thawing treat a pack tile as any other tile. Each variant is a tile-sized window of the
-region's layout (``floe_layout.lay_out``, unbounded by the region's polygon) at a place of
-its own, so variants differ; the floes that reach into the window are cut to it, so the
-edges of neighbouring tiles do not match: a floe ends in a straight edge there.
+A floe-field region's tiles are laid from a few such templates, so the scene, the stream,
+freezing and thawing treat a pack tile as any other tile. Where the region's layout repeats
+in a square of n x n tiles (``floe_layout``, laid for tiles), its templates are the n * n
+windows of that square, and the scene lays each tile from the window its place in the
+square gives (``sim_core.scene.scene.tile_layout``), unturned: the floes that reach over a
+tile's edge are cut there, and the neighbouring tile continues them, so floes run on across
+tile edges (a floe so cut is two pieces, flush: two bodies if narrower than the beam, two
+parts of the pre-fracture if wider). Where it does not repeat (floes too large for a few
+tiles' square), the templates are variants, windows far apart, turned by quarter turns as
+level ice's templates are, and a floe ends in a straight edge at a tile edge.
 
 Why by hand: a template is this project's own format (``TileTemplate``); the floes come
 from ``floe_layout``, the pre-fracture from ``tile_template.build_tile``, the cuts from
@@ -65,6 +69,26 @@ class _Cells:
         self.free += [free] * len(polygons)
 
 
+def template_count(model: RegimeModel, region: int, variants: int) -> int:
+    """How many templates a floe-field region's tiles are laid from: the windows of the
+    square its layout repeats in, else ``variants``."""
+    repeat = model.repeat[region] if model.repeat else 0
+    return repeat * repeat or variants
+
+
+def template_window(model: RegimeModel, region: int, index: int, side: float) -> tuple[float, float]:
+    """South-west corner (m, the layout's frame) of a region's template ``index``: in a
+    repeating layout, window (index % n, index // n) of its square of n x n tiles (side
+    ``side``, m, the layout's tile side); else a variant's place of its own."""
+    repeat = model.repeat[region] if model.repeat else 0
+    if not repeat:
+        x0 = VARIANT_STRIDE * (1 + index)
+        return x0, x0
+    if not math.isclose(side, model.tile_side):
+        raise ValueError(f"tile side {side} m: the regimes were laid for tiles of {model.tile_side} m")
+    return (index % repeat) * side, (index // repeat) * side
+
+
 def pack_template(model: RegimeModel, region: int, variant: int, fracture: FractureSettings | None = None,
                   material: IceMaterial | None = None, big_floe: float = BIG_FLOE_SIZE) -> TileTemplate:
     """The floes of a region's regime on a tile of ``fracture.tile_side`` m, as a template.
@@ -73,7 +97,8 @@ def pack_template(model: RegimeModel, region: int, variant: int, fracture: Fract
     ----------
     model : the compiled regimes (``floe_layout.compile_regimes``).
     region : the region's index in it; a floe field (not level ice, not ice free).
-    variant : which window of the region's layout (a different floe pattern each).
+    variant : which window of the region's layout (``template_window``; up to
+        ``template_count``).
     fracture : how level ice is pre-fractured (the big floes' cells); its tile side.
     big_floe : m: floes this size or larger (mean caliper diameter, before the tile cuts them)
         are pre-fractured; the world gives the ship's beam.
@@ -88,8 +113,8 @@ def pack_template(model: RegimeModel, region: int, variant: int, fracture: Fract
     side = fracture.tile_side
     unbounded = dataclasses.replace(model, polygons=tuple(
         shapely.box(-1e9, -1e9, 1e9, 1e9) if k == region else p for k, p in enumerate(model.polygons)))
-    x0 = VARIANT_STRIDE * (1 + variant)
-    window = (x0, x0, x0 + side, x0 + side)
+    x0, y0 = template_window(model, region, variant, side)
+    window = (x0, y0, x0 + side, y0 + side)
     cells = _Cells()
     for k in laid_layers(model, region):
         layer = model.layers[region][k]
@@ -104,14 +129,15 @@ def pack_template(model: RegimeModel, region: int, variant: int, fracture: Fract
         if np.any(keep & big):
             level = build_tile(layer.thickness, template_seed(fracture.seed, layer.thickness, variant), fracture,
                                material)
-            pieces, seeds = _prefractured(shapely.orient_polygons(cut[keep & big]), level, (x0, x0))
+            pieces, seeds = _prefractured(shapely.orient_polygons(cut[keep & big]), level, (x0, y0))
             cells.add(pieces, layer.thickness, seeds, False)
-    return _template(cells, (x0, x0), side, material, _seed(model, region, variant))
+    return _template(cells, (x0, y0), side, material, _seed(model, region, variant))
 
 
 def _seed(model: RegimeModel, region: int, variant: int) -> int:
-    """A pack template's seed: its region's first layer's hash salt and the variant."""
-    return model.layers[region][0].salt * 16 + variant
+    """A pack template's seed: its region's first layer's hash salt and the variant (fewer
+    than 64: ``floe_layout.REPEAT_TILES`` squared at most)."""
+    return model.layers[region][0].salt * 64 + variant
 
 
 def _prefractured(floes: np.ndarray, level: TileTemplate, corner: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:

@@ -66,6 +66,7 @@ class SceneModel:
     class_thickness: np.ndarray  # (classes,) m
     class_templates: tuple  # per class: array of the ice model's template indices (variants)
     class_names: tuple[str, ...] = ()  # per class: "open water", "level ice 0.50 m", a floe field's egg code
+    class_repeat: tuple[int, ...] = ()  # per class: tiles across the square its templates repeat in (0: variants)
 
     def centre(self, tiles: np.ndarray) -> np.ndarray:
         """Centres (n, 2) of flat tile indices, world m."""
@@ -101,10 +102,11 @@ class SceneUpdate:
 
 def compile_scene(settings: SceneSettings, tile_class: np.ndarray, class_thickness: np.ndarray,
                   class_templates: list[np.ndarray], tile_side: float, ship_length: float,
-                  class_names: list[str] | None = None) -> SceneModel:
+                  class_names: list[str] | None = None, class_repeat: list[int] | None = None) -> SceneModel:
     """Scene model of a field whose tiles (ny, nx) carry thickness classes (indices into
     class_thickness, m); class_templates lists each class's template indices, class_names
-    their names (by default "open water" or "level ice H m")."""
+    their names (by default "open water" or "level ice H m"), class_repeat the classes whose
+    templates are the windows of a repeating square, n x n tiles (0 or none: variants)."""
     radius = detection_radius(tile_side, ship_length)
     if settings.reverse_replacement and settings.reverse_distance < radius + ship_length:
         raise ValueError(f"reverse_distance = {settings.reverse_distance} m must be at least R_T + L = "
@@ -113,9 +115,12 @@ def compile_scene(settings: SceneSettings, tile_class: np.ndarray, class_thickne
     names = class_names or [level_ice_name(h) for h in class_thickness]
     if len(names) != len(class_thickness) or len(set(names)) != len(names):
         raise ValueError(f"class names {names} must name each of {len(class_thickness)} classes once")
+    repeat = tuple(class_repeat or [0] * len(class_thickness))
+    if len(repeat) != len(class_thickness) or any(n and len(t) != n * n for n, t in zip(repeat, class_templates)):
+        raise ValueError(f"class repeats {repeat}: a class repeating in n x n tiles needs n * n templates")
     return SceneModel(settings, nx, ny, float(tile_side), radius, np.ascontiguousarray(tile_class, np.uint8).ravel(),
                       np.asarray(class_thickness, float), tuple(np.asarray(t, np.int64) for t in class_templates),
-                      tuple(names))
+                      tuple(names), repeat)
 
 
 def level_ice_name(thickness: float) -> str:
@@ -188,8 +193,14 @@ def update_scene(model: SceneModel, data: SceneData, contour: np.ndarray, origin
 
 
 def tile_layout(model: SceneModel, tile: int, tile_class: int) -> tuple[int, int]:
-    """(template index, quarter turns) for a tile of this class: a variant of the class and a
-    rotation, both from a hash of the tile index (SplitMix64's finaliser)."""
+    """(template index, quarter turns) for a tile of this class: for a class repeating in a
+    square of n x n tiles, the window of the square at the tile's place in it (column % n,
+    row % n), unturned, so neighbours continue each other's floes; else a variant of the
+    class and a rotation, both from a hash of the tile index (SplitMix64's finaliser)."""
+    repeat = model.class_repeat[tile_class] if model.class_repeat else 0
+    if repeat:
+        column, row = int(tile) % model.nx, int(tile) // model.nx
+        return int(model.class_templates[tile_class][(row % repeat) * repeat + column % repeat]), 0
     z = (int(tile) + 0x9E3779B97F4A7C15) & 0xFFFFFFFFFFFFFFFF
     z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & 0xFFFFFFFFFFFFFFFF
     z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & 0xFFFFFFFFFFFFFFFF
