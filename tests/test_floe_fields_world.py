@@ -134,7 +134,8 @@ def test_the_hull_pushes_the_floes_aside(pack):
     assert broken_counts(data.ice)[BreakCause.HULL] > 20
 
 
-def test_a_medium_floe_splits_along_its_cells_when_rammed(tmp_path_factory):
+def test_a_medium_floe_splits_along_its_cells_when_rammed(tmp_path_factory, ctx):
+    """And the channels draw the field: its 36 templates' cell rasters fit one texture."""
     model, data = _pack_world(tmp_path_factory, -80.0, MEDIUM)
     pieces = [t for t in model.ice.templates if t.floe_field]
     assert all(not t.free_at_start.any() for t in pieces)  # medium floes: pre-fractured, held together
@@ -146,6 +147,18 @@ def test_a_medium_floe_splits_along_its_cells_when_rammed(tmp_path_factory):
     split = [k for k in range(data.ice.tiles.n) if k not in data.ice.frozen
              and np.any(st.cause[data.ice.tiles.rows(k)] == BreakCause.HULL)]
     assert split and all(np.any(st.status[data.ice.tiles.rows(k)] == FloeStatus.INTACT) for k in split)
+    far = _channel_classes(model, data, ctx)[60:80, :]  # the tiles not simulated, drawn from their rasters
+    assert ctx.error == "GL_NO_ERROR"
+    assert (far == CLASS_INDEX["open_water"]).mean() > 0.02 and (far == CLASS_INDEX["level_ice"]).mean() > 0.5
+
+
+def _channel_classes(model, data, ctx):
+    """The class of each pixel of a channel ahead of the ship (180 x 320)."""
+    c = ChannelSettings(name="ahead", width=320, height=180, pitch_deg=-10.0, eye=[20.0, 0.0, 25.0])
+    view = WorldView()
+    view.apply(snapshot(model, data))
+    cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=[c])), [c])
+    return class_of_pixels(cs.class_images(view)[0])
 
 
 def test_floes_and_cells_laid_under_the_hull_go_under_it(tmp_path_factory):
@@ -169,11 +182,7 @@ def test_floes_and_cells_laid_under_the_hull_go_under_it(tmp_path_factory):
 
 def test_the_channels_draw_floes_and_the_water_between(pack, ctx):
     model, data, _ = pack
-    c = ChannelSettings(name="ahead", width=320, height=180, pitch_deg=-10.0, eye=[20.0, 0.0, 25.0])
-    view = WorldView()
-    view.apply(snapshot(model, data))
-    cs = ChannelSet(SceneRenderer(ctx, model, RenderSettings(channels=[c])), [c])
-    cls = class_of_pixels(cs.class_images(view)[0])
+    cls = _channel_classes(model, data, ctx)
     ground = cls[100:, :][cls[100:, :] != CLASS_INDEX["own_ship"]]  # below the horizon, beside the bow
     water, floes = (ground == CLASS_INDEX["open_water"]).mean(), (ground == CLASS_INDEX["broken_floe"]).mean()
     assert water > 0.1 and floes > 0.1  # the tiles simulated: floes, leads between
@@ -190,7 +199,8 @@ def test_regions_of_one_egg_code_share_a_class_and_its_templates(tmp_path):
     cfg = cfg.model_copy(update={"ice_field": cfg.ice_field.model_copy(update={"regions": regions})})
     laid = field_regions(cfg)
     level_class, level_h = field_tile_classes(cfg, None, laid)
-    packs = lay_floe_fields(cfg, None, laid, level_class, level_h, 24.0)
+    (tmp_path / "tiles").mkdir()
+    packs = lay_floe_fields(cfg, None, laid, level_class, level_h, 24.0, tmp_path / "tiles")
     assert len(packs.templates) == 2 and len(packs.class_h) == len(level_h) + 2  # 7/10 pack, 8/10 medium floes
     assert set(np.unique(packs.tile_class[1:])) == {len(level_h)}  # both halves north of 100 m: one class
     assert set(np.unique(packs.tile_class[0, :2])) == {len(level_h) + 1}  # the medium floes' corner

@@ -4,16 +4,18 @@ region's pack templates (``sim_core.regimes.pack_tiles``), built when the world 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import shapely
 
 from bridge_node.charts.field_regions import configured_regions
 from bridge_node.common.errors import UserError
+from bridge_node.library.templates import library_pack_template
 from bridge_node.node.config import NodeConfig
 from sim_core.fracture.tile_template import TileTemplate
 from sim_core.regimes.floe_layout import compile_regimes
-from sim_core.regimes.pack_tiles import pack_template, template_count
+from sim_core.regimes.pack_tiles import template_count
 from sim_core.regimes.regime import IceRegion, tile_regions
 from sim_core.scene.field import tile_counts
 
@@ -53,11 +55,12 @@ class FloeFieldClasses:
 
 
 def lay_floe_fields(cfg: NodeConfig, config_path: str | None, laid: FieldRegions, tile_class: np.ndarray,
-                    class_h: np.ndarray, beam: float) -> FloeFieldClasses:
+                    class_h: np.ndarray, beam: float, cache: Path) -> FloeFieldClasses:
     """The field's tile classes and class thicknesses with a class added per regime (egg
     code) of the floe-field regions that hold a tile's centre, laid from the first such
-    region (``pack_tiles.template_count`` templates; floes wider than the ship's ``beam``,
-    m, pre-fractured). A class's thickness is its thickest floes'."""
+    region (``pack_tiles.template_count`` templates, from the template library in ``cache``;
+    floes wider than the ship's ``beam``, m, pre-fractured). A class's thickness is its
+    thickest floes'."""
     regions, index = laid.regions, laid.index
     packs = [] if index is None else [r for r, region in enumerate(regions) if region.floe_field and np.any(index == r)]
     if not packs:
@@ -74,7 +77,7 @@ def lay_floe_fields(cfg: NodeConfig, config_path: str | None, laid: FieldRegions
     first = list(classes.values())
     for r in packs:
         tile_class[index == r] = len(class_h) + first.index(classes[regions[r].regime])
-    templates = [[pack_template(regimes, r, v, cfg.fracture, cfg.ice_material, beam)
+    templates = [[library_pack_template(cache, regimes, r, v, cfg.fracture, cfg.ice_material, beam)
                   for v in range(template_count(regimes, r, cfg.fracture.variants))] for r in first]
     thickness = [max(t.thickness for t in variants) for variants in templates]
     return FloeFieldClasses(tile_class, np.concatenate([class_h, thickness]), templates,

@@ -64,9 +64,9 @@ def build_world(cfg: NodeConfig, config_path: str | None, progress: Progress | N
     ship = compile_ship(load_ship(cfg.ship.name, config_path), cfg.ice_material)
     laid = field_regions(cfg)
     tile_class, level_h = field_tile_classes(cfg, config_path, laid)
-    packs = lay_floe_fields(cfg, config_path, laid, tile_class, level_h, ship.particulars.beam)
     cache = writable_dir(resolve_path(config_path, cfg.paths.cache_dir), f"{config_path or 'default config'}: "
                          "paths.cache_dir")
+    packs = lay_floe_fields(cfg, config_path, laid, tile_class, level_h, ship.particulars.beam, cache)
     jobs = [(h, v) for h in level_h[level_h > 0.0] for v in range(cfg.fracture.variants)]  # none for open water
     task = progress.add_task("loading tile templates", total=len(jobs)) if progress else None
     templates = []

@@ -65,6 +65,7 @@ from sim_core.world import WorldModel
 FLOE_DRIFT_MARGIN = 30.0  # m: broken floes may drift this far out of their tile
 MAX_TILES = 4096 * 4096  # tile table of 8 bytes per tile: 134 MB of texture at most
 RASTER_SIZE = 1024  # pixels per tile side of the cell rasters (0.1 m for 100 m tiles)
+MIN_RASTER_SIZE = 64  # fewer pixels would blur the leads between the floes of tiles far off
 WATER = (0.04, 0.09, 0.11)  # the sea's body colour (albedo of the light it sends back up)
 NOISE_UNIT = 8  # texture unit of the relief noise
 STATUS_UNIT = 7  # texture unit of the status texture
@@ -72,6 +73,20 @@ NAV_LIGHT_LUX = 10.0  # lux: daylight below which navigation lights show at full
 CRACK_REACH_PX = 4.0  # raster pixels from a cell edge within which a crack's line may be drawn (the distance)
 EYE_WHITE_LUX = 40.0  # lux a surface needs to look white to eyes adapted to the night
 TILE_INFO_UNIT, CELL_RASTER_UNIT = 0, 3  # texture units of the tile table and the cell rasters
+
+
+def raster_size(templates: int, max_texture: int) -> int:
+    """Pixels per tile side of the templates' cell rasters, stacked in one texture:
+    ``RASTER_SIZE`` for a few templates, half of it for more, and halved again while the
+    stack would be taller than the GL's largest texture (``max_texture`` pixels; a floe
+    field's 36 templates with level ice's need 256 under llvmpipe's 16384)."""
+    size = RASTER_SIZE if templates <= 4 else RASTER_SIZE // 2
+    while templates * size > max_texture and size > MIN_RASTER_SIZE:
+        size //= 2
+    if templates * size > max_texture:
+        raise ValueError(f"{templates} tile templates: their cell rasters need a texture of {templates * size} "
+                         f"pixels, more than this GL's {max_texture}")
+    return size
 
 
 class SceneRenderer(SceneUploads):
@@ -98,7 +113,7 @@ class SceneRenderer(SceneUploads):
         self.ship_extent = mesh.bounds  # (2, 3): lower and upper corner, ship frame, m
         self.meshes = template_meshes(model)
         self.mesh_vbos = [ctx.buffer(m.vertices.tobytes()) for m in self.meshes]
-        self.raster_size = RASTER_SIZE if len(model.ice.templates) <= 4 else RASTER_SIZE // 2
+        self.raster_size = raster_size(len(model.ice.templates), ctx.info["GL_MAX_TEXTURE_SIZE"])
         cells = cell_rasters(model, self.raster_size)
         self.rim_px = settings.wet_rim_m / scene.side * self.raster_size
         # 4 components, the 4th unused: on llvmpipe, fetches of 3 cost a tenth of the frame more
