@@ -101,50 +101,51 @@ def compile_regimes(regions: list[IceRegion], area: shapely.Geometry, seed: int,
     floes allow (``repeat_tiles``)."""
     polygons = effective_polygons(regions, area)
     side = tile_side or 0.0
-    repeat = tuple(repeat_tiles(_nominal_spacings(region)[:1], side) for region in regions)
-    layers = tuple(_region_layers(r, region, seed, n * side) for r, (region, n) in enumerate(zip(regions, repeat)))
+    nominal = [_nominal_layers(region) for region in regions]
+    repeat = tuple(repeat_tiles(layers[0][1] if layers else 0.0, side) for layers in nominal)
+    layers = tuple(_region_layers(r, region, seed, nominal[r], repeat[r] * side) for r, region in enumerate(regions))
     return RegimeModel(tuple(regions), tuple(polygons), layers, side, repeat)
 
 
-def repeat_tiles(spacing: list[float], tile_side: float) -> int:
+def repeat_tiles(spacing: float, tile_side: float) -> int:
     """Tiles across the square a layout repeats in, for its largest floes' grid ``spacing``
-    (m; none: no floes) and the tile side (m; 0: not laid for tiles): enough for
+    (m; 0: no floes) and the tile side (m; 0: not laid for tiles): enough for
     ``FLOES_PER_REPEAT`` floes within ``REPEAT_TILES``; 0 (no repeat) where they are too
     large for that."""
-    if not spacing or tile_side <= 0.0:
+    if spacing <= 0.0 or tile_side <= 0.0:
         return 0
     fewest, most = REPEAT_TILES
-    tiles = max(math.ceil(FLOES_PER_REPEAT * spacing[0] / tile_side), fewest)
+    tiles = max(math.ceil(FLOES_PER_REPEAT * spacing / tile_side), fewest)
     return tiles if tiles <= most else 0
 
 
-def _nominal_spacings(region: IceRegion) -> list[float]:
-    """Grid spacing (m) of each of the region's layers at its nominal shrink, largest floes
-    first; none for level ice or ice free."""
+def _nominal_layers(region: IceRegion) -> list[tuple[int, float, float]]:
+    """The region's layers as its regime sets them, largest floes first: each one's ice
+    type (index in the regime), grid spacing (m) and shrink; none for level ice or ice free."""
     regime = region.regime
     if regime.level or not regime.types:
         return []
     out, water = [], 1.0
-    for ice in sorted(regime.types, key=lambda t: -t.size_range.nominal):
+    for k in sorted(range(len(regime.types)), key=lambda i: -regime.types[i].size_range.nominal):
+        ice = regime.types[k]
+        shrink = math.sqrt(min(ice.concentration / 10.0 / water, MAX_SHRINK**2))
         size = math.sqrt(ice.size_range.low * ice.size_range.high)
-        out.append(math.pi * size / (4.0 * math.sqrt(min(ice.concentration / 10.0 / water, MAX_SHRINK**2))))
+        out.append((k, math.pi * size / (4.0 * shrink), shrink))
         water = max(water - ice.concentration / 10.0, 1e-3)
     return out
 
 
-def _region_layers(r: int, region: IceRegion, seed: int, period: float) -> tuple[Layer, ...]:
-    """The region's layers, largest floes first; their spacings dividing ``period`` (m; 0:
-    the layout does not repeat)."""
-    regime = region.regime
-    order = sorted(range(len(regime.types)), key=lambda i: -regime.types[i].size_range.nominal)
+def _region_layers(r: int, region: IceRegion, seed: int, nominal: list[tuple[int, float, float]],
+                   period: float) -> tuple[Layer, ...]:
+    """The region's layers, from its ``nominal`` ones (``_nominal_layers``), their spacings
+    dividing ``period`` (m; 0: the layout does not repeat), the later ones calibrated."""
     layers: list[Layer] = []
     water = 1.0
-    for k, spacing in zip(order, _nominal_spacings(region)):
-        ice = regime.types[k]
-        s_nominal = math.sqrt(min(ice.concentration / 10.0 / water, MAX_SHRINK**2))
+    for k, spacing, shrink in nominal:
+        ice = region.regime.types[k]
         salt = (seed * 1_000_003 + r * 101 + k) & 0xFFFFFFFF
         d, nodes = _fitted(spacing, period)
-        layer = Layer(r, k, d, s_nominal, salt, ice.stage_range.nominal, nodes)
+        layer = Layer(r, k, d, shrink, salt, ice.stage_range.nominal, nodes)
         if layers:
             layer = _calibrated(layer, layers, ice.concentration / 10.0, water, ice.size_range.low, period)
         layers.append(layer)
