@@ -32,6 +32,12 @@ def test_each_region_is_laid_at_its_charted_concentration(issue_report):
     assert regions[1]["whole"]  # medium floes: the whole region is laid and measured
 
 
+def test_the_report_says_where_the_floes_repeat(issue_report):
+    """As the world lays them on 100 m tiles: the small floes every 4 tiles; the medium
+    floes at 6/10 (227 m apart) are too large to repeat in 6 tiles."""
+    assert [r["repeat_m"] for r in issue_report["regions"]] == [None, None, 400.0]
+
+
 def test_floe_sizes_lie_in_the_wmo_ranges(issue_report):
     types = {t["floe_size"]: t for r in issue_report["regions"] for t in r["types"]}
     assert set(types) == {"medium_floe", "small_floe", "brash"}

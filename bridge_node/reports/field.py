@@ -30,6 +30,7 @@ def _region_json(model: RegimeModel, s: RegionSurvey) -> dict:
         "name": region.name, "kind": region.kind, "regime": region.regime.label(), "level_ice": region.regime.level,
         "area_km2": round(s.area / 1e6, 4), "surveyed_km2": round(s.surveyed.area / 1e6, 4), "whole": s.whole,
         "concentration_chart": region.regime.total, "concentration_laid": round(s.concentration, 3), "note": s.note,
+        "repeat_m": _repeat_m(model, s.region),
         "types": [{
             "concentration": t.ice.concentration, "stage": t.ice.stage_range.name, "stage_code": t.ice.stage,
             "thickness_range_m": [t.ice.stage_range.low, t.ice.stage_range.high], "thickness_laid_m": t.thickness,
@@ -38,6 +39,13 @@ def _region_json(model: RegimeModel, s: RegionSurvey) -> dict:
             "size_p5_p50_p95_m": [_finite(v) for v in t.size_percentiles], "share_within_range": _finite(t.within_range),
         } for t in s.types],
     }
+
+
+def _repeat_m(model: RegimeModel, region: int) -> float | None:
+    """The side (m) of the square the region's floes repeat in, as the world lays them on
+    its tiles (``floe_layout``); None where they do not repeat."""
+    tiles = model.repeat[region] if model.repeat else 0
+    return tiles * model.tile_side if tiles else None
 
 
 def _finite(v: float) -> float | None:
@@ -62,6 +70,9 @@ def survey_table(model: RegimeModel, surveys: list[RegionSurvey]) -> Table:
             share = "-" if not math.isfinite(t.within_range) else f"{100 * t.within_range:.0f} %"
             table.add_row(*(head if k == 0 else [""] * len(head)), t.ice.label(), str(t.floes), size, share)
     notes = [f"* {model.regions[s.region].name}: {s.note}" for s in surveys if s.note]
+    notes += [f"{model.regions[s.region].name}: the floes repeat every {_repeat_m(model, s.region):g} m "
+              f"(a square of {model.repeat[s.region]} x {model.repeat[s.region]} tiles)"
+              for s in surveys if _repeat_m(model, s.region)]
     table.caption = "\n".join(notes) or None
     return table
 
