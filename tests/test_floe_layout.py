@@ -95,7 +95,7 @@ def test_laid_for_tiles_a_layout_repeats_in_a_square_of_whole_tiles():
 
 @pytest.mark.parametrize("tile_side", [None, 100.0])
 @pytest.mark.parametrize("total, types, short, repeat", [
-    (8, [(5, 91, 5), (3, 87, 4)], False, 0),  # medium floes (248 m apart: too large to repeat), small floes
+    (8, [(5, 91, 5), (3, 87, 4)], False, 8),  # medium floes (248 m apart: three in 8 tiles), small floes
     (9, [(6, 93, 4), (3, 85, 2)], False, 4),  # small floes, brash in their leads
     (10, [(2, 93, 4), (3, 91, 3), (5, 85, 3)], True, 4),  # ice cakes of two kinds cannot fill what small floes leave
 ])

@@ -33,9 +33,9 @@ def test_each_region_is_laid_at_its_charted_concentration(issue_report):
 
 
 def test_the_report_says_where_the_floes_repeat(issue_report):
-    """As the world lays them on 100 m tiles: the small floes every 4 tiles; the medium
-    floes at 6/10 (227 m apart) are too large to repeat in 6 tiles."""
-    assert [r["repeat_m"] for r in issue_report["regions"]] == [None, None, 400.0]
+    """As the world lays them on 100 m tiles: the small floes every 4 tiles, the medium
+    floes at 6/10 (227 m apart) every 7, three across."""
+    assert [r["repeat_m"] for r in issue_report["regions"]] == [None, 700.0, 400.0]
 
 
 def test_floe_sizes_lie_in_the_wmo_ranges(issue_report):

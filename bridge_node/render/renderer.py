@@ -79,7 +79,7 @@ def raster_size(templates: int, max_texture: int) -> int:
     """Pixels per tile side of the templates' cell rasters, stacked in one texture:
     ``RASTER_SIZE`` for a few templates, half of it for more, and halved again while the
     stack would be taller than the GL's largest texture (``max_texture`` pixels; a floe
-    field's 36 templates with level ice's need 256 under llvmpipe's 16384)."""
+    field's 36 templates with level ice's need 256 under llvmpipe's 16384, 64 need 128)."""
     size = RASTER_SIZE if templates <= 4 else RASTER_SIZE // 2
     while templates * size > max_texture and size > MIN_RASTER_SIZE:
         size //= 2

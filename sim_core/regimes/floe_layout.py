@@ -25,9 +25,9 @@ Laid for the world's tiles (``compile_regimes`` given the tile side), a region's
 repeats: every layer's spacing divides a square of a few whole tiles, and its grid nodes
 are hashed modulo that square, so the floes repeat with it. Tiles laid from the square's
 windows then continue one another's floes across every tile edge, whichever of them lie
-side by side (``pack_tiles``). The repeat holds at least ``FLOES_PER_REPEAT`` of the
-largest floes across, within ``REPEAT_TILES`` (the tile templates it costs); a region whose
-largest floes are too large for that does not repeat.
+side by side (``pack_tiles``). The repeat holds three of the largest floes across, or at
+least two (``FLOES_PER_REPEAT``), within ``REPEAT_TILES`` (the tile templates it costs); a
+region whose largest floes are too large for that does not repeat.
 """
 from __future__ import annotations
 
@@ -45,8 +45,8 @@ JITTER = 0.8  # grid points move up to +-0.4 spacing: cell sizes spread over abo
 MAX_SHRINK = 0.985  # the narrowest lead, as a share of the cell: floes never start in contact
 SIZE_SPREAD = 1.5  # the smallest of a layer's floes are about its median size over this
 CALIBRATION_CELLS = 200  # a later layer's reference patch is at most this many of its cells across
-FLOES_PER_REPEAT = 3  # the largest floes across a repeating layout's square, at least
-REPEAT_TILES = (4, 6)  # tiles across that square, fewest and most (its templates: the square of it)
+FLOES_PER_REPEAT = (3, 2)  # the largest floes across a repeating layout's square: wanted, and at least
+REPEAT_TILES = (4, 8)  # tiles across that square, fewest and most (its templates: the square of it)
 Window = tuple[float, float, float, float]  # x0, y0, x1, y1, m
 
 
@@ -109,14 +109,17 @@ def compile_regimes(regions: list[IceRegion], area: shapely.Geometry, seed: int,
 
 def repeat_tiles(spacing: float, tile_side: float) -> int:
     """Tiles across the square a layout repeats in, for its largest floes' grid ``spacing``
-    (m; 0: no floes) and the tile side (m; 0: not laid for tiles): enough for
-    ``FLOES_PER_REPEAT`` floes within ``REPEAT_TILES``; 0 (no repeat) where they are too
-    large for that."""
+    (m; 0: no floes) and the tile side (m; 0: not laid for tiles): enough for the wanted
+    ``FLOES_PER_REPEAT`` floes within ``REPEAT_TILES``, else for the fewest; 0 (no repeat)
+    where they are too large even for that."""
     if spacing <= 0.0 or tile_side <= 0.0:
         return 0
     fewest, most = REPEAT_TILES
-    tiles = max(math.ceil(FLOES_PER_REPEAT * spacing / tile_side), fewest)
-    return tiles if tiles <= most else 0
+    for floes in FLOES_PER_REPEAT:
+        tiles = max(math.ceil(floes * spacing / tile_side), fewest)
+        if tiles <= most:
+            return tiles
+    return 0
 
 
 def _nominal_layers(region: IceRegion) -> list[tuple[int, float, float]]:
