@@ -43,7 +43,7 @@ def pack_template_path(cache_dir: Path, regimes: RegimeModel, region: int, varia
     side and repeat, the fracture and material settings and the pre-fractured floe size."""
     spec = json.dumps(
         {"format": PACK_FORMAT, "layers": [dataclasses.asdict(layer) for layer in regimes.layers[region]],
-         "tile_side": regimes.tile_side, "repeat": regimes.repeat[region] if regimes.repeat else 0,
+         "tile_side": regimes.tile_side, "repeat": regimes.repeat[region],
          "fracture": settings.model_dump(exclude={"variants"}), "material": material.model_dump(),
          "big_floe": big_floe}, sort_keys=True)
     return Path(cache_dir) / f"pack_{_digest(spec)}_v{variant}.npz"

@@ -44,8 +44,7 @@ def _region_json(model: RegimeModel, s: RegionSurvey) -> dict:
 def _repeat_m(model: RegimeModel, region: int) -> float | None:
     """The side (m) of the square the region's floes repeat in, as the world lays them on
     its tiles (``floe_layout``); None where they do not repeat."""
-    tiles = model.repeat[region] if model.repeat else 0
-    return tiles * model.tile_side if tiles else None
+    return model.repeat[region] * model.tile_side or None
 
 
 def _finite(v: float) -> float | None:

@@ -74,8 +74,8 @@ class RegimeModel:
     regions: tuple[IceRegion, ...]
     polygons: tuple[shapely.Geometry, ...]
     layers: tuple[tuple[Layer, ...], ...]
-    tile_side: float = 0.0
-    repeat: tuple[int, ...] = ()
+    tile_side: float
+    repeat: tuple[int, ...]
 
 
 @dataclass(frozen=True)
@@ -156,12 +156,12 @@ def _region_layers(r: int, region: IceRegion, seed: int, nominal: list[tuple[int
     return tuple(layers)
 
 
-def _fitted(spacing: float, period: float, most: int | None = None) -> tuple[float, int]:
+def _fitted(spacing: float, period: float, more_than: int = 0) -> tuple[float, int]:
     """The grid spacing nearest ``spacing`` (m) that divides ``period`` (m; 0: any), with
-    the nodes across the period (0 without one); at least ``most`` + 1 nodes if given."""
+    the nodes across the period (0 without one); more than ``more_than`` nodes."""
     if period <= 0.0:
         return spacing, 0
-    nodes = max(round(period / spacing), 1 if most is None else most + 1)
+    nodes = max(round(period / spacing), more_than + 1)
     return period / nodes, nodes
 
 

@@ -72,15 +72,14 @@ class _Cells:
 def template_count(model: RegimeModel, region: int, variants: int) -> int:
     """How many templates a floe-field region's tiles are laid from: the windows of the
     square its layout repeats in, else ``variants``."""
-    repeat = model.repeat[region] if model.repeat else 0
-    return repeat * repeat or variants
+    return model.repeat[region] ** 2 or variants
 
 
 def template_window(model: RegimeModel, region: int, index: int, side: float) -> tuple[float, float]:
     """South-west corner (m, the layout's frame) of a region's template ``index``: in a
     repeating layout, window (index % n, index // n) of its square of n x n tiles (side
     ``side``, m, the layout's tile side); else a variant's place of its own."""
-    repeat = model.repeat[region] if model.repeat else 0
+    repeat = model.repeat[region]
     if not repeat:
         x0 = VARIANT_STRIDE * (1 + index)
         return x0, x0
