@@ -41,7 +41,8 @@ def pack(tmp_path_factory):
     """The pack world, and the floes' state after 40 s of steaming into it from its edge."""
     model, data = _pack_world(tmp_path_factory, -80.0)
     step(model, data, 0.1)
-    laid = data.ice.state.status[:data.ice.state.n].copy(), broken_counts(data.ice).copy()
+    st = data.ice.state
+    laid = st.status[:st.n].copy(), st.bonded[:st.n].copy(), broken_counts(data.ice).copy()
     for _ in range(400):
         step(model, data, 0.1)
     return model, data, laid
@@ -106,10 +107,13 @@ def test_neighbouring_pack_tiles_continue_each_others_floes(pack):
 
 
 def test_a_pack_tile_lays_free_floes_that_nothing_broke(pack):
-    model, data, (status, counts) = pack
+    """The cakes are free floes; the small floes are pre-fractured, intact (or, near the
+    bow, already moving as one body each: bonded)."""
+    model, data, (status, bonded, counts) = pack
     free = model.ice.starts_free[data.ice.state.gcell[:len(status)]]
-    assert free.sum() > 20 and np.all(status[free] == FloeStatus.FREE)  # the cakes: free floes
-    assert (~free).sum() > 100 and np.all(status[~free] == FloeStatus.INTACT)  # the small floes, pre-fractured
+    assert free.sum() > 20 and np.all(status[free] == FloeStatus.FREE) and not bonded[free].any()
+    held = (status == FloeStatus.INTACT) | ((status == FloeStatus.FREE) & bonded)
+    assert (~free).sum() > 100 and np.all(held[~free]) and np.any(status == FloeStatus.INTACT)
     assert counts[BreakCause.HULL] == 0 and counts[BreakCause.CONTACT] == 0
 
 
@@ -146,7 +150,8 @@ def test_a_medium_floe_splits_along_its_cells_when_rammed(tmp_path_factory, ctx)
     assert broken_counts(data.ice)[BreakCause.HULL] > 50
     split = [k for k in range(data.ice.tiles.n) if k not in data.ice.frozen
              and np.any(st.cause[data.ice.tiles.rows(k)] == BreakCause.HULL)]
-    assert split and all(np.any(st.status[data.ice.tiles.rows(k)] == FloeStatus.INTACT) for k in split)
+    held = (st.status == FloeStatus.INTACT) | st.bonded  # the rest of the floes: intact, or moving as one body
+    assert split and all(np.any(held[data.ice.tiles.rows(k)]) for k in split)
     far = _channel_classes(model, data, ctx)[60:80, :]  # the tiles not simulated, drawn from their rasters
     assert ctx.error == "GL_NO_ERROR"
     assert (far == CLASS_INDEX["open_water"]).mean() > 0.02 and (far == CLASS_INDEX["level_ice"]).mean() > 0.5

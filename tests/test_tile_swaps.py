@@ -8,7 +8,7 @@ from conftest import exercise_config
 from bridge_node.node.world_setup import build_world, start_world
 from sim_core.fracture.tile_template import FractureSettings, build_tile
 from sim_core.ice.chipmunk_bodies import TileBodies
-from sim_core.ice.contact import REMOVAL_OWN_COST
+from sim_core.ice.contact_swaps import REMOVAL_OWN_COST
 from sim_core.frames.hull_contour import waterline_contour
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.model import compile_ice_model

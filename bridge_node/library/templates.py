@@ -22,7 +22,7 @@ from sim_core.material import IceMaterial
 from sim_core.regimes.floe_layout import RegimeModel
 from sim_core.regimes.pack_tiles import pack_template
 
-PACK_FORMAT = 1  # raise when pack_tiles lays a regime's templates otherwise: older files are not served
+PACK_FORMAT = 2  # raise when pack_tiles lays a regime's templates otherwise: older files are not served
 
 
 def template_path(

@@ -158,6 +158,9 @@ class WorldView:
             if not events.snapshot:
                 self._blend = (rows, before, self.pose[rows], before_ship or events.ship, events.ship,
                                before_offset if before_ship else self.ice_offset, self.ice_offset)
+            # rows free now that were intact: broken, or bonded to a wide floe that woke (drawn as floes)
+            self._broken.append(rows[~new & (self.status[rows] == FloeStatus.INTACT)
+                                     & (events.floe_status == FloeStatus.FREE)])
             self.status[rows] = events.floe_status
             self._span = [min(self._span[0], int(rows.min())), max(self._span[1], int(rows.max()) + 1)]
         self._apply_cracks(events.cracked)

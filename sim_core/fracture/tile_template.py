@@ -49,6 +49,7 @@ class TileTemplate:
     cell_thickness: np.ndarray | None = None  # (n,) m where cells differ (a floe field's types); else ``thickness``
     floe_field: bool = False  # a floe field's template (``sim_core.regimes.pack_tiles``), not level ice
     starts_free: np.ndarray | None = None  # (n,) bool: the cell is a floe of its own from the start; None: none is
+    floe: np.ndarray | None = None  # (n,) int32: the pre-fractured floe the cell is part of (-1: none); None: none is
 
     @property
     def n_cells(self) -> int:
@@ -58,6 +59,11 @@ class TileTemplate:
     def free_at_start(self) -> np.ndarray:
         """Whether each cell (n,) is laid as a free floe (else intact, level ice)."""
         return np.zeros(self.n_cells, dtype=bool) if self.starts_free is None else self.starts_free
+
+    @property
+    def floes(self) -> np.ndarray:
+        """Each cell's pre-fractured floe (n,), -1 for cells of none (level ice, free floes)."""
+        return np.full(self.n_cells, -1, dtype=np.int32) if self.floe is None else self.floe
 
     @property
     def thicknesses(self) -> np.ndarray:
@@ -72,6 +78,7 @@ class TileTemplate:
             mode=np.str_(self.mode), seed=np.int64(self.seed), seeds=self.seeds,
             mass=self.mass, is_sphere=self.is_sphere, sphere_radius=self.sphere_radius,
             cell_thickness=self.thicknesses, floe_field=np.bool_(self.floe_field), starts_free=self.free_at_start,
+            floe=self.floes,
         )
         return out
 
@@ -87,6 +94,7 @@ class TileTemplate:
             cell_thickness=np.asarray(arrays["cell_thickness"]) if "cell_thickness" in arrays else None,
             floe_field=bool(arrays["floe_field"]) if "floe_field" in arrays else False,
             starts_free=np.asarray(arrays["starts_free"]) if "starts_free" in arrays else None,
+            floe=np.asarray(arrays["floe"]) if "floe" in arrays else None,
         )
 
 

@@ -9,7 +9,8 @@ thousands of them cost seconds of creation per tile swap, pauses of a tenth of a
 whenever Python's cyclic collector walks them, and about a kilobyte each. A floe here costs
 its C body and shape and two pointers in an array, and a body names its floe directly: its
 user data is the floe's code (``ROW0 + row``, ``TILE0 + placement`` for a tile's static
-body, ``HULL0 + k`` for the k-th hull), which ``pymunk.batch`` returns as the body id.
+body, ``BOND0 + slot`` for a wide floe's body (``compound_floes``), ``HULL0 + k`` for the
+k-th hull), which ``pymunk.batch`` returns as the body id.
 """
 from __future__ import annotations
 
@@ -23,6 +24,7 @@ HULL_ROW0 = -2  # a contact's row on hull k is HULL_ROW0 - k
 LOWEST_ROW = HULL_ROW0 - (MAX_HULLS - 1)  # no contact's row is below this
 HULL0 = 1
 ROW0, TILE0 = HULL0 + MAX_HULLS, 1 << 40  # body user data: hull k is HULL0 + k, then floe rows, tile bodies
+BOND0 = 1 << 50  # and wide floes' bodies, by slot (``compound_floes.CompoundSlots``)
 HULL_BIT, FLOE_BIT = 1, 2
 INTACT_IN, FLOE_IN = 1, 2  # TileBodies.in_space flags
 HULL_FILTER = (0, HULL_BIT, FLOE_BIT)  # Chipmunk shape filters: (group, categories, mask)
@@ -57,14 +59,19 @@ def new_shape(body, ring: list, radius: float, centre: tuple[float, float], sphe
 
 class TileBodies:
     """Engine objects of one placed tile, by row offset in the tile (0 = none): the static
-    body holding its intact cells, their shapes, and its free floes' bodies and shapes;
-    which of them are in the space; and the offsets still to switch in or out."""
+    body holding its intact cells, their shapes (a wide floe's on a body of the floe's own,
+    ``wide``: global floe -> its slot, -1 until the tile is switched in, and body; static
+    until the floe wakes, ``compound_floes``), its free floes' bodies and shapes, and its
+    bonded cells' shapes; which of them are in the space; and the offsets still to switch in
+    or out."""
 
     def __init__(self, count: int) -> None:
         self.body = ptr_of(lib.cpBodyNewStatic())
         self.intact = np.zeros(count, dtype=np.uintp)
         self.floe_body = np.zeros(count, dtype=np.uintp)
         self.floe_shape = np.zeros(count, dtype=np.uintp)
+        self.bond_shape = np.zeros(count, dtype=np.uintp)
+        self.wide: dict[int, tuple[int, int]] = {}
         self.in_space = np.zeros(count, dtype=np.uint8)  # INTACT_IN | FLOE_IN
         self.queue = np.zeros(0, dtype=np.int64)  # offsets to switch in (entering) or out (leaving)
 
@@ -104,17 +111,42 @@ class TileBodies:
                     lib.cpSpaceRemoveBody(space, body)
             lib.cpShapeFree(shape)
             lib.cpBodyFree(body)
-        self.intact[offsets] = self.floe_body[offsets] = self.floe_shape[offsets] = 0
+        bonded = self.bond_shape[offsets][self.bond_shape[offsets] != 0]
+        self.drop_shapes(space, bonded)
+        self.intact[offsets] = self.floe_body[offsets] = self.floe_shape[offsets] = self.bond_shape[offsets] = 0
         self.in_space[offsets] = 0
-        return len(cells) + 2 * len(floes)
+        return len(cells) + 2 * len(floes) + len(bonded)
+
+    @staticmethod
+    def drop_shapes(space, shapes: np.ndarray) -> None:
+        """Take shapes (C pointers) out of the space and free them."""
+        for p in shapes.tolist():
+            shape = shape_at(p)
+            lib.cpSpaceRemoveShape(space, shape)
+            lib.cpShapeFree(shape)
 
     def built(self) -> np.ndarray:
         """Offsets holding any object."""
-        return np.nonzero((self.intact != 0) | (self.floe_body != 0))[0]
+        return np.nonzero((self.intact != 0) | (self.floe_body != 0) | (self.bond_shape != 0))[0]
+
+    def wide_body(self, floe: int) -> int:
+        """The static body (C pointer) of a wide floe's intact cells, made at first need."""
+        if floe not in self.wide:
+            self.wide[floe] = (-1, ptr_of(lib.cpBodyNewStatic()))
+        return self.wide[floe][1]
+
+    def drop_wide(self, space, floe: int) -> None:
+        """Take a wide floe's body (its shapes already gone) out of the space and free it."""
+        body = body_at(self.wide.pop(floe)[1])
+        if lib.cpBodyGetSpace(body) != ffi.NULL:
+            lib.cpSpaceRemoveBody(space, body)
+        lib.cpBodyFree(body)
 
     def release(self, space) -> None:
         """Take everything out of the space and free it, the static body last."""
         self.remove(space, self.built())
+        for floe in list(self.wide):
+            self.drop_wide(space, floe)
         body = body_at(self.body)
         if lib.cpBodyGetSpace(body) != ffi.NULL:
             lib.cpSpaceRemoveBody(space, body)

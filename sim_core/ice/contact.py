@@ -47,16 +47,14 @@ from sim_core.ice.chipmunk_bodies import (
     ptr_of,
     shape_at,
 )
+from sim_core.ice.compound_floes import CompoundFloes, CompoundSlots, bond_rows, scatter_bonded
 from sim_core.ice.contact_kernels import Contacts, contact_rows, hull_overlaps, scatter_free, seed_grid
 from sim_core.ice.contact_resting import FloeRest
+from sim_core.ice.contact_swaps import TileSwaps
 from sim_core.ice.floes import FloeState, TilePlacement
 from sim_core.ice.hull_bodies import HullBody, move_hull, new_hull
 from sim_core.ice.model import IceModel, placed_centroids, placed_outlines
 
-# A tile removal's own cost (the static tree, its body's contacts), counted as visits of
-# cached contacts, of which each removal also walks all: measured 2.2 us a removal with
-# none cached and 18 us with 983 (16 ns a contact), 2 cores.
-REMOVAL_OWN_COST = 140
 _ROW_BY_ROW = 16  # fewer rows than this have their engine objects looked up one by one
 _BODY_FIELDS = (pb.BodyFields.BODY_ID | pb.BodyFields.POSITION | pb.BodyFields.ANGLE
                 | pb.BodyFields.VELOCITY | pb.BodyFields.ANGULAR_VELOCITY)
@@ -65,7 +63,7 @@ _ARB_FIELDS = (pb.ArbiterFields.BODY_A_ID | pb.ArbiterFields.BODY_B_ID | pb.Arbi
                | pb.ArbiterFields.POINT_A_2)  # a contact's points on body a only: its mean point is all we use
 
 
-class ContactSpace(FloeRest):
+class ContactSpace(FloeRest, CompoundFloes, TileSwaps):
     """Chipmunk space holding the hulls and the floes of breakable tiles."""
 
     def __init__(self, model: IceModel, tiles: TilePlacement, hull_outline: np.ndarray,
@@ -89,6 +87,7 @@ class ContactSpace(FloeRest):
         self._water = (0.0, 0.0, 0.0)  # the water's velocity (m/s) and the step (s) the gravity was set for
         self.hulls: list[HullBody] = []  # by index: every ship's hull breaks ice in this one space
         self._tiles: dict[int, TileBodies] = {}  # placement -> its engine objects
+        self.compounds = CompoundSlots()  # wide floes' bodies (``compound_floes``)
         self._tile_index: tuple | None = None  # _in_space's arrays, until _tiles or the placements change
         self._entering: list[TileBodies] = []  # switched in, objects still going into the space
         self._leaving: list[tuple[int, TileBodies]] = []  # switched out, objects still to take out
@@ -128,16 +127,16 @@ class ContactSpace(FloeRest):
                     quarter_turns: int, cells: np.ndarray) -> None:
         """Make, outside the space, the intact-cell shapes of cells (offsets in the template)
         of a template laid at corner (m) turned by quarter turns, on the tile's static
-        body; ``insert_tile`` switches them in."""
+        body (a wide floe's, on the floe's own); ``insert_tile`` switches them in."""
         m = self.model
         g = int(m.template_start[template]) + cells
         home, yaw = placed_centroids(m, template, corner, quarter_turns)
         home = home[cells]
-        body = body_at(bodies.body)
         rings = self._rings(g, home, np.full(len(cells), yaw))
         friction = m.settings.ice_friction
-        for j, gi, centre, ring, sphere in zip(cells.tolist(), g.tolist(), home.tolist(), rings,
-                                               m.is_sphere[g].tolist()):
+        for j, gi, floe, centre, ring, sphere in zip(cells.tolist(), g.tolist(), m.wide.of_cell[g].tolist(),
+                                                     home.tolist(), rings, m.is_sphere[g].tolist()):
+            body = body_at(bodies.body if floe < 0 else bodies.wide_body(floe))
             bodies.intact[j] = new_shape(body, ring, float(m.radius[gi]), tuple(centre), sphere, friction)
 
     def build_floes(self, bodies: TileBodies, offsets: np.ndarray, gcell: np.ndarray, xy: np.ndarray,
@@ -166,71 +165,6 @@ class ContactSpace(FloeRest):
         for j, row in zip(offsets.tolist(), rows.tolist()):
             lib.cpBodySetUserData(body_at(int(bodies.floe_body[j])), ffi.cast("void *", ROW0 + row))
 
-    def insert_tile(self, bodies: TileBodies, placement: int) -> None:
-        """Switch a built tile into the space as placement: its static body now, its intact
-        shapes and floe bodies over the coming steps (``swap_objects_per_step`` a step, so
-        no step pays for a whole tile; the hull cannot reach a tile's cells within the few
-        steps that takes, since R_T keeps it at least a third of a tile away)."""
-        for k, leaving in enumerate(self._leaving):
-            if leaving[0] == placement:  # thawed before its freeze had finished: finish that first
-                del self._leaving[k]
-                leaving[1].release(self._cp)
-                break
-        lib.cpBodySetUserData(body_at(bodies.body), ffi.cast("void *", TILE0 + placement))
-        lib.cpSpaceAddBody(self._cp, body_at(bodies.body))
-        bodies.queue = bodies.built()
-        self._tiles[placement] = bodies
-        self._tile_index = None
-        self._entering.append(bodies)
-
-    def drop_tile(self, placement: int) -> None:
-        """Switch a tile out: it leaves the tiles the space works with now, and its objects
-        leave the space over the coming steps. Its floes are frozen in the arrays meanwhile
-        (``read_free`` does not copy FROZEN rows)."""
-        bodies = self._tiles.pop(placement)
-        self._tile_index = None
-        if bodies in self._entering:
-            self._entering.remove(bodies)
-        bodies.queue = bodies.built()
-        self._leaving.append((placement, bodies))
-
-    def _swap_work(self) -> None:
-        """Switch the step's share of objects of entering tiles in, and of leaving tiles out.
-        Adding costs a few microseconds an object; removing one costs Chipmunk a walk over
-        every cached contact (cpSpaceFilterArbiters) besides its own (``REMOVAL_OWN_COST``),
-        so removals are budgeted by that work (``swap_removal_work``: about 2 ms a step).
-        Both shares are counts, not wall times, so that reruns stay the same."""
-        budget = self._insert_budget
-        while budget > 0 and self._entering:
-            bodies = self._entering[0]
-            cells = max(1, budget // 2)  # a thawed floe is two objects: body and shape
-            chunk, bodies.queue = bodies.queue[:cells], bodies.queue[cells:]
-            budget -= max(bodies.insert(self._cp, chunk), 1)
-            if not len(bodies.queue):
-                self._entering.pop(0)
-        budget = min(self._insert_budget, max(8, self._removal_work // (self._arbiters + REMOVAL_OWN_COST)))
-        while budget > 0 and self._leaving:
-            _, bodies = self._leaving[0]
-            cells = max(1, budget // 3)  # a broken cell is up to three objects: shape, body, shape
-            chunk, bodies.queue = bodies.queue[:cells], bodies.queue[cells:]
-            budget -= max(bodies.remove(self._cp, chunk), 1)
-            if not len(bodies.queue):
-                self._leaving.pop(0)[1].release(self._cp)
-
-    def switch_in_now(self) -> None:
-        """Put every entering tile's objects into the space now, whatever the per-step
-        budget: in the order the steps would have, without their engine steps between (a
-        benchmark of a field already in the space)."""
-        for bodies in self._entering:
-            bodies.insert(self._cp, bodies.queue)
-            bodies.queue = bodies.queue[:0]
-        self._entering.clear()
-
-    @property
-    def swaps_pending(self) -> int:
-        """Tiles still switching in or out."""
-        return len(self._entering) + len(self._leaving)
-
     def _rings(self, g: np.ndarray, at: np.ndarray, angle: np.ndarray) -> list[list]:
         """Outlines of cells g placed at (at, angle), as lists of (x, y) for Chipmunk."""
         pts, counts = placed_outlines(self.model, g, at, angle)
@@ -238,7 +172,9 @@ class ContactSpace(FloeRest):
         return [pts[a:b] for a, b in zip([0] + ends[:-1], ends)]
 
     def free(self, state: FloeState, rows: np.ndarray) -> None:
-        """Intact rows leave their tile body, each for a dynamic body of its own, now."""
+        """Intact or bonded rows leave their tile's or floe's body, each for a dynamic body of its own, now."""
+        if np.any(state.bonded[rows]):
+            self.unbond(state, rows[state.bonded[rows]])
         for tile in np.unique(state.tile[rows]).tolist():
             bodies, start = self._tiles[tile], int(self.tiles.row_start[tile])
             mine = rows[state.tile[rows] == tile]
@@ -259,10 +195,6 @@ class ContactSpace(FloeRest):
     def discard(self, bodies: TileBodies) -> None:
         """Free a built tile that was never switched in."""
         bodies.release(self._cp)
-
-    def is_leaving(self, placement: int) -> bool:
-        """Whether objects of the placement's last switch-out are still in the space."""
-        return any(k == placement for k, _ in self._leaving)
 
     def has_tile(self, placement: int) -> bool:
         """Whether the placement's bodies are in the space."""
@@ -376,9 +308,14 @@ class ContactSpace(FloeRest):
         buf.clear()
         pb.get_space_bodies(self.space, _BODY_FIELDS, buf)  # the dynamic bodies first, in the space's order
         ids = np.frombuffer(buf.int_buf(), dtype=np.uintp)
-        moving, self._moving_at = scatter_free(
-            ids, np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ids), 6), state.status, state.resting,
-            state.xy, state.yaw, state.vel, state.yaw_rate)
+        f = np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ids), 6)
+        moving, self._moving_at = scatter_free(ids, f, state.status, state.resting, state.xy, state.yaw, state.vel,
+                                               state.yaw_rate)
+        if self.compounds.live:
+            c, w = self.compounds, self.model.wide
+            scatter_bonded(ids, f, state.status, state.bonded, self._in_space()[3], self.tiles.row_start,
+                           c.placement, c.floe, c.cog, c.velocity, w.cells_start, w.cells, state.bond_xy,
+                           state.bond_yaw, state.xy, state.yaw, state.vel, state.yaw_rate)
         return moving
 
     def read_contacts(self, state: FloeState) -> Contacts:
@@ -391,6 +328,13 @@ class ContactSpace(FloeRest):
         f = np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(len(ints), 8)
         self._arbiters = len(ints)
         tiles = self.tiles
-        a, b, point = contact_rows(ints, f, state.status, self._in_space()[3], tiles.template, tiles.corner,
+        working = self._in_space()[3]
+        a, b, point = contact_rows(ints, f, state.status, working, tiles.template, tiles.corner,
                                     tiles.quarter_turns, tiles.row_start, self._sides, *self._grid)
+        if self.compounds.n:
+            c = self.compounds
+            c.read_poses()
+            bond_rows(ints, point, a, b, state.status, state.bonded, working, tiles.template, tiles.corner,
+                      tiles.quarter_turns, tiles.row_start, self._sides, c.placement, c.floe, c.pose,
+                      self.model.wide.of_cell, *self._grid)
         return Contacts(a, b, f[:, 0:2].copy(), f[:, 2:4].copy(), point)

@@ -11,8 +11,9 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from sim_core.ice.chipmunk_bodies import HULL0, HULL_ROW0, INTACT_IN, NOT_A_FLOE, ROW0, TILE0
+from sim_core.ice.chipmunk_bodies import BOND0, HULL0, HULL_ROW0, INTACT_IN, NOT_A_FLOE, ROW0, TILE0
 from sim_core.ice.model import IceModel
+from sim_core.ice.tile_frame import template_box, template_point
 
 SEEDS_PER_BUCKET = 4  # mean Voronoi seeds per bucket of a template's seed grid
 
@@ -91,15 +92,8 @@ def hull_overlaps(near, present, status, gcell, xy, yaw, outline, outline_start,
     y0, y1 = hull[:, 1].min(), hull[:, 1].max()
     for p in near:
         t = template[p]
-        half, n, h = 0.5 * sides[t], per_side[t], size[t]
-        q = (-turns[p]) % 4  # world to template frame, as in contact_rows
-        c, s = (1, 0, -1, 0)[q], (0, 1, 0, -1)[q]
-        lo_x = lo_y = np.inf
-        hi_x = hi_y = -np.inf
-        for wx, wy in ((x0, y0), (x1, y0), (x0, y1), (x1, y1)):
-            rx, ry = wx - corner[p, 0] - half, wy - corner[p, 1] - half
-            lx, ly = c * rx - s * ry + half, s * rx + c * ry + half
-            lo_x, hi_x, lo_y, hi_y = min(lo_x, lx), max(hi_x, lx), min(lo_y, ly), max(hi_y, ly)
+        n, h = per_side[t], size[t]
+        lo_x, lo_y, hi_x, hi_y = template_box(x0, y0, x1, y1, p, template, corner, turns, sides)
         i0, i1 = max(int((lo_x - pad[t]) // h), 0), min(int((hi_x + pad[t]) // h), n - 1)
         j0, j1 = max(int((lo_y - pad[t]) // h), 0), min(int((hi_y + pad[t]) // h), n - 1)
         for bj in range(j0, j1 + 1):
@@ -175,9 +169,12 @@ def seed_grid(model: IceModel) -> tuple[np.ndarray, ...]:
 
 
 @numba.njit(cache=True)
-def nearest_intact(qx, qy, t, row_start, status, bucket0, per_side, size, first, entries, seeds, g0):
-    """Row of the intact cell whose seed is nearest (qx, qy), template t's frame (m), among
-    the cells of the tile whose rows start at row_start; -1 if none is intact."""
+def nearest_cell(qx, qy, t, row_start, status, bonded, floe_of, floe, bucket0, per_side, size, first, entries, seeds,
+                 g0):
+    """Row of the cell whose seed is nearest (qx, qy), template t's frame (m), among the
+    cells of the tile whose rows start at row_start: its intact cells (floe < 0), or the
+    intact cells and those bonded to it of the wide floe ``floe`` (``floe_of``: each global
+    cell's floe; ``compound_floes``); -1 if there is none."""
     n, h = per_side[t], size[t]
     bx, by = min(max(int(qx / h), 0), n - 1), min(max(int(qy / h), 0), n - 1)
     best, best_row = np.inf, -1
@@ -192,7 +189,10 @@ def nearest_intact(qx, qy, t, row_start, status, bucket0, per_side, size, first,
                 for e in range(first[k], first[k + 1]):
                     c = entries[e]
                     row = row_start + c
-                    if status[row] != 0:
+                    if floe < 0 and status[row] != 0:
+                        continue
+                    if floe >= 0 and (floe_of[g0[t] + c] != floe or status[row] > 1
+                                      or (status[row] == 1 and not bonded[row])):
                         continue
                     dx, dy = seeds[g0[t] + c, 0] - qx, seeds[g0[t] + c, 1] - qy
                     d = dx * dx + dy * dy
@@ -207,7 +207,8 @@ def contact_rows(ints, f, status, working, template, corner, turns, row_start, s
     """Rows of both bodies of each arbiter (ints (k, 3): body ids a, b and contact count;
     f (k, 8): impulse, normal, points A1, A2) and the mean contact point (k, 2) m.
     On a tile body the row is the intact cell with the seed nearest the point (the point
-    lies on its cell's boundary, the cell across is broken); on a tile no longer worked
+    lies on its cell's boundary, the cell across is broken); on a wide floe's body it is
+    left NOT_A_FLOE for ``compound_floes.bond_rows``; on a tile no longer worked
     (leaving the space), or on a body that is not a floe, it is NOT_A_FLOE. So are both
     rows of a contact with no points this step: Chipmunk keeps a separated pair's contact a
     few steps, with no impulse, and the pair no longer touches (a floe that has left the
@@ -225,17 +226,15 @@ def contact_rows(ints, f, status, working, template, corner, turns, row_start, s
             continue
         for side in range(2):
             code = np.int64(ints[k, side])
-            if code >= TILE0:
+            if code >= BOND0:  # a wide floe's body: ``compound_floes.bond_rows`` names its row
+                rows[side, k] = NOT_A_FLOE
+            elif code >= TILE0:
                 p = code - TILE0
                 row = NOT_A_FLOE
                 if p < len(working) and working[p]:
-                    t = template[p]
-                    half = 0.5 * sides[t]
-                    q = (-turns[p]) % 4
-                    c, s = (1, 0, -1, 0)[q], (0, 1, 0, -1)[q]
-                    rx, ry = point[k, 0] - corner[p, 0] - half, point[k, 1] - corner[p, 1] - half
-                    found = nearest_intact(c * rx - s * ry + half, s * rx + c * ry + half, t, row_start[p],
-                                            status, bucket0, per_side, size, first, entries, seeds, g0)
+                    qx, qy = template_point(point[k, 0], point[k, 1], p, template, corner, turns, sides)
+                    found = nearest_cell(qx, qy, template[p], row_start[p], status, status, g0, -1, bucket0,
+                                         per_side, size, first, entries, seeds, g0)  # floe -1: bonded, floe_of unread
                     if found >= 0:
                         row = found
                 rows[side, k] = row

@@ -19,7 +19,10 @@ pushed under the hull: they collide with nothing until the hull has passed over 
 piece the bow strikes first turns against it (``turn``, ``turn_dir``: ``sim_core.ice.turning``).
 ``resting`` marks free floes that came to rest far from the hull: the engine holds them as
 static bodies (they cost no solver work) until the hull comes near or a moving floe pushes
-them; their pose and velocity stay as they were when they came to rest.
+them; their pose and velocity stay as they were when they came to rest. ``bonded`` marks free
+rows that are still part of a wide floe moving as one body (``sim_core.ice.compound_floes``):
+they have no body of their own, and their pose follows the floe's body, at ``bond_xy`` and
+``bond_yaw`` in its frame.
 """
 from __future__ import annotations
 
@@ -117,6 +120,10 @@ class FloeState(_Table):
     turn_dir = _Column(np.float32)  # a turning piece's direction to the hull, rad CCW from east
     resting = _Column(np.bool_)  # a free floe at rest far from the hull, out of the dynamic set
     calm = _Column(np.uint16)  # steps in a row a free floe has been at rest (saturates at 65535)
+    bonded = _Column(np.bool_)  # a free row still part of its wide floe's body (``compound_floes``)
+    bond_xy = _Column(np.float64, 2)  # a bonded row's centre of mass in its floe body's frame, m
+    bond_yaw = _Column(np.float64)  # a bonded row's yaw in its floe body's frame, rad
+    bond_slot = _Column(np.int32)  # a bonded row's floe body's slot (``compound_floes.CompoundSlots``)
     home = _Column(np.float32, 2)  # placed centroid in the level ice, world m
     xy = _Column(np.float64, 2)  # centre of mass, world m
     yaw = _Column(np.float64)  # rad, CCW

@@ -16,6 +16,7 @@ from sim_core.csr import gather_ranges, offsets
 from sim_core.fracture.tile_template import TileTemplate
 from sim_core.ice.breaking import RIDE_UP_SHARE, WEDGE_COEFFICIENT, impact_constant, ride_up_load, static_capacity
 from sim_core.ice.drift import DEVIATION_DEG, WIND_FACTOR
+from sim_core.ice.wide_floes import WideFloes, compile_wide_floes
 from sim_core.material import IceMaterial
 from sim_core.params import Params
 
@@ -96,6 +97,7 @@ class IceModel:
     edge_capacity: np.ndarray  # (G,) quasi-static breaking load F_s of the cell as an edge, N
     ride_load: np.ndarray  # (G,) vertical load of the cell as a floe riding onto an edge, N
     omega_max: float  # highest heave/roll/pitch natural frequency, rad/s
+    wide: WideFloes  # the floe fields' floes wider than the beam, by global floe
 
 
 def _second_moments(tris: np.ndarray, owner: np.ndarray, n: int) -> np.ndarray:
@@ -165,7 +167,7 @@ def compile_ice_model(templates: list[TileTemplate], material: IceMaterial | Non
         k_impact=impact_constant(thickness, material, settings.wedge_coefficient),
         edge_capacity=static_capacity(thickness, material, settings.wedge_coefficient),
         ride_load=ride_up_load(mass, material, settings.ride_up_share),
-        omega_max=float(omega.max()) if n else 0.0,
+        omega_max=float(omega.max()) if n else 0.0, wide=compile_wide_floes(templates),
     )
 
 

@@ -26,15 +26,16 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from sim_core.ice import contact_kernels, resting, turning
+from sim_core.ice import compound_floes, contact_kernels, resting, turning
 from sim_core.ice.bending import crack_ahead
 from sim_core.ice import vertical
 from sim_core.ice.breaking import pushed_hard
 from sim_core.ice.contact_kernels import Contacts
 from sim_core.ice.floes import BreakCause, FloeState, FloeStatus
 from sim_core.ice.model import IceModel, vertical_substeps
-from sim_core.ice.tiles import IceData, break_cells
+from sim_core.ice.tiles import IceData, bond_floe, break_cells
 from sim_core.ice.vertical import settled, vertical_step
+from sim_core.ice.wash import drag_in_wash
 
 _CLEAR_AHEAD = 10.0  # m ahead of the stem: a submerged floe there is no longer held down
 _BESIDE = 5.0  # m beyond the beam lines: a submerged floe there is no longer pressed by the hull
@@ -69,8 +70,9 @@ class IceStepReport:
 
 
 @numba.njit(cache=True)
-def _hard_pushes(a, b, impulse, normal, status, velocity, gcell, mass, k_impact, ride_load, edge_capacity):
-    """Of contacts between a free floe (striker) and an intact cell (target): the targets
+def _hard_pushes(a, b, impulse, normal, status, bonded, velocity, gcell, mass, k_impact, ride_load, edge_capacity):
+    """Of contacts between a free floe (striker) and an intact or bonded cell (target; a
+    bonded striker is a wide floe's body, ``compound_floes``, and breaks nothing): the targets
     broken (pushed hard, ``breaking.pushed_hard``, by a striker whose ride-up load reaches
     the edge's capacity), and the strikers pushed hard that could break nothing; both sorted,
     each row once."""
@@ -79,9 +81,9 @@ def _hard_pushes(a, b, impulse, normal, status, velocity, gcell, mass, k_impact,
     for k in range(len(a)):
         if a[k] < 0 or b[k] < 0:
             continue
-        if status[a[k]] == 1 and status[b[k]] == 0:
+        if status[a[k]] == 1 and not bonded[a[k]] and (status[b[k]] == 0 or bonded[b[k]]):
             striker, target, sign = a[k], b[k], 1.0
-        elif status[b[k]] == 1 and status[a[k]] == 0:
+        elif status[b[k]] == 1 and not bonded[b[k]] and (status[a[k]] == 0 or bonded[a[k]]):
             striker, target, sign = b[k], a[k], -1.0
         else:
             continue
@@ -112,7 +114,7 @@ def _contact_breaks(model: IceModel, st: FloeState, con: Contacts,
     """Intact rows whose contact with a free floe broke them this step (the energy it
     brought and the load its striker can put on the edge, ``breaking.breaks``), and the free
     floes pushed hard against an edge they cannot break: jammed, they go under it."""
-    return _hard_pushes(con.a, con.b, con.impulse, con.normal, st.status, velocity, st.gcell, model.mass,
+    return _hard_pushes(con.a, con.b, con.impulse, con.normal, st.status, st.bonded, velocity, st.gcell, model.mass,
                         model.k_impact, model.ride_load, model.edge_capacity)
 
 
@@ -133,9 +135,10 @@ def _hull_load(rows, impulse, point, hull_xy, dt):
 
 
 @numba.njit(cache=True)
-def _going_under(struck, jammed, status, submerged, xy, hull_xy, c, s, beam_half):
-    """Free rows above water to send under: struck by the hull with their centre within
-    beam_half (m) of its centre line (heading c, s = cos, sin of its CCW angle), or jammed."""
+def _going_under(struck, jammed, status, submerged, bonded, xy, hull_xy, c, s, beam_half):
+    """Free rows above water, not bonded to a wide floe's body, to send under: struck by
+    the hull with their centre within beam_half (m) of its centre line (heading c, s = cos,
+    sin of its CCW angle), or jammed."""
     rows = np.empty(len(struck) + len(jammed), np.int64)
     n = 0
     for i in struck:
@@ -148,7 +151,7 @@ def _going_under(struck, jammed, status, submerged, xy, hull_xy, c, s, beam_half
     rows = np.unique(rows[:n])
     keep = np.zeros(len(rows), np.bool_)
     for k in range(len(rows)):
-        keep[k] = status[rows[k]] == 1 and not submerged[rows[k]]
+        keep[k] = status[rows[k]] == 1 and not submerged[rows[k]] and not bonded[rows[k]]
     return rows[keep]
 
 
@@ -208,7 +211,7 @@ def _update_submersion(model: IceModel, data: IceData, k: int, hull: HullMotion,
     up and rights it. ``k``: the hull's index, whose motion is ``hull``."""
     st, space, body, rows = data.state, data.contacts, data.contacts.hulls[k], data.hulls[k]
     c, s = math.cos(hull.angle), math.sin(hull.angle)
-    under = _going_under(struck, jammed, st.status, st.submerged, st.xy, hull.xy, c, s, body.half_beam) \
+    under = _going_under(struck, jammed, st.status, st.submerged, st.bonded, st.xy, hull.xy, c, s, body.half_beam) \
         if len(struck) or len(jammed) else _NO_ROWS
     if len(under):
         rows.went_under = np.concatenate([rows.went_under[st.submerged[rows.went_under]], under])
@@ -244,28 +247,6 @@ def _advance_turns(model: IceModel, data: IceData, k: int, hull: HullMotion, dt:
     turning.advance_turns(went_under, st.submerged, st.turn, st.turn_dir, model.plan_area, st.gcell,
                           model.z_equilibrium, model.thickness, st.yaw, st.heave, st.roll, st.pitch, advance,
                           hull.surface_angle)
-
-
-WASH_SHARES = 6  # the wash drags a sixth of the floes in it each step, each by six steps' drag
-
-
-def _wash(data: IceData, moving: np.ndarray, wash: Callable[[np.ndarray], np.ndarray], dt: float) -> None:
-    """Drag the moving floes above water towards the local water velocity ``wash`` (xy (n, 2)
-    m -> velocity (n, 2) m/s, on top of the uniform water's) by the same linear drag as the
-    space gives them towards the uniform one (``ContactSpace.set_water_velocity``). Setting
-    a body's velocity is a call per floe, so each step takes one of ``WASH_SHARES`` shares of
-    the floes in turn and gives it the drag of that many steps: with a drag time of seconds,
-    the same as every floe every step, at a sixth of the calls."""
-    st, space = data.state, data.contacts
-    rows = moving[~st.submerged[moving]]
-    data.wash_turn = (data.wash_turn + 1) % WASH_SHARES
-    rows = rows[rows % WASH_SHARES == data.wash_turn]
-    extra = wash(st.xy[rows])
-    hit = np.any(extra != 0.0, axis=1)
-    if hit.any():
-        rows = rows[hit]
-        share = 1.0 - space.space.damping ** (WASH_SHARES * dt)
-        space.set_velocity(st, rows, st.vel[rows] + share * extra[hit], st.yaw_rate[rows])
 
 
 def _laid_under_hull(model: IceModel, data: IceData, k: int, hull: HullMotion) -> None:
@@ -310,6 +291,13 @@ def _union(parts: list[np.ndarray]) -> np.ndarray:
     return np.unique(np.concatenate(parts))
 
 
+def _hull_motions(hulls: Sequence[HullMotion]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The hulls' reference points (h, 2) m, velocities (h, 2) m/s and yaw rates (h,) rad/s."""
+    return (np.array([h.xy for h in hulls], dtype=float).reshape(-1, 2),
+            np.array([h.velocity for h in hulls], dtype=float).reshape(-1, 2),
+            np.array([h.angular_velocity for h in hulls], dtype=float))
+
+
 def _nearest_hull(xy: np.ndarray, hulls: Sequence[HullMotion]) -> np.ndarray:
     """The index of the hull whose reference point is nearest each point (n, 2), m."""
     at = np.array([np.asarray(h.xy, dtype=float) for h in hulls])
@@ -348,17 +336,28 @@ def ice_step(model: IceModel, data: IceData, hulls: Sequence[HullMotion], dt: fl
         if resting_on:
             resting.wake_near_hull(model, data, k, hull.xy)
     by_hull, cracked, broke = _hulls_break(model, data, hulls)
+    for k, hull in enumerate(hulls):  # after the hulls broke what they lie on (a ship laid in the ice)
+        speed = float(np.hypot(*hull.velocity))
+        space.wake_resting(k, speed)
+        for placement, floe in space.wake_near(st, k, speed):
+            bond_floe(data, placement, floe)
     for k, hull in enumerate(hulls):
         _advance_turns(model, data, k, hull, dt)
     space.step(dt)
     con = space.read_contacts(st)
     by_contact, jammed = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
+    struck_off, breaker = compound_floes.struck_off(space, st, con, *_hull_motions(hulls))
     vel_before = st.vel.copy() if resting_on else None
     moving = space.read_free(st)
     if wash is not None and len(moving):
-        _wash(data, moving, wash, dt)
+        drag_in_wash(data, moving, wash, dt)
     if len(by_contact):
         break_cells(data, by_contact, BreakCause.CONTACT)
+    struck_off = np.setdiff1d(struck_off, by_contact)
+    if len(struck_off):
+        break_cells(data, struck_off, BreakCause.HULL)
+        by_hull = _union([by_hull, struck_off])
+        broke += np.bincount(breaker, minlength=len(hulls))
     free = _unsettled(moving, st.submerged, st.gcell, model.z_equilibrium, st.heave, st.roll, st.pitch,
                       st.heave_rate, st.roll_rate, st.pitch_rate)
     if len(free):
@@ -370,24 +369,25 @@ def ice_step(model: IceModel, data: IceData, hulls: Sequence[HullMotion], dt: fl
     force, moment = _hull_loads(model, data, con, hulls, jammed, dt)
     if resting_on:
         resting.wake_struck(model, data, con, vel_before)
-        resting.rest_far(model, data, moving, np.array([np.asarray(h.xy, dtype=float) for h in hulls]), dt, new=rest)
+        at = _hull_motions(hulls)[0]
+        resting.rest_far(model, data, moving, at, dt, new=rest)
+        space.rest_far(at, model.settings.rest_speed, model.settings.rest_distance)
     return IceStepReport(by_hull, by_contact, cracked, force, moment, broke)
 
 
 def warm_up(model: IceModel, data: IceData) -> None:
     """Load every compiled kernel the ice step uses, so that no step waits for a compile."""
     contact_kernels.warm_up()
-    _hard_pushes(np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2)),
-                 np.zeros(0, dtype=np.uint8), np.zeros((0, 2), np.float32), np.zeros(0, dtype=np.int32), model.mass,
-                 model.k_impact, model.ride_load, model.edge_capacity)
-    resting.warm_up(model)
-    _hull_load(np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(2), 1.0)
+    compound_floes.warm_up()
     none, f32 = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.float32)
-    _surfacing(none, none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hulls[0].outline,
-               1.0, 1.0, 1.0)
-    _going_under(none, none, none.astype(np.uint8), none.astype(np.bool_), np.zeros((0, 2)), np.zeros(2), 1.0, 0.0,
-                 1.0)
-    _unsettled(none, none.astype(np.bool_), none.astype(np.int32), model.z_equilibrium, f32, f32, f32, f32, f32, f32)
+    flags = none.astype(np.bool_)
+    _hard_pushes(none, none, np.zeros((0, 2)), np.zeros((0, 2)), none.astype(np.uint8), flags,
+                 np.zeros((0, 2), np.float32), np.zeros(0, dtype=np.int32), model.mass, model.k_impact,
+                 model.ride_load, model.edge_capacity)
+    resting.warm_up(model)
+    _hull_load(none, np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(2), 1.0)
+    _surfacing(none, flags, np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hulls[0].outline, 1.0, 1.0, 1.0)
+    _going_under(none, none, none.astype(np.uint8), flags, flags, np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, 1.0)
+    _unsettled(none, flags, none.astype(np.int32), model.z_equilibrium, f32, f32, f32, f32, f32, f32)
     vertical.warm_up(model.tris, model.tri_start, model.mass, model.inertia, model.damping)
     turning.warm_up()
-

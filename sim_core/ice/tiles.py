@@ -1,7 +1,8 @@
 """The life of a placed tile's rows: laid intact, broken free, frozen, thawed.
 
 This is the one module that changes a floe's status (through ``FloeState.set_status``):
-``place_tile`` takes rows INTACT, ``break_cells`` makes them FREE, ``freeze_tile`` keeps a
+``place_tile`` takes rows INTACT, ``break_cells`` makes them FREE (``bond_floe`` too, for a
+wide floe's cells that start moving as one body), ``freeze_tile`` keeps a
 tile's free floes as ``FrozenFloes`` records (their rows FROZEN until the tile's engine
 objects have left the space, then ``reclaim_rows`` makes the tile's rows VACANT for the
 next tile), and ``thaw_tile`` gives the tile rows again, its floes FREE with the poses and
@@ -54,7 +55,7 @@ class IceData:
     leaving_rows: dict[int, slice] = field(default_factory=dict)  # placement -> rows to give back
     hulls: list[HullRows] = field(default_factory=lambda: [HullRows()])  # by hull index, as contacts.hulls
     rest_water: tuple[float, float] = (0.0, 0.0)  # the drift (m/s, east, north) the resting floes came to rest in
-    wash_turn: int = 0  # the share of the floes the propeller's wash drags this step (``step._wash``)
+    wash_turn: int = 0  # the share of the floes the propeller's wash drags this step (``wash.drag_in_wash``)
 
 
 @dataclass
@@ -189,10 +190,18 @@ def place_tile(model: IceModel, data: IceData, template: int, corner: tuple[floa
 
 
 def break_cells(data: IceData, rows: np.ndarray, cause: BreakCause) -> None:
-    """Break intact rows free: they become free floes."""
+    """Break intact or bonded rows free: they become free floes, each a body of its own."""
     data.contacts.free(data.state, rows)
     data.state.set_status(rows, FloeStatus.FREE)
     data.state.cause[rows] = cause
+
+
+def bond_floe(data: IceData, placement: int, floe: int) -> None:
+    """A wide floe of a placed tile (global floe index) starts moving as one body: its
+    intact cells become FREE rows bonded to it (``compound_floes``), broken by nothing."""
+    rows = data.contacts.bond(data.state, placement, floe)
+    data.state.set_status(rows, FloeStatus.FREE)
+    data.state.cause[rows] = BreakCause.NONE
 
 
 def freeze_tile(data: IceData, placement: int) -> None:
@@ -211,6 +220,7 @@ def freeze_tile(data: IceData, placement: int) -> None:
     data.contacts.drop_tile(placement)
     st.set_status(free, FloeStatus.FROZEN)
     st.submerged[rows] = st.resting[rows] = False  # a frozen floe thaws afloat, in the dynamic set
+    st.bonded[rows] = False  # and a floe of its own (its wide floe's body leaves with the tile)
     st.turn[rows] = 0.0  # and not turning against the bow
     st.calm[rows] = 0
     data.leaving_rows[placement] = slice(int(rows[0]), int(rows[-1]) + 1)

@@ -3,7 +3,8 @@ water between them. Floes narrower than the ship's beam are a cell each that sta
 free floe, one body the hull pushes aside or under; wider ones, which a ship's bow breaks
 rather than pushes, are the paper's thickness-dependent pre-fracture (the level-ice template
 of their thickness, §2.1) cut to the floe, cells that start intact and break free as level
-ice does (held together: such a floe does not move as a whole).
+ice does; each cell records its floe (``TileTemplate.floe``), so that the world can move the
+floe's intact cells as one body (``sim_core.ice.compound_floes``).
 
 A floe-field region's tiles are laid from a few such templates, so the scene, the stream,
 freezing and thawing treat a pack tile as any other tile. Where the region's layout repeats
@@ -61,12 +62,22 @@ class _Cells:
     thickness: list = field(default_factory=list)
     seeds: list = field(default_factory=list)
     free: list = field(default_factory=list)
+    floe: list = field(default_factory=list)
+    floes: int = 0  # pre-fractured floes so far
 
-    def add(self, polygons: np.ndarray, thickness: float, seeds: np.ndarray, free: bool) -> None:
+    def add(self, polygons: np.ndarray, thickness: float, seeds: np.ndarray, free: bool,
+            floe: np.ndarray | None = None) -> None:
+        """Add cells; ``floe``: the index of each one's pre-fractured floe among those
+        added with it (none: free floes)."""
         self.polygons += list(polygons)
         self.thickness += [thickness] * len(polygons)
         self.seeds += [tuple(p) for p in seeds]
         self.free += [free] * len(polygons)
+        if floe is None:
+            self.floe += [-1] * len(polygons)
+            return
+        self.floe += (self.floes + np.unique(floe, return_inverse=True)[1]).tolist()
+        self.floes += len(np.unique(floe))
 
 
 def template_count(model: RegimeModel, region: int, variants: int) -> int:
@@ -106,7 +117,8 @@ def pack_template(model: RegimeModel, region: int, variant: int, fracture: Fract
     -------
     A prism ``TileTemplate`` in the tile's frame ([0, side]^2, m), ``floe_field`` set: a cell
     per floe under ``big_floe`` (``starts_free``), the pre-fracture's cells cut to each larger
-    floe (intact), each its type's thickness (``cell_thickness``); mesh colliders.
+    floe (intact, their floe's index in ``floe``), each its type's thickness
+    (``cell_thickness``); mesh colliders.
     """
     fracture, material = fracture or FractureSettings(), material or IceMaterial()
     side = fracture.tile_side
@@ -128,8 +140,8 @@ def pack_template(model: RegimeModel, region: int, variant: int, fracture: Fract
         if np.any(keep & big):
             level = build_tile(layer.thickness, template_seed(fracture.seed, layer.thickness, variant), fracture,
                                material)
-            pieces, seeds = _prefractured(shapely.orient_polygons(cut[keep & big]), level, (x0, y0))
-            cells.add(pieces, layer.thickness, seeds, False)
+            pieces, seeds, floe = _prefractured(shapely.orient_polygons(cut[keep & big]), level, (x0, y0))
+            cells.add(pieces, layer.thickness, seeds, False, floe)
     return _template(cells, (x0, y0), side, material, _seed(model, region, variant))
 
 
@@ -139,16 +151,18 @@ def _seed(model: RegimeModel, region: int, variant: int) -> int:
     return model.layers[region][0].salt * 64 + variant
 
 
-def _prefractured(floes: np.ndarray, level: TileTemplate, corner: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+def _prefractured(floes: np.ndarray, level: TileTemplate,
+                  corner: tuple[float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The level template's cells (laid at corner, m) cut to the floes: the pieces (convex
-    polygons, as both are convex) and each one's cell's Voronoi seed (x, y; m)."""
+    polygons, as both are convex), each one's cell's Voronoi seed (x, y; m) and its floe
+    (index into floes)."""
     g = level.geometry
     cell_polygons = shapely.polygons(shapely.linearrings(
         g.footprint + corner, indices=np.repeat(np.arange(level.n_cells), np.diff(g.foot_start))))
     cell, floe = shapely.STRtree(cell_polygons).query(floes, predicate="intersects")[::-1]
     pieces = shapely.intersection(cell_polygons[cell], floes[floe])
     keep = (shapely.get_type_id(pieces) == 3) & (shapely.area(pieces) >= MIN_FLOE_AREA)
-    return shapely.orient_polygons(pieces[keep]), level.seeds[cell[keep], :2] + corner
+    return shapely.orient_polygons(pieces[keep]), level.seeds[cell[keep], :2] + corner, floe[keep]
 
 
 def _template(cells: _Cells, corner: tuple[float, float], side: float, material: IceMaterial,
@@ -172,4 +186,5 @@ def _template(cells: _Cells, corner: tuple[float, float], side: float, material:
     return TileTemplate(side=side, thickness=float(thickness.max(initial=0.0)), mode="prism", seed=seed,
                         seeds=seeds, geometry=geometry, mass=geometry.volume * material.density,
                         is_sphere=np.zeros(n, dtype=bool), sphere_radius=enclosing, cell_thickness=thickness,
-                        floe_field=True, starts_free=np.array(cells.free, dtype=bool))
+                        floe_field=True, starts_free=np.array(cells.free, dtype=bool),
+                        floe=np.array(cells.floe, dtype=np.int32))

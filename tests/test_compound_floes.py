@@ -1,0 +1,181 @@
+"""A floe wider than the beam moves as a whole until it breaks (issue 26, item 2:
+``sim_core.ice.compound_floes``). Its intact cells are one body once a hull comes near: a
+slow push moves the floe rigidly, a ram breaks a channel through it while shoving it, and
+the cells broken off become floes of their own."""
+import math
+
+import numpy as np
+import pytest
+import shapely
+from conftest import region_world
+from pymunk._chipmunk import lib
+from test_floe_fields_world import MEDIUM
+
+from sim_core.frames.hull_contour import waterline_contour
+from sim_core.ice.chipmunk_bodies import body_at
+from sim_core.ice.floes import BreakCause, FloeStatus
+from sim_core.ice.model import placed_outlines
+from sim_core.ice.step import HullMotion, ice_step
+from sim_core.ice.tiles import freeze_tile, new_ice_data, place_tile, reclaim_rows, thaw_tile
+
+DT = 1 / 30
+SECONDS = 40.0
+STEM = 75.0  # m: the hull's reference point to its stem
+
+
+@pytest.fixture(scope="module")
+def medium(tmp_path_factory):
+    """The ice model of 8/10 medium floes, and its largest wide floe: (template, floe)."""
+    model, _ = region_world(tmp_path_factory.getbasetemp() / "pack", 400.0, 600.0, [MEDIUM], -80.0)
+    ice, w = model.ice, model.ice.wide
+    floes = [f for t in np.flatnonzero(ice.floe_field) for f in range(w.template_floes[t], w.template_floes[t + 1])]
+    floe = max(floes, key=lambda f: w.cells_start[f + 1] - w.cells_start[f])
+    template = int(np.searchsorted(w.template_floes, floe, side="right") - 1)
+    return ice, template, floe
+
+
+def _push(medium, speed, seconds=SECONDS):
+    """A hull driven north at speed (m/s) into the floe's south edge for seconds: the ice
+    data, the floe's rows, and where the hull went (its reference point, m)."""
+    ice, template, floe = medium
+    w = ice.wide
+    data = new_ice_data(ice, waterline_contour(150.0, 24.0), 0.1)
+    placement = place_tile(ice, data, template, (0.0, 0.0))
+    data.contacts.switch_in_now()
+    rows = data.tiles.rows(placement)[w.cells[w.cells_start[floe]:w.cells_start[floe + 1]]]
+    home = data.state.home[rows]
+    x = float(np.median(home[:, 0]))
+    y = float(home[np.abs(home[:, 0] - x) < 5.0, 1].min()) - 6.0 - STEM
+    for _ in range(round(seconds / DT)):
+        ice_step(ice, data, (HullMotion(np.array([x, y]), 0.5 * math.pi, np.array([0.0, speed]), 0.0),), DT)
+        y += speed * DT
+    return data, rows, np.array([x, y])
+
+
+@pytest.fixture(scope="module")
+def pushed(medium):
+    return _push(medium, 0.3)
+
+
+@pytest.fixture(scope="module")
+def rammed(medium):
+    return _push(medium, 3.0)
+
+
+def _moved(data, rows):
+    """The floe's bonded rows and their displacement from where they lay (n, 2), m."""
+    st = data.state
+    bonded = rows[st.bonded[rows] & (st.status[rows] == FloeStatus.FREE)]
+    return bonded, st.xy[bonded] - st.home[bonded]
+
+
+def test_a_floe_pushed_slowly_moves_as_a_whole(pushed):
+    """At 0.3 m/s the hull crushes a few cells of the floe's edge, then pushes the floe
+    ahead of it: every cell moves with the one body, none apart from the others."""
+    data, rows, _ = pushed
+    st = data.state
+    bonded, moved = _moved(data, rows)
+    assert len(rows) > 300 and len(bonded) > 0.97 * len(rows)
+    assert np.mean(moved[:, 1]) > 1.0 and np.all(np.hypot(*moved.T) > 0.3)  # north, all of it
+    assert np.mean(st.vel[bonded, 1]) > 0.1  # still going ahead of the hull
+    pick = bonded[:: max(1, len(bonded) // 40)]
+    apart = lambda p: np.hypot(*(p[:, None, :] - p[None, :, :]).transpose(2, 0, 1))  # noqa: E731
+    assert np.abs(apart(st.xy[pick]) - apart(st.home[pick].astype(float))).max() < 0.01  # rigid
+    turned = st.yaw[bonded] - st.yaw[bonded[0]]
+    assert np.abs(turned).max() < 1e-9  # one body turns as one
+    assert np.all(st.cause[bonded] == BreakCause.NONE)
+
+
+def test_a_floe_rammed_breaks_along_its_cells(rammed, pushed):
+    """At 3 m/s the hull breaks a channel into the floe, cell by cell, and shoves what is
+    left less than it advanced; the body keeps the mass of the cells still on it."""
+    data, rows, hull = rammed
+    st = data.state
+    bonded, moved = _moved(data, rows)
+    broken = rows[~st.bonded[rows]]
+    by_hull = np.sum(st.cause[broken] == BreakCause.HULL)  # the others: broken off by floes it pushed
+    assert by_hull > 100 and np.all(np.isin(st.cause[broken], (BreakCause.HULL, BreakCause.CONTACT)))
+    assert len(bonded) > 0.2 * len(rows)
+    assert np.mean(moved[:, 1]) < 0.7 * 3.0 * SECONDS  # shoved, not carried along
+    assert by_hull > 10 * np.sum(~pushed[0].state.bonded[pushed[1]])
+    c = data.contacts.compounds
+    slot = int(st.bond_slot[bonded[0]])
+    body = body_at(c.live[slot])
+    assert lib.cpBodyGetMass(body) == pytest.approx(data.contacts.model.mass[st.gcell[bonded]].sum(), rel=1e-9)
+
+
+def test_contacts_on_a_floe_name_its_cells_where_they_are(medium, monkeypatch):
+    """The hull's contacts on the floe's body, as each ice step reads them, name the floe's
+    cells that hold the contact points, where the body has carried them (a cell the contact
+    breaks off leaves the space in that step, and its contact with it)."""
+    ice = medium[0]
+    data, rows, hull = _push(medium, 0.3, 0.0)
+    st, space = data.state, data.contacts
+    named = []
+    read = space.read_contacts
+
+    def check(state):
+        contacts = read(state)
+        struck, _, points = contacts.with_hull(0)
+        mine = np.isin(struck, rows)
+        assert np.all(st.bonded[struck[mine]])
+        pts, counts = placed_outlines(ice, st.gcell[struck[mine]], st.xy[struck[mine]], st.yaw[struck[mine]])
+        named.extend(shapely.Polygon(ring).distance(shapely.Point(point))
+                     for ring, point in zip(np.split(pts, np.cumsum(counts)[:-1]), points[mine]))
+        return contacts
+    monkeypatch.setattr(space, "read_contacts", check)
+    for _ in range(round(SECONDS / DT)):
+        hull = hull + np.array([0.0, 0.3 * DT])
+        ice_step(ice, data, (HullMotion(hull, 0.5 * math.pi, np.array([0.0, 0.3]), 0.0),), DT)
+    assert len(named) >= 5 and max(named) < 0.1  # m: on the cell, where the body carried it
+
+
+def test_a_frozen_tile_keeps_the_floe_where_it_was_pushed(medium):
+    """A tile frozen with a floe moved keeps its cells where they were (as floes of their
+    own: the body goes with the tile's engine objects) and thaws them there."""
+    ice = medium[0]
+    data, rows, _ = _push(medium, 0.3, 20.0)
+    st = data.state
+    bonded, _ = _moved(data, rows)
+    cells = bonded - data.tiles.row_start[0]
+    where = st.xy[bonded].copy()
+    freeze_tile(data, 0)
+    while data.contacts.swaps_pending:
+        data.contacts.step(DT)
+    reclaim_rows(data)
+    thaw_tile(ice, data, 0)
+    data.contacts.switch_in_now()
+    again = data.tiles.row_start[0] + cells
+    assert np.array_equal(st.xy[again], where)
+    assert np.all(st.status[again] == FloeStatus.FREE) and not st.bonded[again].any()
+
+
+def test_a_floe_far_from_the_hull_rests_and_wakes_again(medium):
+    """A floe pushed and left rests as a static body far from the hull (no solver work, no
+    drift in the field's frame); the hull coming back wakes it."""
+    ice = medium[0]
+    data, rows, hull = _push(medium, 0.3, 20.0)
+    c, st = data.contacts.compounds, data.state
+    slot = int(st.bond_slot[_moved(data, rows)[0][0]])
+    away = HullMotion(hull - np.array([0.0, 2000.0]), 0.5 * math.pi, np.zeros(2), 0.0)
+    for _ in range(round(60.0 / DT)):
+        ice_step(ice, data, (away,), DT)
+        if slot in c.resting:
+            break
+    assert slot in c.resting
+    bonded, _ = _moved(data, rows)
+    where = st.xy[bonded].copy()
+    for _ in range(30):
+        ice_step(ice, data, (away,), DT)
+    assert np.array_equal(st.xy[bonded], where)
+    ice_step(ice, data, (HullMotion(hull, 0.5 * math.pi, np.zeros(2), 0.0),), DT)
+    assert slot not in c.resting and slot in c.live
+
+
+def test_reruns_of_a_ram_are_the_same(medium, rammed):
+    """The engine lists contacts in an order that differs from run to run; what the floe's
+    body gets back from its broken cells does not depend on it, so a rerun (a save point's
+    re-simulation) is the same run, to the bit."""
+    again, rows, _ = _push(medium, 3.0)
+    assert np.array_equal(again.state.xy[rows], rammed[0].state.xy[rows])
+    assert np.array_equal(again.state.bonded[rows], rammed[0].state.bonded[rows])
