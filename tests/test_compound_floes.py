@@ -2,6 +2,7 @@
 ``sim_core.ice.compound_floes``). Its intact cells are one body once a hull comes near: a
 slow push moves the floe rigidly, a ram breaks a channel through it while shoving it, and
 the cells broken off become floes of their own."""
+import dataclasses
 import math
 
 import numpy as np
@@ -25,9 +26,12 @@ STEM = 75.0  # m: the hull's reference point to its stem
 
 @pytest.fixture(scope="module")
 def medium(tmp_path_factory):
-    """The ice model of 8/10 medium floes, and its largest wide floe: (template, floe)."""
+    """The ice model of 8/10 medium floes, its wide floes moving, and its largest wide floe:
+    (template, floe)."""
     model, _ = region_world(tmp_path_factory.getbasetemp() / "pack", 400.0, 600.0, [MEDIUM], -80.0)
-    ice, w = model.ice, model.ice.wide
+    moving = model.ice.settings.model_copy(update={"wide_floes_move": True})
+    ice = dataclasses.replace(model.ice, settings=moving)
+    w = ice.wide
     floes = [f for t in np.flatnonzero(ice.floe_field) for f in range(w.template_floes[t], w.template_floes[t + 1])]
     floe = max(floes, key=lambda f: w.cells_start[f + 1] - w.cells_start[f])
     template = int(np.searchsorted(w.template_floes, floe, side="right") - 1)

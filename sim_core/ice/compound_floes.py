@@ -8,8 +8,9 @@ When a hull comes near such a floe (``WAKE_REACH`` beyond the hull's bounds, mor
 per cell, the floe's mass, centre of mass and moment of inertia summed from its cells'.
 Their rows become FREE and ``bonded``: drawn, streamed and frozen as floes, their poses
 following the floe's body (``scatter_bonded``). So the floe moves as a whole: the hull
-and other floes push and turn it, and the water drags it. Far from every hull and at rest
-it turns static again (``rest_far``), and a hull coming near wakes it (``wake_resting``).
+and other floes push and turn it, and the water drags it. At rest and ``REST_REACH`` clear
+of every hull it turns static again (``rest_far``), and a hull coming near wakes it
+(``wake_resting``).
 
 A cell of the floe breaks away when a contact loads it past its capacity: struck by a
 free floe, by the test an intact edge meets (``step._hard_pushes``); struck by the hull, by
@@ -59,8 +60,9 @@ from sim_core.ice.floes import FloeState, FloeStatus
 from sim_core.ice.tile_frame import template_point
 from sim_core.ice.wide_floes import floes_near
 
-WAKE_REACH = 20.0  # m beyond a hull's bounds: a wide floe's bounds this near wake it
-WAKE_AHEAD_S = 4.0  # s of the hull's speed added to that reach
+WAKE_REACH = 10.0  # m beyond a hull's bounds: a wide floe's bounds this near wake it
+WAKE_AHEAD_S = 2.0  # s of the hull's speed added to that reach
+REST_REACH = 40.0  # m beyond every hull's bounds: a woken floe at rest this far from them turns static
 
 
 class CompoundSlots:
@@ -134,34 +136,41 @@ class CompoundFloes:
 
     def wake_resting(self, hull: int, speed: float) -> None:
         """Wake the resting floes whose reach from their centre comes within ``WAKE_REACH``
-        (more ``WAKE_AHEAD_S`` of the speed, m/s) of the hull's (by index)."""
-        c, body = self.compounds, self.hulls[hull]
+        (more ``WAKE_AHEAD_S`` of the speed, m/s) of the hull's (by index) bounds."""
+        c = self.compounds
         if not c.resting:
             return
         slots = np.fromiter(c.resting, np.int64, len(c.resting))
-        gap = np.hypot(*(self._centres(slots) - body.xy).T) - c.radius[slots] - body.radius
-        for slot in slots[gap < WAKE_REACH + WAKE_AHEAD_S * speed].tolist():
+        for slot in slots[self._clear_of(hull, slots) < WAKE_REACH + WAKE_AHEAD_S * speed].tolist():
             self._set_dynamic(slot)
             c.resting.discard(slot)
 
-    def rest_far(self, hulls_xy: np.ndarray, speed: float, distance: float) -> None:
+    def rest_far(self, speed: float) -> None:
         """Woken floes slower than speed (m/s, at their rim) whose reach from their centre lies
-        farther than distance (m) from every hull's reference point (k, 2) go static: no
-        solver work, and no drift in the field's frame, as resting floes
-        (``resting.rest_far``)."""
+        ``REST_REACH`` or more beyond every hull's bounds go static: no solver work, and no
+        drift in the field's frame, as resting floes (``resting.rest_far``)."""
         c = self.compounds
         slots = np.array([k for k in c.live if k not in c.resting], np.int64)
         if not len(slots):
             return
         v = c.velocity[slots]
         slow = np.hypot(v[:, 0], v[:, 1]) + np.abs(v[:, 2]) * c.radius[slots] < speed
-        gap = np.hypot(*(self._centres(slots)[:, None, :] - hulls_xy[None, :, :]).transpose(2, 0, 1)).min(axis=1)
-        for slot in slots[slow & (gap - c.radius[slots] > distance)].tolist():
+        clear = np.min([self._clear_of(k, slots) for k in range(len(self.hulls))], axis=0) >= REST_REACH
+        for slot in slots[slow & clear].tolist():
             body = body_at(c.live[slot])
             lib.cpBodySetVelocity(body, (0.0, 0.0))
             lib.cpBodySetAngularVelocity(body, 0.0)
             lib.cpBodySetType(body, lib.CP_BODY_TYPE_STATIC)  # its shapes move to the static index
             c.resting.add(slot)
+
+    def _clear_of(self, hull: int, slots: np.ndarray) -> np.ndarray:
+        """How far (m) woken floes' reach from their centre lies outside a hull's (by index)
+        bounds (world, axis-aligned; 0 where they meet)."""
+        box = self.hulls[hull].in_world()
+        lo, hi = box.min(axis=0), box.max(axis=0)
+        centre = self._centres(slots)
+        out = np.maximum(np.maximum(lo - centre, centre - hi), 0.0)
+        return np.maximum(np.hypot(out[:, 0], out[:, 1]) - self.compounds.radius[slots], 0.0)
 
     def _centres(self, slots: np.ndarray) -> np.ndarray:
         """Woken floes' centres of mass (n, 2), world m, at their last read poses."""

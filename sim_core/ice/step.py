@@ -336,7 +336,8 @@ def ice_step(model: IceModel, data: IceData, hulls: Sequence[HullMotion], dt: fl
         if resting_on:
             resting.wake_near_hull(model, data, k, hull.xy)
     by_hull, cracked, broke = _hulls_break(model, data, hulls)
-    for k, hull in enumerate(hulls):  # after the hulls broke what they lie on (a ship laid in the ice)
+    waking = hulls if model.settings.wide_floes_move else ()
+    for k, hull in enumerate(waking):  # after the hulls broke what they lie on (a ship laid in the ice)
         speed = float(np.hypot(*hull.velocity))
         space.wake_resting(k, speed)
         for placement, floe in space.wake_near(st, k, speed):
@@ -371,7 +372,7 @@ def ice_step(model: IceModel, data: IceData, hulls: Sequence[HullMotion], dt: fl
         resting.wake_struck(model, data, con, vel_before)
         at = _hull_motions(hulls)[0]
         resting.rest_far(model, data, moving, at, dt, new=rest)
-        space.rest_far(at, model.settings.rest_speed, model.settings.rest_distance)
+        space.rest_far(model.settings.rest_speed)
     return IceStepReport(by_hull, by_contact, cracked, force, moment, broke)
 
 
