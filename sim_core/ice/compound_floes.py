@@ -372,7 +372,8 @@ def struck_off(space: CompoundFloes, state: FloeState, con: Contacts, hull_xy: n
                               state.bond_slot, space.compounds.mass, m.k_impact, m.edge_capacity, m.plan_area, hull_xy,
                               hull_vel, hull_w)
     hull_is_a = con.a[hits] < 0
-    rows, hulls = np.where(hull_is_a, con.b[hits], con.a[hits]), HULL_ROW0 - np.where(hull_is_a, con.a[hits], con.b[hits])
+    rows = np.where(hull_is_a, con.b[hits], con.a[hits])
+    hulls = HULL_ROW0 - np.where(hull_is_a, con.a[hits], con.b[hits])
     order = np.lexsort((hulls, rows))  # the engine lists contacts in a run-dependent order; the impulses add up in this
     rows, hulls, hull_is_a, hits, share = rows[order], hulls[order], hull_is_a[order], hits[order], share[order]
     for row, on_a, k, keep in zip(rows.tolist(), hull_is_a.tolist(), hits.tolist(), share.tolist()):
