@@ -47,14 +47,7 @@ import numpy as np
 from pymunk._chipmunk import ffi, lib
 
 from sim_core.ice.breaking import pushed_hard
-from sim_core.ice.chipmunk_bodies import (
-    BOND0,
-    HULL_ROW0,
-    INTACT_IN,
-    LOWEST_ROW,
-    NOT_A_FLOE,
-    body_at,
-)
+from sim_core.ice.chipmunk_bodies import BOND0, HULL_ROW0, INTACT_IN, LOWEST_ROW, NOT_A_FLOE, body_at
 from sim_core.ice.contact_kernels import Contacts, nearest_cell
 from sim_core.ice.floes import FloeState, FloeStatus
 from sim_core.ice.tile_frame import template_point
