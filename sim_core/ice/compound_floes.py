@@ -358,8 +358,6 @@ def struck_off(space: CompoundFloes, state: FloeState, con: Contacts, hull_xy: n
     velocities still those before it), and the hull that broke each. Each broken contact's
     impulse beyond what the edge passed on goes back to the floe's body, and the contact
     keeps only that share (the hull's load)."""
-    if not space.compounds.live:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
     m = space.model
     hits, share = hull_breaks(con.a, con.b, con.impulse, con.normal, con.point, state.bonded, state.vel, state.gcell,
                               state.bond_slot, space.compounds.mass, m.k_impact, m.edge_capacity, m.plan_area, hull_xy,

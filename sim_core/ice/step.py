@@ -347,15 +347,16 @@ def ice_step(model: IceModel, data: IceData, hulls: Sequence[HullMotion], dt: fl
     space.step(dt)
     con = space.read_contacts(st)
     by_contact, jammed = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
-    struck_off, breaker = compound_floes.struck_off(space, st, con, *_hull_motions(hulls))
+    struck_off, breaker = compound_floes.struck_off(space, st, con, *_hull_motions(hulls)) if space.compounds.live \
+        else (_NO_ROWS, _NO_ROWS)
     vel_before = st.vel.copy() if resting_on else None
     moving = space.read_free(st)
     if wash is not None and len(moving):
         drag_in_wash(data, moving, wash, dt)
     if len(by_contact):
         break_cells(data, by_contact, BreakCause.CONTACT)
-    struck_off = np.setdiff1d(struck_off, by_contact)
     if len(struck_off):
+        struck_off = np.setdiff1d(struck_off, by_contact)
         break_cells(data, struck_off, BreakCause.HULL)
         by_hull = _union([by_hull, struck_off])
         broke += np.bincount(breaker, minlength=len(hulls))
@@ -372,7 +373,8 @@ def ice_step(model: IceModel, data: IceData, hulls: Sequence[HullMotion], dt: fl
         resting.wake_struck(model, data, con, vel_before)
         at = _hull_motions(hulls)[0]
         resting.rest_far(model, data, moving, at, dt, new=rest)
-        space.rest_far(model.settings.rest_speed)
+        if space.compounds.live:
+            space.rest_far(model.settings.rest_speed)
     return IceStepReport(by_hull, by_contact, cracked, force, moment, broke)
 
 

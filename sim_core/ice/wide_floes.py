@@ -33,10 +33,6 @@ class WideFloes:
     cells: np.ndarray
     box: np.ndarray
 
-    @property
-    def count(self) -> int:
-        return len(self.box)
-
 
 def compile_wide_floes(templates: tuple[TileTemplate, ...] | list[TileTemplate]) -> WideFloes:
     """Index the wide floes of the templates (``TileTemplate.floes``)."""
