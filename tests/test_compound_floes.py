@@ -108,6 +108,48 @@ def test_a_floe_rammed_breaks_along_its_cells(rammed, pushed):
     assert lib.cpBodyGetMass(body) == pytest.approx(data.contacts.model.mass[st.gcell[bonded]].sum(), rel=1e-9)
 
 
+def _footprints(ice, template: int, cells: np.ndarray) -> np.ndarray:
+    """Shapely polygons of a template's cells (template frame, m)."""
+    g = ice.templates[template].geometry
+    return np.array([shapely.Polygon(g.footprint[g.foot_start[c]:g.foot_start[c + 1]]) for c in cells.tolist()])
+
+
+def test_only_a_floes_rim_goes_into_the_engine(medium):
+    """A wide floe's cells off its outline (``WideFloes.inner``) lie clear of it, and they
+    are most of a medium floe's cells: the engine holds and moves its rim only."""
+    ice, template, floe = medium
+    w = ice.wide
+    cells = w.cells[w.cells_start[floe]:w.cells_start[floe + 1]]
+    inner = w.inner[ice.template_start[template] + cells]
+    outline = shapely.union_all(shapely.buffer(_footprints(ice, template, cells), 1e-3, join_style="mitre")).boundary
+    apart = shapely.distance(_footprints(ice, template, cells), outline)
+    assert inner.mean() > 0.6 and apart[inner].min() > 0.0 and apart[~inner].max() < 0.01
+
+
+def test_nothing_touches_a_cell_held_out_of_the_engine(rammed):
+    """After the ram, the cells of the floe still held out of the engine (their shapes never
+    in the space) are clear of every broken cell afloat and of the hull: the cells that the
+    channel bared went in as it broke them free, and those that a piece surfaced under
+    (the floe shoved over it while the hull held it under) went in as it surfaced."""
+    data, rows, hull = rammed
+    st, ice = data.state, data.contacts.model
+    bodies = data.contacts._tiles[int(st.tile[rows[0]])]
+    held = rows[bodies.held[rows - data.tiles.row_start[0]] != 0]
+    bonded, _ = _moved(data, rows)
+    assert 0 < len(held) and len(held) > 0.3 * len(bonded)
+
+    def placed(r):
+        pts, counts = placed_outlines(ice, st.gcell[r], st.xy[r], st.yaw[r])
+        return shapely.polygons(shapely.linearrings(pts, indices=np.repeat(np.arange(len(r)), counts)))
+    near = np.flatnonzero(np.hypot(*(st.xy[:st.n] - st.xy[held].mean(axis=0)).T) < 150.0)
+    loose = near[(st.status[near] == FloeStatus.FREE) & ~st.bonded[near] & ~st.submerged[near]]
+    contour = waterline_contour(150.0, 24.0)  # x forward, y starboard; heading north
+    at = hull - np.array([0.0, 3.0 * DT])  # where the last step had it
+    hull_shape = shapely.Polygon(np.column_stack([at[0] + contour[:, 1], at[1] + contour[:, 0]]))
+    assert len(loose) > 20
+    assert not shapely.intersects(placed(held), shapely.union_all([*placed(loose), hull_shape])).any()
+
+
 def test_contacts_on_a_floe_name_its_cells_where_they_are(medium, monkeypatch):
     """The hull's contacts on the floe's body, as each ice step reads them, name the floe's
     cells that hold the contact points, where the body has carried them (a cell the contact

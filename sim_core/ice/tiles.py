@@ -26,6 +26,7 @@ from sim_core.ice.chipmunk_bodies import TileBodies
 from sim_core.ice.contact import ContactSpace
 from sim_core.ice.floes import BreakCause, FloeState, FloeStatus, FrozenFloes, TilePlacement
 from sim_core.ice.model import IceModel, placed_centroids
+from sim_core.ice.wide_floes import held_back
 
 
 @dataclass
@@ -107,7 +108,8 @@ def prepare_place(model: IceModel, template: int, corner: tuple[float, float], q
     n, g0 = model.templates[template].n_cells, int(model.template_start[template])
     free = model.starts_free[g0:g0 + n]
     return PreparedTile(template, (float(corner[0]), float(corner[1])), quarter_turns % 4, -1,
-                        TileBodies(n), np.flatnonzero(~free), np.zeros(0, dtype=np.int64), np.flatnonzero(free))
+                        TileBodies(n, held_back(model.wide, g0, ~free)), np.flatnonzero(~free),
+                        np.zeros(0, dtype=np.int64), np.flatnonzero(free))
 
 
 def prepare_thaw(model: IceModel, data: IceData, placement: int) -> PreparedTile:
@@ -119,8 +121,9 @@ def prepare_thaw(model: IceModel, data: IceData, placement: int) -> PreparedTile
     floes = data.frozen[placement]
     intact = np.ones(n, dtype=bool)
     intact[floes["cell"]] = False
+    hold = held_back(model.wide, int(model.template_start[template]), intact)
     return PreparedTile(template, tuple(tiles.corner[placement].tolist()), int(tiles.quarter_turns[placement]),
-                        placement, TileBodies(n), np.nonzero(intact)[0], np.arange(len(floes)))
+                        placement, TileBodies(n, hold), np.nonzero(intact)[0], np.arange(len(floes)))
 
 
 def _lay(model: IceModel, st: FloeState, rows: slice, template: int, corner: tuple[float, float] | np.ndarray,
