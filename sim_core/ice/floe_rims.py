@@ -4,14 +4,13 @@
 
 - A cell leaving the floe (broken free, or taken out) bares its mates, the floe's cells
   that it may have touched (``expose_mates``).
-- A piece that the hull pushed under may lie under a floe's inside when the hull leaves
-  it, the floe shoved over it meanwhile: it stays under the floe (``under_held``), as a
-  piece rafted under a floe does, until the floe has moved off it. (Surfacing inside the
-  floe, with the cells it lies under let into the engine to part them, cost the main job
-  its real time in medium floes: ticks of 60-100 ms for two minutes of one run.)
+- A floe surfacing after the hull pushed it under may come up over a floe's inside, where
+  the floe was shoved over it: the cells it lies over go in (``expose_under``), so that the
+  engine parts them, as it did when every cell was in it. (A floe pushed under a wide floe
+  stays under it in nature; here, as for level ice, it surfaces where the hull left it.)
 
 The attributes of ``ContactSpace`` are used as they are there (``_tiles``, ``_cp``,
-``model``, ``tiles``, ``extent``, ``_sides``).
+``model``, ``tiles``, ``extent``).
 """
 from __future__ import annotations
 
@@ -19,8 +18,6 @@ import numpy as np
 
 from sim_core.csr import gather_ranges
 from sim_core.ice.floes import FloeState, FloeStatus
-
-FLOE_SHOVE = 100.0  # m: how far a woken floe may have moved from its tile, for ``under_held``'s look
 
 
 class FloeRims:
@@ -37,20 +34,18 @@ class FloeRims:
         near = np.repeat(rows - g, count) + mates  # a mate's row: its tile's rows are its template's cells
         self._expose(state, np.unique(near))
 
-    def under_held(self, state: FloeState, rows: np.ndarray) -> np.ndarray:
-        """Which free rows (n,) bool lie under a wide floe's held cells (their enclosing
-        circles meet), so that they stay under the floe rather than surface inside it."""
-        reach = 2.0 * float(self.extent.max(initial=0.0)) + FLOE_SHOVE
-        at, out = state.xy[rows], np.zeros(len(rows), bool)
-        for t, bodies in self._tiles.items():
-            lo = self.tiles.corner[t] - reach
-            hi = self.tiles.corner[t] + self._sides[self.tiles.template[t]] + reach
-            if not bodies.held.any() or not np.any(np.all((at > lo) & (at < hi), axis=1)):
-                continue
-            held = self.tiles.row_start[t] + np.flatnonzero(bodies.held)
-            gap = np.hypot(*(state.xy[held][:, None, :] - at[None, :, :]).transpose(2, 0, 1))
-            out |= (gap < self.extent[state.gcell[held]][:, None] + self.extent[state.gcell[rows]][None, :]).any(axis=0)
-        return out
+    def expose_under(self, state: FloeState, rows: np.ndarray) -> None:
+        """Free rows surfacing bare the held cells whose enclosing circles meet theirs."""
+        held = [self.tiles.row_start[t] + np.flatnonzero(b.held) for t, b in self._tiles.items() if b.held.any()]
+        if not len(rows) or not held:
+            return
+        held, at = np.concatenate(held), state.xy[rows]
+        reach = 2.0 * float(self.extent.max())
+        xy = state.xy[held]
+        held = held[np.all((xy > at.min(axis=0) - reach) & (xy < at.max(axis=0) + reach), axis=1)]
+        gap = np.hypot(*(state.xy[held][:, None, :] - state.xy[rows][None, :, :]).transpose(2, 0, 1))
+        reach = self.extent[state.gcell[held]][:, None] + self.extent[state.gcell[rows]][None, :]
+        self._expose(state, held[(gap < reach).any(axis=1)])
 
     def _expose(self, state: FloeState, rows: np.ndarray) -> None:
         """Put the held shapes of rows (ascending; intact, or bonded to a woken floe) into

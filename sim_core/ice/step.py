@@ -229,7 +229,6 @@ def _update_submersion(model: IceModel, data: IceData, k: int, hull: HullMotion,
         st.roll[at_once] = turning.PUSHED_DOWN_TILT
     up = _surfacing(rows.went_under, st.submerged, st.xy, hull.xy, c, s, body.outline,
                     body.half_beam + _BESIDE, body.stem, _CLEAR_AHEAD)
-    up = up[~space.under_held(st, up)] if len(up) else up  # a piece under a wide floe's inside stays there
     if len(up):
         st.submerged[up] = False
         st.turn[up] = 0.0
