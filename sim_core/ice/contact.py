@@ -237,8 +237,6 @@ class ContactSpace(FloeRest, CompoundFloes, CompoundRest, FloeRims, TileSwaps):
             lib.cpShapeSetFilter(shape_at(p), f)
         if submerged:
             self.set_velocity(state, rows, np.zeros((len(rows), 2)), np.zeros(len(rows)))
-        else:
-            self.expose_under(state, rows)
 
     def set_velocity(self, state: FloeState, rows: np.ndarray, velocity: np.ndarray, yaw_rate: np.ndarray) -> None:
         """Give free rows (their bodies and state) a planar velocity (n, 2) m/s, yaw rate (n,) rad/s."""
