@@ -31,6 +31,8 @@ class FloeRims:
         touched: those held out of the space go in (``WideFloes.mates``)."""
         w = self.model.wide
         rows = rows[w.of_cell[state.gcell[rows]] >= 0]
+        if not len(rows):  # level ice: no work on the step's path
+            return
         g = state.gcell[rows]
         count = w.mates_start[g + 1] - w.mates_start[g]
         mates = w.mates[gather_ranges(w.mates_start[g], w.mates_start[g + 1])]
