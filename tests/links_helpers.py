@@ -3,6 +3,7 @@ configs, a paced console writer, and hub ticks."""
 from __future__ import annotations
 
 import math
+import os
 import shutil
 import subprocess
 import time
@@ -66,6 +67,20 @@ def pty_pair(folder: Path):
     finally:
         proc.terminate()
         proc.wait(5.0)
+
+
+@contextmanager
+def bare_pty():
+    """One kernel pseudo-terminal with no relay: (the path of its serial end, for the node;
+    the file descriptor of its other end, for the console). Unlike socat's pair, nothing in
+    between can stall: socat blocks writing to an end that is never read, and then stops
+    passing the other way too."""
+    console, node = os.openpty()
+    try:
+        yield os.ttyname(node), console
+    finally:
+        os.close(node)
+        os.close(console)
 
 
 def node_config(links: list[dict], **arbitration) -> NodeConfig:
