@@ -57,6 +57,7 @@ from sim_core.scene.switches import (
     placed_tiles,
     prepare_ahead,
     prepare_switch,
+    warm_up_moved,
 )
 from sim_core.fleet import (Controls, KinematicPose, ShipReport, ShipStart, apply_controls, collisions, fleet_contour,
                              fleet_wash, hulls_in_ice, move_ship, new_ship, per_ship, take_ice_loads)
@@ -134,8 +135,9 @@ class WorldEvents:
     both ``placed``, with its new rows, and ``thawed``). A tile ``frozen`` gives its rows up
     (a later placement may be given them), and its broken cells travel as
     ``frozen_floes`` (``FROZEN_FLOE_EVENT`` records): all others of its cells are intact.
-    ``floe_rows`` are the rows whose pose or status may have changed: the free floes of the
-    live tiles, and every row of a tile placed or thawed in this step; in a snapshot, every
+    ``floe_rows`` are the rows whose pose or status changed: the free floes of the live
+    tiles that moved, or came free, since they were last published (a floe at rest is not
+    sent again), and every row of a tile placed or thawed in this step; in a snapshot, every
     row of the live tiles, with ``frozen`` and ``frozen_floes`` naming every frozen tile and
     its floes. ``cracked`` names the intact cells cracked in the step (in a snapshot, every
     cracked cell of the live tiles; and every cracked cell of a tile placed or thawed) with
@@ -220,6 +222,7 @@ def warm_up(model: WorldModel, data: WorldData) -> None:
     kernels, and build the tiles around the start position (and the ring beyond) in full,
     so that the first step only switches them in."""
     warm_up_ice(model.ice, data.ice)
+    warm_up_moved(data)
     contour = fleet_contour(model, data)
     start = with_ice(model.scene, data.scene, tiles_near(contour, model.scene.radius, model.scene.nx,
                                                          model.scene.ny, model.scene.side))

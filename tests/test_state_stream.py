@@ -4,6 +4,8 @@ what a single process draws, and a slow renderer never holds the physics back.""
 import dataclasses
 import json
 import math
+import os
+import signal
 import socket
 import subprocess
 import sys
@@ -19,6 +21,8 @@ from pyais import decode as ais_decode
 from test_links_ais import QUIET
 from test_links_dis import datagrams, other_simulator_pdu, receiver
 
+from bridge_node.exercise.listeners import StreamOutput
+from bridge_node.exercise.tick import TickOutcome
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.config import load_config
 from bridge_node.node.realtime_loop import run_realtime
@@ -141,6 +145,42 @@ def test_the_publisher_process_that_dies_is_reported_and_the_physics_goes_on(exe
         for _ in range(1200):  # beyond the handover's high-water mark: dropped, never waited for
             publisher.publish(events)
     assert publisher.dropped > 0 and "exit code -9" in publisher.error
+
+
+def test_after_a_step_the_publisher_could_not_take_the_whole_state_goes(exercise):
+    """Steps carry only the floes that changed, so steps lost in the handover (the publisher
+    process stopped) would leave its view, and every late joiner's, behind for good: the
+    step after the loss sends the whole state instead."""
+    _, cfg, model = exercise
+    data = start_world(model, cfg)
+    with StatePublisher(cfg.stream) as publisher:
+        stream = StreamOutput(publisher, None, model.origin, lambda: snapshot(model, data))
+        publisher.publish(snapshot(model, data))
+
+        def tick() -> None:
+            stream.on_step(TickOutcome(step(model, data, 0.1), Controls(), (), time.monotonic(), None))
+        os.kill(publisher._process.pid, signal.SIGSTOP)
+        try:
+            while publisher.dropped < 50 and data.seq < 20000:  # floes break and come to rest, unheard
+                tick()
+        finally:
+            os.kill(publisher._process.pid, signal.SIGCONT)
+        assert publisher.dropped >= 50
+        deadline = time.monotonic() + 30.0
+        while time.monotonic() < deadline:  # the publisher catches up; the first step it takes is the whole state
+            dropped = publisher.dropped
+            tick()
+            if publisher.dropped == dropped:
+                break
+            time.sleep(0.05)
+        with StateSubscriber(cfg.stream.publish, cfg.stream.snapshot) as late:
+            late.sync()
+            deadline = time.monotonic() + 20.0
+            while late.view.seq < data.seq and time.monotonic() < deadline:
+                late.poll(50)
+            truth = WorldView()
+            truth.apply(decode(encode(snapshot(model, data)))[0])
+            views_equal(late.view, truth)
 
 
 def test_a_dis_vessel_goes_out_as_ais_and_reaches_a_late_joiners_traffic(exercise):

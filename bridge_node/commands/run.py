@@ -127,8 +127,8 @@ def _loop(cfg, args, rate: float, model, data, publisher: StatePublisher, render
         with ControlEndpoint(cfg.control, queue, lambda: exercise_status(status.last, data, hub, others) | ice,
                              [link.name for h in hubs for link in h.links], record,
                              model.scene.class_names, len(model.ships)) as control, station:
-            stats = run_realtime(model, data, hub, rate, args.duration,
-                                 [StreamOutput(publisher, traffic, model.origin), status], commands=queue,
+            stream = StreamOutput(publisher, traffic, model.origin, lambda: snapshot(model, data))
+            stats = run_realtime(model, data, hub, rate, args.duration, [stream, status], commands=queue,
                                  scheduler=(cfg.realtime.scheduler, cfg.realtime.priority), fleet=fleet)
         return (stats, status.last, bridges_summary(hub, fleet),
                 {"endpoint": cfg.control.endpoint, "requests": dict(control.counts)},

@@ -8,6 +8,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from bridge_node.control.save_point import SAVES_FOLDER, SavePoint, state_of
@@ -19,6 +20,7 @@ from bridge_node.common.output_files import write_output
 from bridge_node.stream.publisher import StatePublisher
 from bridge_node.links.traffic_picture import TrafficPicture
 from sim_core.frames.geodesy import local_to_geodetic
+from sim_core.world import WorldEvents
 
 
 log = logging.getLogger(__name__)
@@ -120,13 +122,20 @@ class WorldTraffic(StepListener):
 
 class StreamOutput(StepListener):
     """Every step sent on the state stream with its input time and the traffic picture
-    (placed on the field whose corner is at ``origin``, latitude and longitude rad)."""
+    (placed on the field whose corner is at ``origin``, latitude and longitude rad). A
+    step carries only the floes that changed since they were last published, so after a
+    step the publisher could not take (``StatePublisher.dropped``) the whole state goes
+    instead of the next one (``resync``: ``sim_core.world.snapshot``): else the publisher's
+    view, which late joiners start from, would miss that step's changes for good."""
 
     def __init__(self, publisher: StatePublisher, traffic: TrafficPicture | None,
-                 origin: tuple[float, float]) -> None:
-        self.publisher, self.traffic, self.origin = publisher, traffic, origin
+                 origin: tuple[float, float], resync: Callable[[], WorldEvents]) -> None:
+        self.publisher, self.traffic, self.origin, self.resync = publisher, traffic, origin, resync
+        self._behind = False
 
     def on_step(self, outcome: TickOutcome) -> None:
         if outcome.send:
             table = self.traffic.table(self.origin) if self.traffic is not None else None
-            self.publisher.publish(outcome.events, outcome.input_time, table)
+            dropped = self.publisher.dropped
+            self.publisher.publish(self.resync() if self._behind else outcome.events, outcome.input_time, table)
+            self._behind = self.publisher.dropped > dropped

@@ -191,7 +191,8 @@ def run_replay(model: WorldModel, data: WorldData, source: Source, playback: Pla
                *fleet_listeners(model, hub, fleet, ReplayLinkOutputs)]
     links = ReplayLinkOutputs(hub) if hub is not None else None
     world_traffic = WorldTraffic(hub.traffic, model.origin) if hub is not None else None
-    stream = StreamOutput(publisher, hub.traffic if hub else None, model.origin) if publisher is not None else None
+    stream = StreamOutput(publisher, hub.traffic if hub else None, model.origin,
+                          lambda: snapshot(model, data)) if publisher is not None else None
     tick = ExerciseTick(model, data, orders, [_stats_listener(stats, model, data, orders), *bridges,
                                                *(x for x in (world_traffic, links, stream) if x is not None)], orders)
     stats.refusals = tick.refusals

@@ -135,6 +135,8 @@ class FloeState(_Table):
     heave_rate = _Column(np.float32)  # m/s
     roll_rate = _Column(np.float32)  # rad/s
     pitch_rate = _Column(np.float32)  # rad/s
+    shown_pose = _Column(np.float64, 6)  # a free row's pose as last published (``scene.switches.moved_rows``)
+    shown = _Column(np.bool_)  # published free, at ``shown_pose``, since its status last changed
 
     def __init__(self, capacity: int = 1024) -> None:
         super().__init__(capacity)
@@ -173,6 +175,7 @@ class FloeState(_Table):
         """Give rows a new status, keeping the counts."""
         self._counts -= np.bincount(self._status[rows], minlength=len(FloeStatus))
         self._status[rows] = status
+        self._shown[rows] = False  # its new status goes out
         self._counts[status] += len(rows)
 
     def count(self, status: FloeStatus) -> int:

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+import numba
 import numpy as np
 import shapely
 
@@ -175,15 +176,47 @@ def prepare_ahead(model: WorldModel, data: WorldData, contour: np.ndarray, budge
     return True
 
 
+_FREE = int(FloeStatus.FREE)  # for the compiled kernel
+
+
 def moved_rows(data: WorldData, placed: PlacedTiles) -> np.ndarray:
-    """Rows whose pose or status may have changed in a step: the free floes of the live
-    tiles (broken cells included), and every row of the tiles placed or thawed in it.
-    Intact cells of live tiles do not move, and frozen tiles have no rows."""
+    """Rows whose pose or status changed in a step: the free floes of the live tiles
+    (broken cells included) that moved, or are new or newly free, since they were last
+    published, and every row of the tiles placed or thawed in it. Intact cells of live
+    tiles do not move, frozen tiles have no rows, and a floe at rest is not sent again
+    (in 7/10 pack, two thirds of the free rows: 400 KB a step to every subscriber)."""
     st = data.ice.state
     live = data.live_rows
-    moving = live[st.status[live] == FloeStatus.FREE]
+    moving = live[_newly_moved(live, st.status, st.xy, st.heave, st.yaw, st.roll, st.pitch, st.shown, st.shown_pose)]
     return np.union1d(moving, _tile_rows(data.ice.tiles, placed.placement.tolist())) if len(placed.placement) \
         else moving
+
+
+@numba.njit(cache=True)
+def _newly_moved(rows, status, xy, heave, yaw, roll, pitch, shown, shown_pose):
+    """Which rows (n,) are free and not yet published at their pose (x, y, heave, yaw, roll,
+    pitch), as ``shown`` and ``shown_pose`` say; marks them published at it. Returns (n,)
+    bool."""
+    out = np.zeros(len(rows), np.bool_)
+    pose = np.empty(6)
+    for k in range(len(rows)):
+        i = rows[k]
+        if status[i] != _FREE:
+            continue
+        pose[0], pose[1], pose[2], pose[3], pose[4], pose[5] = xy[i, 0], xy[i, 1], heave[i], yaw[i], roll[i], pitch[i]
+        same = shown[i]
+        for j in range(6):
+            same = same and shown_pose[i, j] == pose[j]
+        if not same:
+            out[k], shown[i] = True, True
+            shown_pose[i] = pose
+    return out
+
+
+def warm_up_moved(data: WorldData) -> None:
+    """Load ``moved_rows``' compiled kernel (numba compiles or loads it on its first call)."""
+    st = data.ice.state
+    _newly_moved(data.live_rows[:0], st.status, st.xy, st.heave, st.yaw, st.roll, st.pitch, st.shown, st.shown_pose)
 
 
 def cracks_published(data: WorldData, placed: PlacedTiles, cracked: np.ndarray) -> np.ndarray:
