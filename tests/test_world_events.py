@@ -1,7 +1,6 @@
 """The world's published contract: events and snapshots agree (a floe at rest is not sent
-again), live rows keep their numbers
-and a frozen tile's rows go to the next tile, a thawed tile's floes come back where they
-froze, and refused orders are counted and raise an alarm."""
+again), live rows keep their numbers and a frozen tile's rows go to the next tile, a thawed
+tile's floes come back where they froze, and refused orders are counted and raise an alarm."""
 import dataclasses
 import math
 
