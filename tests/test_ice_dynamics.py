@@ -104,7 +104,8 @@ def test_no_floe_accelerates_without_contact_and_energy_decays():
 def test_a_floe_the_hull_has_left_is_not_among_its_contacts():
     """Chipmunk keeps a separated pair's contact for a few steps, with no points and no
     impulse: the hull's contacts (what strikes floes, sends them under and loads the hull)
-    leave such a pair out."""
+    leave such a pair out. The hull strikes the floe with its side, so that the floe stays
+    afloat (one sent under leaves the engine with its contacts, ``TileBodies.sink``)."""
     t = build_tile(0.5, 4, FractureSettings(tile_side=40.0, colliders="sphere"))
     m = compile_ice_model([t])
     data = new_ice_data(m, waterline_contour(150, 24), 0.1)
@@ -113,11 +114,11 @@ def test_a_floe_the_hull_has_left_is_not_among_its_contacts():
     data.contacts.remove(data.state, np.setdiff1d(rows, one))
     break_cells(data, one, BreakCause.HULL)
     x, y = data.state.xy[one[0]]
-    hull = np.array([x - 75.0 - data.contacts.extent[data.state.gcell[one[0]]] - 0.3, y])  # stem short of it
+    hull = np.array([x, y - 12.0 - data.contacts.extent[data.state.gcell[one[0]]] - 0.3])  # its side short of it
     hull_pairs, v = [], 2.0
-    for _ in range(90):  # ahead into the floe, then astern once it is struck
-        hull += (v / 30, 0.0)
-        ice_step(m, data, (HullMotion(hull.copy(), 0.0, np.array([v, 0.0]), 0.0),), 1 / 30)
+    for _ in range(90):  # sideways into the floe, then away once it is struck
+        hull += (0.0, v / 30)
+        ice_step(m, data, (HullMotion(hull.copy(), 0.0, np.array([0.0, v]), 0.0),), 1 / 30)
         buf = pb.Buffer()
         pb.get_space_arbiters(data.contacts.space, pb.ArbiterFields.BODY_A_ID | pb.ArbiterFields.BODY_B_ID
                               | pb.ArbiterFields.CONTACT_COUNT, buf)

@@ -27,6 +27,7 @@ ROW0, TILE0 = HULL0 + MAX_HULLS, 1 << 40  # body user data: hull k is HULL0 + k,
 BOND0 = 1 << 50  # and wide floes' bodies, by slot (``compound_floes.CompoundSlots``)
 HULL_BIT, FLOE_BIT = 1, 2
 INTACT_IN, FLOE_IN = 1, 2  # TileBodies.in_space flags
+FLOE_UNDER = 4  # and: the floe's shape is out of the space while it is under a hull (``TileBodies.sink``)
 HULL_FILTER = (0, HULL_BIT, FLOE_BIT)  # Chipmunk shape filters: (group, categories, mask)
 FLOE_FILTER = (0, FLOE_BIT, HULL_BIT | FLOE_BIT)
 NO_CONTACT = (0, 0, 0)  # floes under the hull, and floes shedding their contacts before they rest
@@ -107,10 +108,11 @@ class TileBodies:
         has_floe = self.floe_body[offsets] != 0
         floes = offsets[has_floe]
         for b, p, inside in zip(self.floe_body[floes].tolist(), self.floe_shape[floes].tolist(),
-                                (flags[has_floe] & FLOE_IN).tolist()):
+                                (flags[has_floe] & (FLOE_IN | FLOE_UNDER)).tolist()):
             body, shape = cast("cpBody *", b), cast("cpShape *", p)
             if inside:
-                lib.cpSpaceRemoveShape(space, shape)
+                if inside == FLOE_IN:
+                    lib.cpSpaceRemoveShape(space, shape)
                 if lib.cpBodyGetSpace(body) != ffi.NULL:  # a resting floe's body is not (``rest``)
                     lib.cpSpaceRemoveBody(space, body)
             lib.cpShapeFree(shape)
@@ -121,6 +123,23 @@ class TileBodies:
         self.intact[offsets] = self.floe_body[offsets] = self.floe_shape[offsets] = self.bond_shape[offsets] = 0
         self.in_space[offsets] = 0
         return len(cells) + 2 * len(floes) + len(bonded) + held
+
+    def sink(self, space, offsets: np.ndarray) -> None:
+        """Take the shapes of the free floes at offsets out of the space while they are under
+        a hull; their bodies stay. A floe under the hull touches nothing in the plane, but
+        its shape would stay in the broad phase, paired every step with the pieces piled
+        under the hull with it. Only moving floes' shapes (body in the space) go out."""
+        for k, b, p in zip(offsets.tolist(), self.floe_body[offsets].tolist(), self.floe_shape[offsets].tolist()):
+            if self.in_space[k] & (FLOE_IN | FLOE_UNDER) == FLOE_IN and lib.cpBodyGetSpace(body_at(b)) != ffi.NULL:
+                lib.cpSpaceRemoveShape(space, shape_at(p))
+                self.in_space[k] |= FLOE_UNDER
+
+    def lift(self, space, offsets: np.ndarray) -> None:
+        """Put back into the space the shapes ``sink`` took out, of the floes at offsets."""
+        under = offsets[self.in_space[offsets] & FLOE_UNDER != 0]
+        for p in self.floe_shape[under].tolist():
+            lib.cpSpaceAddShape(space, shape_at(p))
+        self.in_space[under] &= ~np.uint8(FLOE_UNDER)
 
     def expose(self, space, offsets: np.ndarray, bonded: np.ndarray) -> None:
         """Put the held shapes of cells at offsets (bonded (n,): on a woken floe's body, else

@@ -156,30 +156,24 @@ def _going_under(struck, jammed, status, submerged, bonded, xy, hull_xy, c, s, b
 
 
 @numba.njit(cache=True)
-def _surfacing(rows, submerged, xy, hull_xy, c, s, outline, reach, stem, clear_ahead):
-    """Of rows, the submerged ones the hull has passed: centre outside the hull's convex
-    CCW outline (body frame, m) and aft of midship, farther than reach (m) from the centre
-    line, or clear ahead of the stem (m)."""
-    out = np.empty(len(rows), np.int64)
-    n_out = 0
+def _hull_passed(rows, xy, hull_xy, c, s, outline, reach, stem, clear_ahead):
+    """Which rows (a flag each) the hull no longer covers or presses: centre outside its
+    convex CCW outline (body frame, m) and aft of midship, farther than reach (m) from the
+    centre line, or clear ahead of the stem (m)."""
+    out = np.zeros(len(rows), np.bool_)
     n = outline.shape[0]
-    for i in rows:
-        if not submerged[i]:
-            continue
+    for k in range(len(rows)):
+        i = rows[k]
         dx, dy = xy[i, 0] - hull_xy[0], xy[i, 1] - hull_xy[1]
         u, v = c * dx + s * dy, -s * dx + c * dy
         if not (u < 0.0 or abs(v) >= reach or u > stem + clear_ahead):
             continue
-        inside = True
         for e in range(n):
             ex, ey = outline[(e + 1) % n, 0] - outline[e, 0], outline[(e + 1) % n, 1] - outline[e, 1]
             if ex * (v - outline[e, 1]) - ey * (u - outline[e, 0]) < 0.0:
-                inside = False
+                out[k] = True  # outside the outline
                 break
-        if not inside:
-            out[n_out] = i
-            n_out += 1
-    return out[:n_out]
+    return out
 
 
 @numba.njit(cache=True)
@@ -208,11 +202,16 @@ def _update_submersion(model: IceModel, data: IceData, k: int, hull: HullMotion,
     a submerged floe surfaces once the hull no longer covers or presses it (its centre
     outside the waterline, and aft of midship, more than _BESIDE beyond the beam lines, or
     clear ahead of the stem because the ship stopped or backed), and buoyancy brings it back
-    up and rights it. ``k``: the hull's index, whose motion is ``hull``."""
+    up and rights it. A floe the hull has so passed stays afloat, struck or jammed: sent
+    under, it came up in the same step, pinned (its velocity zeroed) and dropped a thickness
+    every step it stayed so (seen beside the hull in a jam: some hundred floes a step).
+    ``k``: the hull's index, whose motion is ``hull``."""
     st, space, body, rows = data.state, data.contacts, data.contacts.hulls[k], data.hulls[k]
     c, s = math.cos(hull.angle), math.sin(hull.angle)
+    cover = (st.xy, hull.xy, c, s, body.outline, body.half_beam + _BESIDE, body.stem, _CLEAR_AHEAD)
     under = _going_under(struck, jammed, st.status, st.submerged, st.bonded, st.xy, hull.xy, c, s, body.half_beam) \
         if len(struck) or len(jammed) else _NO_ROWS
+    under = under[~_hull_passed(under, *cover)]
     if len(under):
         rows.went_under = np.concatenate([rows.went_under[st.submerged[rows.went_under]], under])
         st.submerged[under] = True
@@ -227,8 +226,8 @@ def _update_submersion(model: IceModel, data: IceData, k: int, hull: HullMotion,
         g = st.gcell[at_once]
         st.heave[at_once] = model.z_equilibrium[g] - model.thickness[g]
         st.roll[at_once] = turning.PUSHED_DOWN_TILT
-    up = _surfacing(rows.went_under, st.submerged, st.xy, hull.xy, c, s, body.outline,
-                    body.half_beam + _BESIDE, body.stem, _CLEAR_AHEAD)
+    went = rows.went_under[st.submerged[rows.went_under]]
+    up = went[_hull_passed(went, *cover)]
     if len(up):
         st.submerged[up] = False
         st.turn[up] = 0.0
@@ -389,7 +388,7 @@ def warm_up(model: IceModel, data: IceData) -> None:
                  model.ride_load, model.edge_capacity)
     resting.warm_up(model)
     _hull_load(none, np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(2), 1.0)
-    _surfacing(none, flags, np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hulls[0].outline, 1.0, 1.0, 1.0)
+    _hull_passed(none, np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, data.contacts.hulls[0].outline, 1.0, 1.0, 1.0)
     _going_under(none, none, none.astype(np.uint8), flags, flags, np.zeros((0, 2)), np.zeros(2), 1.0, 0.0, 1.0)
     _unsettled(none, flags, none.astype(np.int32), model.z_equilibrium, f32, f32, f32, f32, f32, f32)
     vertical.warm_up(model.tris, model.tri_start, model.mass, model.inertia, model.damping)
