@@ -33,10 +33,11 @@ class IceDynamicsSettings(Params):
     field_drift: bool = Field(False, description="the whole ice field drifts with the current and the wind's free "
                               "drift, as one body of ice (pack: its floes, channels, frozen tiles and regions go "
                               "with it); off: the level ice is fast and only the broken floes drift")
-    wide_floes_move: bool = Field(False, description="a floe wider than the beam moves as one body once a hull comes "
+    wide_floes_move: bool = Field(True, description="a floe wider than the beam moves as one body once a hull comes "
                                   "near, until the hull breaks it cell by cell (``sim_core.ice.compound_floes``); off: "
-                                  "it is held as level ice is. Off by default: in 3/10 medium and 4/10 small floes the "
-                                  "60 Hz main job's tick p99 was 15.9 ms and 21.4 ms in two 15-minute runs on 2 cores")
+                                  "it is held as level ice is. In 3/10 medium and 4/10 small floes the 60 Hz main job's tick "
+                                  "p99 was 14.8 ms and 14.9 ms in two 15-minute runs on 2 cores "
+                                  "(docs/benchmarks/main-job.md)")
     propeller_wash: bool = Field(False, description="the propeller's jet drags the floes in it "
                                  "(``sim_core.ship.propeller_jet``); off by default: the floes it keeps "
                                  "moving cost the world step 40-70 % more over a long run")
