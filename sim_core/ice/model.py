@@ -35,8 +35,8 @@ class IceDynamicsSettings(Params):
                               "with it); off: the level ice is fast and only the broken floes drift")
     wide_floes_move: bool = Field(True, description="a floe wider than the beam moves as one body once a hull comes "
                                   "near, until the hull breaks it cell by cell (``sim_core.ice.compound_floes``); off: "
-                                  "it is held as level ice is. In 3/10 medium and 4/10 small floes the 60 Hz main job's tick "
-                                  "p99 was 14.8 ms and 14.9 ms in two 15-minute runs on 2 cores "
+                                  "it is held as level ice is. In 3/10 medium and 4/10 small floes the 60 Hz main "
+                                  "job's tick p99 was 14.8 ms and 14.9 ms in two 15-minute runs on 2 cores "
                                   "(docs/benchmarks/main-job.md)")
     propeller_wash: bool = Field(False, description="the propeller's jet drags the floes in it "
                                  "(``sim_core.ship.propeller_jet``); off by default: the floes it keeps "
