@@ -204,7 +204,7 @@ def _update_submersion(model: IceModel, data: IceData, k: int, hull: HullMotion,
     clear ahead of the stem because the ship stopped or backed), and buoyancy brings it back
     up and rights it. A floe the hull has so passed stays afloat, struck or jammed: sent
     under, it came up in the same step, pinned (its velocity zeroed) and dropped a thickness
-    every step it stayed so (seen beside the hull in a jam: some hundred floes a step).
+    every step it stayed so (in a jam: about 19 sendings under a step, mostly beside the hull).
     ``k``: the hull's index, whose motion is ``hull``."""
     st, space, body, rows = data.state, data.contacts, data.contacts.hulls[k], data.hulls[k]
     c, s = math.cos(hull.angle), math.sin(hull.angle)
