@@ -101,7 +101,11 @@ def test_a_floe_rammed_breaks_along_its_cells(rammed, pushed):
     bonded, moved = _moved(data, rows)
     broken = rows[~st.bonded[rows]]
     by_hull = np.sum(st.cause[broken] == BreakCause.HULL)  # the others: broken off by floes it pushed
-    assert by_hull > 100 and np.all(np.isin(st.cause[broken], (BreakCause.HULL, BreakCause.CONTACT)))
+    alone = broken[st.cause[broken] == BreakCause.NONE]  # or left alone by the cells broken around it
+    assert by_hull > 100 and len(alone) < 0.02 * len(broken)
+    w = data.contacts.model.wide
+    for row, g in zip(alone.tolist(), st.gcell[alone].tolist()):  # none of its mates still on the body
+        assert not st.bonded[row - g + w.mates[w.mates_start[g]:w.mates_start[g + 1]]].any()
     assert len(bonded) > 0.2 * len(rows)
     assert np.mean(moved[:, 1]) < 0.7 * 3.0 * SECONDS  # shoved, not carried along
     assert by_hull > 10 * np.sum(~pushed[0].state.bonded[pushed[1]])
@@ -182,15 +186,21 @@ def test_contacts_on_a_floe_name_its_cells_where_they_are(medium, monkeypatch):
 def test_a_frozen_tile_keeps_the_floe_where_it_was_pushed(medium):
     """A tile frozen with a floe moved keeps its cells where they were (as floes of their
     own: the body goes with the tile's engine objects) and thaws them there."""
-    ice = medium[0]
     data, rows, _, _ = _push(medium, 0.3, 20.0)
+    _freeze_and_thaw(medium[0], data, _moved(data, rows)[0])
+
+
+def _freeze_and_thaw(ice, data, bonded, leaving=None):
+    """Freeze tile 0, its objects all out of the space (then call ``leaving``, if given),
+    thaw it, and check that the rows that were bonded (n,) are floes of their own where
+    they lay."""
     st = data.state
-    bonded, _ = _moved(data, rows)
-    cells = bonded - data.tiles.row_start[0]
-    where = st.xy[bonded].copy()
+    cells, where = bonded - data.tiles.row_start[0], st.xy[bonded].copy()
     freeze_tile(data, 0)
     while data.contacts.swaps_pending:
         data.contacts.step(DT)
+    if leaving is not None:
+        leaving()
     reclaim_rows(data)
     thaw_tile(ice, data, 0)
     data.contacts.switch_in_now()
@@ -199,9 +209,10 @@ def test_a_frozen_tile_keeps_the_floe_where_it_was_pushed(medium):
     assert np.all(st.status[again] == FloeStatus.FREE) and not st.bonded[again].any()
 
 
-def test_a_floe_far_from_the_hull_rests_and_wakes_again(medium):
-    """A floe pushed and left rests as a static body far from the hull (no solver work, no
-    drift in the field's frame); the hull coming back wakes it."""
+def _rested(medium):
+    """A floe pushed for 20 s, then left while the hull lies 2 km away until the floe's body
+    rests: the ice data, the floe's rows, where the hull pushed from, the body's slot and
+    the hull lying away."""
     ice = medium[0]
     data, rows, hull, _ = _push(medium, 0.3, 20.0)
     c, st = data.contacts.compounds, data.state
@@ -212,6 +223,15 @@ def test_a_floe_far_from_the_hull_rests_and_wakes_again(medium):
         if slot in c.resting:
             break
     assert slot in c.resting
+    return data, rows, hull, slot, away
+
+
+def test_a_floe_far_from_the_hull_rests_and_wakes_again(medium):
+    """A floe pushed and left rests as a static body far from the hull (no solver work, no
+    drift in the field's frame); the hull coming back wakes it."""
+    ice = medium[0]
+    data, rows, hull, slot, away = _rested(medium)
+    c, st = data.contacts.compounds, data.state
     bonded, _ = _moved(data, rows)
     where = st.xy[bonded].copy()
     for _ in range(30):
@@ -219,6 +239,63 @@ def test_a_floe_far_from_the_hull_rests_and_wakes_again(medium):
     assert np.array_equal(st.xy[bonded], where)
     ice_step(ice, data, (HullMotion(hull, 0.5 * math.pi, np.zeros(2), 0.0),), DT)
     assert slot not in c.resting and slot in c.live
+
+
+def test_a_floe_resting_when_its_tile_freezes_stays_out_of_the_way(medium):
+    """A floe at rest when its tile freezes leaves with the tile: a hull coming back to
+    where it lay, before and after the tile thaws, wakes nothing of it (its resting body
+    was once left among the resting and woken from there, with no body to wake)."""
+    ice = medium[0]
+    data, _, hull, slot, _ = _rested(medium)
+    c = data.contacts.compounds
+    freeze_tile(data, 0)
+    back = HullMotion(hull, 0.5 * math.pi, np.zeros(2), 0.0)
+    while data.contacts.swaps_pending:
+        ice_step(ice, data, (back,), DT)
+    reclaim_rows(data)
+    thaw_tile(ice, data, 0)
+    data.contacts.switch_in_now()
+    for _ in range(3):
+        ice_step(ice, data, (back,), DT)
+    assert slot not in c.live and slot not in c.resting
+
+
+@pytest.fixture(scope="module")
+def rammed_through(medium):
+    return _push(medium, 5.0)
+
+
+def test_a_floe_the_hull_cuts_in_two_parts_into_two_bodies(medium, rammed_through):
+    """At 5 m/s the hull breaks a channel right through the floe (``floe_parts``): the cells
+    left on either side are each a body of their own, with their own cells' mass, each
+    body's cells hang together, and the two parts go their own ways, pushed aside by the
+    hull passing between them; a cell the channel left alone is a floe of its own."""
+    ice = medium[0]
+    data, rows, hull, _ = rammed_through
+    st, c = data.state, data.contacts.compounds
+    bonded, _ = _moved(data, rows)
+    slots, count = np.unique(st.bond_slot[bonded], return_counts=True)
+    assert len(slots) >= 2 and np.sort(count)[-2] > 0.2 * len(rows)
+    west, east = (bonded[st.bond_slot[bonded] == k] for k in slots[np.argsort(count)[-2:]])
+    if st.xy[west, 0].mean() > st.xy[east, 0].mean():
+        west, east = east, west
+    assert st.xy[west, 0].max() < hull[0] < st.xy[east, 0].min()  # one part either side of the hull's track
+    assert st.vel[west, 0].mean() < -0.05 and st.vel[east, 0].mean() > 0.05  # shoved apart
+    for k in slots.tolist():
+        mine = bonded[st.bond_slot[bonded] == k]
+        mass = lib.cpBodyGetMass(body_at(int(c.body[k])))
+        assert mass == pytest.approx(ice.mass[st.gcell[mine]].sum(), rel=1e-9)
+        pts, counts = placed_outlines(ice, st.gcell[mine], st.xy[mine], st.yaw[mine])
+        cells = shapely.polygons(shapely.linearrings(pts, indices=np.repeat(np.arange(len(mine)), counts)))
+        assert shapely.get_num_geometries(shapely.union_all(shapely.buffer(cells, 0.05))) == 1  # in one piece
+    alone = rows[~st.bonded[rows] & (st.status[rows] == FloeStatus.FREE) & (st.cause[rows] == BreakCause.NONE)]
+    tile = data.contacts._tiles[0]
+    assert np.all(tile.floe_body[alone - data.tiles.row_start[0]] != 0)
+    assert len(tile.parts) >= 1
+
+    def gone():  # the parts' bodies leave with the tile's, and the floe thaws where it lay
+        assert not any(k in c.live for k in slots.tolist())
+    _freeze_and_thaw(ice, data, bonded, gone)
 
 
 def test_reruns_of_a_ram_are_the_same(medium, rammed):

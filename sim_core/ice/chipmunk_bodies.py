@@ -62,7 +62,8 @@ class TileBodies:
     """Engine objects of one placed tile, by row offset in the tile (0 = none): the static
     body holding its intact cells, their shapes (a wide floe's on a body of the floe's own,
     ``wide``: global floe -> its slot, -1 until the tile is switched in, and body; static
-    until the floe wakes, ``compound_floes``), its free floes' bodies and shapes, and its
+    until the floe wakes, ``compound_floes``; ``parts``: slot -> body of each part that
+    parted from such a body, ``floe_parts``), its free floes' bodies and shapes, and its
     bonded cells' shapes; the shapes of wide floes' cells ``held`` out of the space while
     their floe is whole around them (``hold``: which cells to build so,
     ``wide_floes.WideFloes.inner``); which of them are in the space; and the offsets still
@@ -77,6 +78,7 @@ class TileBodies:
         self.floe_shape = np.zeros(count, dtype=np.uintp)
         self.bond_shape = np.zeros(count, dtype=np.uintp)
         self.wide: dict[int, tuple[int, int]] = {}
+        self.parts: dict[int, int] = {}
         self.in_space = np.zeros(count, dtype=np.uint8)  # INTACT_IN | FLOE_IN
         self.queue = np.zeros(0, dtype=np.int64)  # offsets to switch in (entering) or out (leaving)
 
@@ -153,6 +155,17 @@ class TileBodies:
         self.in_space[offsets[~bonded]] |= INTACT_IN
         self.held[offsets] = 0
 
+    def move_shapes(self, space, offsets: np.ndarray, body) -> None:
+        """Move the bonded cells' shapes at offsets, in the space or held out of it, onto
+        another body (in the space, in the same frame): Chipmunk changes a shape's body only
+        out of the space, so those in it go out and back in."""
+        for p in self.bond_shape[offsets][self.bond_shape[offsets] != 0].tolist():
+            lib.cpSpaceRemoveShape(space, shape_at(p))
+            lib.cpShapeSetBody(shape_at(p), body)
+            lib.cpSpaceAddShape(space, shape_at(p))
+        for p in self.held[offsets][self.held[offsets] != 0].tolist():
+            lib.cpShapeSetBody(shape_at(p), body)
+
     def free_held(self, offsets: np.ndarray) -> int:
         """Free the held shapes (never in the space) at offsets; returns how many."""
         held = self.held[offsets][self.held[offsets] != 0]
@@ -181,21 +194,32 @@ class TileBodies:
 
     def drop_wide(self, space, floe: int) -> None:
         """Take a wide floe's body (its shapes already gone) out of the space and free it."""
-        body = body_at(self.wide.pop(floe)[1])
-        if lib.cpBodyGetSpace(body) != ffi.NULL:
-            lib.cpSpaceRemoveBody(space, body)
-        lib.cpBodyFree(body)
+        _free_body(space, self.wide.pop(floe)[1])
+
+    def drop_part(self, space, slot: int) -> None:
+        """Take the body of a part of a wide floe (its shapes already gone) out of the space and free it."""
+        _free_body(space, self.parts.pop(slot))
 
     def release(self, space) -> None:
         """Take everything out of the space and free it, the static body last."""
         self.remove(space, self.built())
         for floe in list(self.wide):
             self.drop_wide(space, floe)
+        for slot in list(self.parts):
+            self.drop_part(space, slot)
         body = body_at(self.body)
         if lib.cpBodyGetSpace(body) != ffi.NULL:
             lib.cpSpaceRemoveBody(space, body)
         lib.cpBodyFree(body)
         self.body = 0
+
+
+def _free_body(space, ptr: int) -> None:
+    """Take a body (C pointer) out of the space, if it is in it, and free it."""
+    body = body_at(ptr)
+    if lib.cpBodyGetSpace(body) != ffi.NULL:
+        lib.cpSpaceRemoveBody(space, body)
+    lib.cpBodyFree(body)
 
 
 def free_all(space: pymunk.Space, tiles: dict, leaving: list, hulls: list[tuple[int, int]]) -> None:

@@ -29,12 +29,14 @@ alone (about 70 times less for 0.5 m ice, its cells 2.4 m across), a floe struck
 0.3 m/s did not move and the hull cut through it cell by cell. A broken cell gets a body
 of its own (``unbond``, from ``ContactSpace.free``), and the floe's body its remaining
 cells' mass properties. So a slow push moves a floe, and a ship at speed breaks a channel
-into it, shoving it the harder the longer it crushes.
+into it, shoving it the harder the longer it crushes. Where the cells left on the body no
+longer hang together (a channel right across the floe), it parts: each part a body of its
+own (``floe_parts``).
 
-Not modelled: the body stays one rigid body when a channel cuts it in two; a floe a tile
-edge cuts is a body per tile; the bonded cells take no conduction cracking
-(``bending``); a tile frozen keeps its bonded cells as separate floes, so such a floe thaws
-as its cells, held together by contact only.
+Not modelled: a floe a tile edge cuts is a body per tile; the bonded cells take no
+conduction cracking (``bending``), so a floe parts only where its cells broke; a tile
+frozen keeps its bonded cells as separate floes, so such a floe thaws as its cells, held
+together by contact only.
 
 The attributes of ``ContactSpace`` are used as they are there (``_tiles``, ``_cp``,
 ``_entering``, ``model``, ``tiles``, ``hulls``, ``extent``, ``compounds``, ``_in_space``,
@@ -49,7 +51,7 @@ import numpy as np
 from pymunk._chipmunk import ffi, lib
 
 from sim_core.ice.breaking import pushed_hard
-from sim_core.ice.chipmunk_bodies import BOND0, HULL_ROW0, INTACT_IN, LOWEST_ROW, NOT_A_FLOE, body_at
+from sim_core.ice.chipmunk_bodies import BOND0, HULL_ROW0, INTACT_IN, LOWEST_ROW, NOT_A_FLOE, TileBodies, body_at
 from sim_core.ice.contact_kernels import Contacts, nearest_cell
 from sim_core.ice.floes import FloeState, FloeStatus
 from sim_core.ice.tile_frame import template_point
@@ -60,33 +62,35 @@ WAKE_AHEAD_S = 2.0  # s of the hull's speed added to that reach
 
 
 class CompoundSlots:
-    """Every wide floe's body switched into the space, by slot: its placement, global floe,
-    centre of mass in the body's frame (m) and pose at the last ``read_poses`` (origin x,
-    y m; angle rad). A body is made static at the world's origin, its cells' shapes where
-    the tile lays them, so the body's frame is the world's as the floe lay when it woke.
-    ``live``: slot -> C body of the woken floes of tiles worked now; ``resting``: those of
-    them at rest far from the hulls, static again, and ``shedding``: those shedding their
-    contacts before that (``compound_rest``). Slots are never
-    reused, so that a body still leaving the space with its tile never names another floe
-    (a few tens of bytes a wide floe laid)."""
+    """Every wide floe's body switched into the space, by slot (and every part that parted
+    from one, ``floe_parts``): its placement, global floe, C body, centre of mass in the
+    body's frame (m) and pose at the last ``read_poses`` (origin x, y m; angle rad). A body
+    is made static at the world's origin, its cells' shapes where the tile lays them, so
+    the body's frame is the world's as the floe lay when it woke (a part keeps its floe's
+    frame). ``live``: slot -> C body of the woken floes of tiles worked now; ``resting``:
+    those of them at rest far from the hulls, static again, and ``shedding``: those
+    shedding their contacts before that (``compound_rest``). Slots are never reused, so
+    that a body still leaving the space with its tile never names another floe (a few tens
+    of bytes a wide floe laid)."""
 
     def __init__(self) -> None:
         self.n = 0
-        self.placement, self.floe = np.zeros(64, np.int64), np.zeros(64, np.int64)
+        self.placement, self.floe, self.body = np.zeros(64, np.int64), np.zeros(64, np.int64), np.zeros(64, np.uintp)
         self.cog, self.pose, self.velocity = np.zeros((64, 2)), np.zeros((64, 3)), np.zeros((64, 3))
         self.mass, self.moment, self.radius = np.zeros(64), np.zeros(64), np.zeros(64)
         self.live: dict[int, int] = {}
         self.resting: set[int] = set()
         self.shedding: dict[int, int] = {}  # slot -> the engine's stamp from which it has shed its contacts
 
-    def add(self, placement: int, floe: int) -> int:
-        """A new slot for the floe's body; returns it."""
+    def add(self, placement: int, floe: int, body: int) -> int:
+        """A new slot for a body (C pointer) of the floe; returns it."""
         if self.n == len(self.floe):
-            for name in ("placement", "floe", "cog", "pose", "velocity", "mass", "moment", "radius"):
+            for name in ("placement", "floe", "body", "cog", "pose", "velocity", "mass", "moment", "radius"):
                 old = getattr(self, name)
                 setattr(self, name, np.concatenate([old, np.zeros_like(old)]))
         slot, self.n = self.n, self.n + 1
-        self.placement[slot], self.floe[slot], self.cog[slot], self.pose[slot] = placement, floe, 0.0, 0.0
+        self.placement[slot], self.floe[slot], self.body[slot] = placement, floe, body
+        self.cog[slot], self.pose[slot] = 0.0, 0.0
         return slot
 
     def read_poses(self) -> None:
@@ -166,34 +170,52 @@ class CompoundFloes:
         state.vel[rows], state.yaw_rate[rows] = 0.0, 0.0
         return rows
 
-    def unbond(self, state: FloeState, rows: np.ndarray) -> None:
+    def unbond(self, state: FloeState, rows: np.ndarray) -> np.ndarray:
         """Take bonded rows' shapes off their floes' bodies (their rows keep the poses and
-        velocities they had on it), and give each body its remaining cells' mass
-        properties, keeping its velocity field; a body left with no cell goes."""
-        w = self.model.wide
+        velocities they had on it). A body left with no cell goes; one whose cells no longer
+        hang together parts (``floe_parts``), and each keeps its cells' mass properties and
+        its velocity field. Returns the rows of the cells that parting left alone, taken
+        off their body too, for the caller to make floes of their own."""
+        w, alone = self.model.wide, []
         for tile in np.unique(state.tile[rows]).tolist():
             bodies, start = self._tiles[tile], int(self.tiles.row_start[tile])
             mine = rows[state.tile[rows] == tile]
-            shapes = bodies.bond_shape[mine - start]
-            bodies.drop_shapes(self._cp, shapes[shapes != 0])
-            bodies.free_held(mine - start)
-            bodies.bond_shape[mine - start] = 0
-            state.bonded[mine] = False
-            for floe in np.unique(w.of_cell[state.gcell[mine]]).tolist():
-                self.stop_shedding(bodies.wide[floe][0])  # its new rim collides (``compound_rest``)
+            self._take_off(state, bodies, start, mine)
+            for slot in np.unique(state.bond_slot[mine]).tolist():
+                self.stop_shedding(slot)  # its new rim collides (``compound_rest``)
+                floe = int(self.compounds.floe[slot])
                 left = start + w.cells[w.cells_start[floe]:w.cells_start[floe + 1]]
-                left = left[state.bonded[left]]
-                if not len(left):
-                    self.compounds.live.pop(bodies.wide[floe][0])
-                    self.compounds.resting.discard(bodies.wide[floe][0])
-                    bodies.drop_wide(self._cp, floe)
+                left = left[state.bonded[left] & (state.bond_slot[left] == slot)]
+                if len(left):
+                    alone.append(self.part(state, bodies, slot, left))
+                    self._take_off(state, bodies, start, alone[-1])
                 else:
-                    self._reweigh(state, *bodies.wide[floe], left)
+                    self._drop_body(bodies, slot)
+        return np.concatenate(alone) if alone else rows[:0]
 
-    def _reweigh(self, state: FloeState, slot: int, body_ptr: int, rows: np.ndarray) -> None:
-        """Give a floe's body the mass properties of its bonded rows, about their centre of
-        mass, its origin, pose and velocity field kept (a resting body's slot only)."""
-        m, body = self.model, body_at(body_ptr)
+    def _take_off(self, state: FloeState, bodies: TileBodies, start: int, rows: np.ndarray) -> None:
+        """Take bonded rows of a tile (its first row start) off their floes' bodies and free their shapes."""
+        shapes = bodies.bond_shape[rows - start]
+        bodies.drop_shapes(self._cp, shapes[shapes != 0])
+        bodies.free_held(rows - start)
+        bodies.bond_shape[rows - start] = 0
+        state.bonded[rows] = False
+
+    def _drop_body(self, bodies: TileBodies, slot: int) -> None:
+        """Take a floe's body (by slot; its shapes gone) out of the space and free it."""
+        c = self.compounds
+        c.live.pop(slot)
+        c.resting.discard(slot)
+        floe = int(c.floe[slot])
+        if floe in bodies.wide and bodies.wide[floe][0] == slot:
+            bodies.drop_wide(self._cp, floe)
+        else:
+            bodies.drop_part(self._cp, slot)
+
+    def _reweigh(self, state: FloeState, slot: int, rows: np.ndarray) -> None:
+        """Give a floe's body (by slot) the mass properties of its bonded rows, about their
+        centre of mass, its origin, pose and velocity field kept (a resting body's slot only)."""
+        m, body = self.model, body_at(int(self.compounds.body[slot]))
         g = state.gcell[rows]
         total, cog, moment = _mass_properties(m.mass[g], m.inertia[g, 2], state.bond_xy[rows])
         old_cog = self.compounds.cog[slot].copy()
@@ -213,18 +235,17 @@ class CompoundFloes:
 
     def push_back(self, state: FloeState, row: int, impulse: tuple[float, float], point: tuple[float, float]) -> None:
         """Apply an impulse (N s, world) at a point (m) to the body of a bonded row."""
-        bodies = self._tiles[int(state.tile[row])]
-        floe = int(self.model.wide.of_cell[state.gcell[row]])
-        lib.cpBodyApplyImpulseAtWorldPoint(body_at(bodies.wide[floe][1]), impulse, point)
+        lib.cpBodyApplyImpulseAtWorldPoint(body_at(int(self.compounds.body[state.bond_slot[row]])), impulse, point)
 
 
 @numba.njit(cache=True)
-def scatter_bonded(ids, f, status, bonded, working, row_start, slot_p, slot_f, slot_cog, slot_velocity, cells_start,
-                   cells, bond_xy, bond_yaw, xy, yaw, vel, yaw_rate):
-    """Write the poses and velocities of the bonded rows of each wide floe's body among the
-    bodies ids (n,) with poses and velocities f (n, 6: origin x, y m, angle rad, centre of
-    mass velocity m/s, rad/s) into the arrays, and each body's velocity into its slot's
-    (x, y m/s; rad/s); a body of a tile no longer worked is skipped."""
+def scatter_bonded(ids, f, status, bonded, bond_slot, working, row_start, slot_p, slot_f, slot_cog, slot_velocity,
+                   cells_start, cells, bond_xy, bond_yaw, xy, yaw, vel, yaw_rate):
+    """Write the poses and velocities of the bonded rows of each wide floe's body (a row's
+    body: its ``bond_slot``) among the bodies ids (n,) with poses and velocities f (n, 6:
+    origin x, y m, angle rad, centre of mass velocity m/s, rad/s) into the arrays, and each
+    body's velocity into its slot's (x, y m/s; rad/s); a body of a tile no longer worked is
+    skipped."""
     for k in range(len(ids)):
         if ids[k] < BOND0:
             continue
@@ -239,7 +260,7 @@ def scatter_bonded(ids, f, status, bonded, working, row_start, slot_p, slot_f, s
         slot_velocity[slot, 0], slot_velocity[slot, 1], slot_velocity[slot, 2] = f[k, 3], f[k, 4], w
         for e in range(cells_start[fl], cells_start[fl + 1]):
             i = row_start[p] + cells[e]
-            if status[i] != 1 or not bonded[i]:
+            if status[i] != 1 or not bonded[i] or bond_slot[i] != slot:
                 continue
             x = f[k, 0] + c * bond_xy[i, 0] - s * bond_xy[i, 1]
             y = f[k, 1] + s * bond_xy[i, 0] + c * bond_xy[i, 1]
@@ -338,7 +359,8 @@ def warm_up() -> None:
     """Load the compiled kernels of this module (numba compiles or loads on first call)."""
     none, flags = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.bool_)
     status, f32 = none.astype(np.uint8), np.zeros((0, 2), np.float32)
-    scatter_bonded(none.astype(np.uintp), np.zeros((0, 6)), status, flags, status, none, none, none, np.zeros((0, 2)),
+    scatter_bonded(none.astype(np.uintp), np.zeros((0, 6)), status, flags, none.astype(np.int32), status, none, none,
+                   none, np.zeros((0, 2)),
                    np.zeros((0, 3)), np.zeros(1, np.int64), none, np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)),
                    np.zeros(0), f32,
                    np.zeros(0, np.float32))

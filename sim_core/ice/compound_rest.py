@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from pymunk._chipmunk import lib
 
-from sim_core.ice.chipmunk_bodies import FLOE_FILTER, NO_CONTACT, body_at, shape_at
+from sim_core.ice.chipmunk_bodies import FLOE_FILTER, NO_CONTACT, body_at, ptr_of, shape_at
 from sim_core.ice.compound_floes import WAKE_AHEAD_S, WAKE_REACH
 
 REST_REACH = 40.0  # m beyond every hull's bounds: a woken floe at rest this far from them turns static
@@ -64,12 +64,15 @@ class CompoundRest:
             self._filter(slot, FLOE_FILTER)
 
     def _filter(self, slot: int, shape_filter: tuple[int, int, int]) -> None:
-        """Give the shapes in the space of a live floe's body (by slot) a Chipmunk filter."""
+        """Give the shapes in the space of a live floe's body (by slot) a Chipmunk filter
+        (the floe's cells' shapes on that body: a floe that parted has more than one)."""
         c, w = self.compounds, self.model.wide
         floe = int(c.floe[slot])
         shapes = self._tiles[int(c.placement[slot])].bond_shape[w.cells[w.cells_start[floe]:w.cells_start[floe + 1]]]
+        body = int(c.body[slot])
         for p in shapes[shapes != 0].tolist():
-            lib.cpShapeSetFilter(shape_at(p), shape_filter)
+            if ptr_of(lib.cpShapeGetBody(shape_at(p))) == body:
+                lib.cpShapeSetFilter(shape_at(p), shape_filter)
 
     def _at_rest_far(self, slots: np.ndarray, speed: float) -> np.ndarray:
         """Which woken floes (by slot) are slower than speed (m/s, at their rim) and lie

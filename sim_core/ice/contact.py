@@ -53,6 +53,7 @@ from sim_core.ice.compound_rest import CompoundRest
 from sim_core.ice.contact_kernels import Contacts, contact_rows, hull_overlaps, scatter_free, seed_grid
 from sim_core.ice.contact_resting import FloeRest
 from sim_core.ice.contact_swaps import TileSwaps
+from sim_core.ice.floe_parts import FloeParts
 from sim_core.ice.floe_rims import FloeRims
 from sim_core.ice.floes import FloeState, TilePlacement
 from sim_core.ice.hull_bodies import HullBody, move_hull, new_hull
@@ -66,7 +67,7 @@ _ARB_FIELDS = (pb.ArbiterFields.BODY_A_ID | pb.ArbiterFields.BODY_B_ID | pb.Arbi
                | pb.ArbiterFields.POINT_A_2)  # a contact's points on body a only: its mean point is all we use
 
 
-class ContactSpace(FloeRest, CompoundFloes, CompoundRest, FloeRims, TileSwaps):
+class ContactSpace(FloeRest, CompoundFloes, CompoundRest, FloeParts, FloeRims, TileSwaps):
     """Chipmunk space holding the hulls and the floes of breakable tiles."""
 
     def __init__(self, model: IceModel, tiles: TilePlacement, hull_outline: np.ndarray,
@@ -177,9 +178,11 @@ class ContactSpace(FloeRest, CompoundFloes, CompoundRest, FloeRims, TileSwaps):
         return [pts[a:b] for a, b in zip([0] + ends[:-1], ends)]
 
     def free(self, state: FloeState, rows: np.ndarray) -> None:
-        """Intact or bonded rows leave their tile's or floe's body, each for a dynamic body of its own, now."""
+        """Intact or bonded rows leave their tile's or floe's body, each for a dynamic body of
+        its own, now, and so do the cells of a floe's body that their leaving left alone
+        (``floe_parts``)."""
         if np.any(state.bonded[rows]):
-            self.unbond(state, rows[state.bonded[rows]])
+            rows = np.union1d(rows, self.unbond(state, rows[state.bonded[rows]]))
         for tile in np.unique(state.tile[rows]).tolist():
             bodies, start = self._tiles[tile], int(self.tiles.row_start[tile])
             mine = rows[state.tile[rows] == tile]
@@ -330,9 +333,9 @@ class ContactSpace(FloeRest, CompoundFloes, CompoundRest, FloeRims, TileSwaps):
                                                state.yaw_rate)
         if self.compounds.live:
             c, w = self.compounds, self.model.wide
-            scatter_bonded(ids, f, state.status, state.bonded, self._in_space()[3], self.tiles.row_start,
-                           c.placement, c.floe, c.cog, c.velocity, w.cells_start, w.cells, state.bond_xy,
-                           state.bond_yaw, state.xy, state.yaw, state.vel, state.yaw_rate)
+            scatter_bonded(ids, f, state.status, state.bonded, state.bond_slot, self._in_space()[3],
+                           self.tiles.row_start, c.placement, c.floe, c.cog, c.velocity, w.cells_start, w.cells,
+                           state.bond_xy, state.bond_yaw, state.xy, state.yaw, state.vel, state.yaw_rate)
         return moving
 
     def read_contacts(self, state: FloeState) -> Contacts:

@@ -32,7 +32,7 @@ class TileSwaps:
         lib.cpBodySetUserData(body_at(bodies.body), ffi.cast("void *", TILE0 + placement))
         lib.cpSpaceAddBody(self._cp, body_at(bodies.body))
         for floe, (_, body) in bodies.wide.items():  # its wide floes' bodies, static until they wake
-            slot = self.compounds.add(placement, floe)
+            slot = self.compounds.add(placement, floe, body)
             bodies.wide[floe] = slot, body
             lib.cpBodySetUserData(body_at(body), ffi.cast("void *", BOND0 + slot))
             lib.cpSpaceAddBody(self._cp, body_at(body))
@@ -47,8 +47,11 @@ class TileSwaps:
         (``read_free`` does not copy FROZEN rows)."""
         bodies = self._tiles.pop(placement)
         self._tile_index = None
-        for slot, _ in bodies.wide.values():  # its wide floes' bodies: no longer read
-            self.compounds.live.pop(slot, None)
+        c = self.compounds
+        for slot in [*(k for k, _ in bodies.wide.values()), *bodies.parts]:  # its wide floes' bodies: no longer read
+            c.live.pop(slot, None)
+            c.resting.discard(slot)  # nor woken by a hull coming near again
+            c.shedding.pop(slot, None)
         if bodies in self._entering:
             self._entering.remove(bodies)
         bodies.queue = bodies.built()

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from sim_core.ice import compound_floes, contact_kernels, resting, turning
+from sim_core.ice import compound_floes, contact_kernels, floe_parts, resting, turning
 from sim_core.ice.bending import crack_ahead
 from sim_core.ice import vertical
 from sim_core.ice.breaking import pushed_hard
@@ -381,6 +381,7 @@ def warm_up(model: IceModel, data: IceData) -> None:
     """Load every compiled kernel the ice step uses, so that no step waits for a compile."""
     contact_kernels.warm_up()
     compound_floes.warm_up()
+    floe_parts.warm_up()
     none, f32 = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.float32)
     flags = none.astype(np.bool_)
     _hard_pushes(none, none, np.zeros((0, 2)), np.zeros((0, 2)), none.astype(np.uint8), flags,
