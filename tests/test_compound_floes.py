@@ -14,6 +14,7 @@ from test_floe_fields_world import MEDIUM
 
 from sim_core.frames.hull_contour import waterline_contour
 from sim_core.ice.chipmunk_bodies import body_at
+from sim_core.ice.floe_parts import body_parts
 from sim_core.ice.floes import BreakCause, FloeStatus
 from sim_core.ice.model import placed_outlines
 from sim_core.ice.step import HullMotion, ice_step
@@ -296,6 +297,18 @@ def test_a_floe_the_hull_cuts_in_two_parts_into_two_bodies(medium, rammed_throug
     def gone():  # the parts' bodies leave with the tile's, and the floe thaws where it lay
         assert not any(k in c.live for k in slots.tolist())
     _freeze_and_thaw(ice, data, bonded, gone)
+
+
+def test_a_bodys_parts_are_its_cells_joined_through_mates():
+    """``body_parts`` joins a body's cells through chains of mates on the body: of cells 10,
+    11, 12, 14, 15 and 17, 11 and 12 are mates and so are 15 and 17; 10 reaches 11 only
+    through 13, and 14 has only 16, neither of them on the body: four parts."""
+    pairs = [(11, 12), (10, 13), (13, 11), (15, 17), (14, 16)]
+    both = sorted(pairs + [(b, a) for a, b in pairs])
+    start = np.searchsorted(np.array([a for a, _ in both]), np.arange(19))
+    mates = np.array([b for _, b in both])
+    part, parts = body_parts(np.array([10, 11, 12, 14, 15, 17]), start, mates)
+    assert parts == 4 and part.tolist() == [0, 1, 1, 2, 3, 3]
 
 
 def test_reruns_of_a_ram_are_the_same(medium, rammed):

@@ -145,7 +145,8 @@ class TileBodies:
 
     def expose(self, space, offsets: np.ndarray, bonded: np.ndarray) -> None:
         """Put the held shapes of cells at offsets (bonded (n,): on a woken floe's body, else
-        intact) into the space, on their floe's body as they were built."""
+        intact) into the space, on the body they are on (their floe's, or the part's that
+        took them, ``floe_parts``)."""
         has = self.held[offsets] != 0
         offsets, bonded = offsets[has], bonded[has]
         for p in self.held[offsets].tolist():

@@ -162,7 +162,7 @@ class CompoundFloes:
         slot, ptr = bodies.wide[floe]
         c = self.compounds
         c.mass[slot], c.cog[slot], c.moment[slot] = _mass_properties(m.mass[g], m.inertia[g, 2], xy)
-        c.radius[slot] = float(np.hypot(*(xy - c.cog[slot]).T).max() + self.extent[g].max())
+        c.radius[slot] = self._reach(g, xy, c.cog[slot])
         c.live[slot] = ptr
         self._set_dynamic(slot)
         state.bond_xy[rows], state.bond_yaw[rows], state.bonded[rows] = xy, state.yaw[rows], True
@@ -186,10 +186,10 @@ class CompoundFloes:
                 floe = int(self.compounds.floe[slot])
                 left = start + w.cells[w.cells_start[floe]:w.cells_start[floe + 1]]
                 left = left[state.bonded[left] & (state.bond_slot[left] == slot)]
-                if len(left):
-                    alone.append(self.part(state, bodies, slot, left))
-                    self._take_off(state, bodies, start, alone[-1])
-                else:
+                lone = self.part(state, bodies, slot, left) if len(left) else left
+                self._take_off(state, bodies, start, lone)
+                alone.append(lone)
+                if len(lone) == len(left):  # no cell left on it
                     self._drop_body(bodies, slot)
         return np.concatenate(alone) if alone else rows[:0]
 
@@ -212,14 +212,20 @@ class CompoundFloes:
         else:
             bodies.drop_part(self._cp, slot)
 
+    def _reach(self, g: np.ndarray, at: np.ndarray, cog: np.ndarray) -> float:
+        """How far (m) cells g (n,) at (n, 2) m reach from a centre of mass cog (2,), m."""
+        return float(np.hypot(*(at - cog).T).max() + self.extent[g].max())
+
     def _reweigh(self, state: FloeState, slot: int, rows: np.ndarray) -> None:
-        """Give a floe's body (by slot) the mass properties of its bonded rows, about their
-        centre of mass, its origin, pose and velocity field kept (a resting body's slot only)."""
+        """Give a floe's body (by slot) the mass properties and reach of its bonded rows,
+        about their centre of mass, its origin, pose and velocity field kept (a resting
+        body's slot only)."""
         m, body = self.model, body_at(int(self.compounds.body[slot]))
         g = state.gcell[rows]
         total, cog, moment = _mass_properties(m.mass[g], m.inertia[g, 2], state.bond_xy[rows])
         old_cog = self.compounds.cog[slot].copy()
         self.compounds.cog[slot], self.compounds.mass[slot], self.compounds.moment[slot] = cog, total, moment
+        self.compounds.radius[slot] = self._reach(g, state.bond_xy[rows], cog)
         if slot in self.compounds.resting:  # static: ``_set_dynamic`` gives it these when it wakes
             return
         origin, angle = lib.cpBodyGetPosition(body), lib.cpBodyGetAngle(body)
@@ -269,14 +275,15 @@ def scatter_bonded(ids, f, status, bonded, bond_slot, working, row_start, slot_p
 
 
 @numba.njit(cache=True)
-def bond_rows(ints, point, a, b, status, bonded, working, template, corner, turns, row_start, sides, slot_p, slot_f,
-              pose, floe_of, bucket0, per_side, size, first, entries, seeds, g0):
+def bond_rows(ints, point, a, b, status, bonded, bond_slot, working, template, corner, turns, row_start, sides, slot_p,
+              slot_f, pose, floe_of, bucket0, per_side, size, first, entries, seeds, g0):
     """Fill in the rows (a, b; k,) of the contacts (ints (k, 3): body ids and contact count;
     points (k, 2) m) on wide floes' bodies: the floe's intact or bonded cell with the
     Voronoi seed nearest the point (as ``contact_kernels.contact_rows`` names intact cells;
     the point, carried back by the body's motion (``pose``, ``CompoundSlots``) to where the
     floe lay when it woke, lies in its template as the tile lays it); NOT_A_FLOE on a body
-    of a tile no longer worked or with no point this step."""
+    of a tile no longer worked, with no point this step, or where that cell is bonded to
+    another body (``bond_slot``: a part of the floe that parted, ``floe_parts``)."""
     for k in range(ints.shape[0]):
         for side in range(2):
             code = np.int64(ints[k, side])
@@ -291,7 +298,7 @@ def bond_rows(ints, point, a, b, status, bonded, working, template, corner, turn
                 qx, qy = template_point(c * dx + s * dy, -s * dx + c * dy, p, template, corner, turns, sides)
                 row = nearest_cell(qx, qy, template[p], row_start[p], status, bonded, floe_of, slot_f[slot],
                                    bucket0, per_side, size, first, entries, seeds, g0)
-                row = NOT_A_FLOE if row < 0 else row
+                row = NOT_A_FLOE if row < 0 or (bonded[row] and bond_slot[row] != slot) else row
             if side == 0:
                 a[k] = row
             else:
@@ -364,7 +371,8 @@ def warm_up() -> None:
                    np.zeros((0, 3)), np.zeros(1, np.int64), none, np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)),
                    np.zeros(0), f32,
                    np.zeros(0, np.float32))
-    bond_rows(np.zeros((0, 3), np.uintp), np.zeros((0, 2)), none, none, status, flags, status, none, np.zeros((0, 2)),
+    bond_rows(np.zeros((0, 3), np.uintp), np.zeros((0, 2)), none, none, status, flags, none.astype(np.int32), status,
+              none, np.zeros((0, 2)),
               none, none, np.ones(1), none, none, np.zeros((0, 3)), none, none, none, np.ones(1), none, none,
               np.zeros((0, 2)), none)
     hull_breaks(none, none, np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 2)), flags, f32, none.astype(np.int32),

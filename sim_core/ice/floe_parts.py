@@ -14,7 +14,7 @@ that share an edge. So a part never parts where its cells touch; a crack narrowe
 about a cell may leave two parts joined, a channel the hull breaks (a beam wide) does not.
 
 The attributes of ``ContactSpace`` are used as they are there (``_cp``, ``model``,
-``tiles``, ``compounds``, ``extent``, ``_reweigh``).
+``tiles``, ``compounds``, ``_reweigh``).
 """
 from __future__ import annotations
 
@@ -65,13 +65,16 @@ class FloeParts:
 
     def part(self, state: FloeState, bodies: TileBodies, slot: int, rows: np.ndarray) -> np.ndarray:
         """Part the body of a slot whose bonded rows (ascending) are rows: the largest part
-        keeps it, with its cells' mass properties; every other part of two cells or more
-        gets a body of its own (``_part_body``). Returns the rows of the cells left alone,
-        still on the body, for the caller to take off."""
+        keeps it, with its cells' mass properties and reach; every other part of two cells
+        or more gets a body of its own (``_part_body``). Returns the rows of the cells left
+        alone, still on the body, for the caller to take off: all of them where no two
+        hang together, and the body is to go."""
         w = self.model.wide
         part, parts = body_parts(state.gcell[rows], w.mates_start, w.mates)
         size = np.bincount(part, minlength=parts)
         keep = int(np.argmax(size))
+        if size[keep] == 1:
+            return rows
         for k in np.flatnonzero(size > 1).tolist():
             if k != keep:
                 self._part_body(state, bodies, slot, rows[part == k])
@@ -103,8 +106,6 @@ class FloeParts:
         bodies.move_shapes(self._cp, rows - int(self.tiles.row_start[c.placement[slot]]), body)
         state.bond_slot[rows] = slot
         self._reweigh(state, slot, rows)  # from the parent's centre of mass to its own, velocity field kept
-        g = state.gcell[rows]
-        c.radius[slot] = float(np.hypot(*(state.bond_xy[rows] - c.cog[slot]).T).max() + self.extent[g].max())
 
 
 def warm_up() -> None:
