@@ -160,11 +160,12 @@ class TileBodies:
         """Move the bonded cells' shapes at offsets, in the space or held out of it, onto
         another body (in the space, in the same frame): Chipmunk changes a shape's body only
         out of the space, so those in it go out and back in."""
-        for p in self.bond_shape[offsets][self.bond_shape[offsets] != 0].tolist():
+        in_space, held = self.bond_shape[offsets], self.held[offsets]
+        for p in in_space[in_space != 0].tolist():
             lib.cpSpaceRemoveShape(space, shape_at(p))
             lib.cpShapeSetBody(shape_at(p), body)
             lib.cpSpaceAddShape(space, shape_at(p))
-        for p in self.held[offsets][self.held[offsets] != 0].tolist():
+        for p in held[held != 0].tolist():
             lib.cpShapeSetBody(shape_at(p), body)
 
     def free_held(self, offsets: np.ndarray) -> int:
@@ -208,10 +209,7 @@ class TileBodies:
             self.drop_wide(space, floe)
         for slot in list(self.parts):
             self.drop_part(space, slot)
-        body = body_at(self.body)
-        if lib.cpBodyGetSpace(body) != ffi.NULL:
-            lib.cpSpaceRemoveBody(space, body)
-        lib.cpBodyFree(body)
+        _free_body(space, self.body)
         self.body = 0
 
 
