@@ -148,6 +148,7 @@ def test_a_far_end_that_does_not_read_never_holds_up_the_loop(tmp_path):
             while hub.links[0].health().errors["send_failed"] < 10:  # the writer's queue has filled up
                 now += 0.1
                 tick(hub, STATE, now)  # 7 to 8 frames a tick
+                time.sleep(0.002)  # the pacer's wait, in which the writer thread runs
             done.set()
         with hub:
             publisher = threading.Thread(target=publish_for_a_while, daemon=True)
@@ -155,3 +156,35 @@ def test_a_far_end_that_does_not_read_never_holds_up_the_loop(tmp_path):
             publisher.join(60.0)
             assert done.is_set(), "the loop's publish is stuck in a write"
             assert hub.links[0].health().outputs > 256  # the pty's buffers filled, then the queue
+
+
+def test_a_silent_serial_line_never_holds_up_the_poll(tmp_path):
+    """python-can's 'serial' adapter waits for its port's timeout (100 ms by default) in every
+    receive, even one asked not to wait. The node receives on a reader thread, so the loop's
+    poll of a silent port returns at once: 20 ticks take less than half of the 2 s that 20
+    such waits would (a bound that only the defect can break, not a timing window), and an
+    order sent after them still comes in, and the node's frames go out on the line (their
+    timestamps as the line's 32-bit milliseconds)."""
+    with pty_pair(tmp_path) as (node_end, console_end):
+        cfg = node_config([{"type": "can", "name": "line", "interface": "serial", "channel": node_end,
+                            "allowed_sources": [0x42]}], rudder=["line"], engine=["line"])
+        hub = LinkHub(cfg.links, cfg.arbitration)
+        hub.open()
+        console = can.Bus(interface="serial", channel=console_end)
+        try:
+            assert hub.links[0].health().connected
+            t0 = time.monotonic()
+            for _ in range(20):
+                tick(hub, STATE, time.monotonic())
+            assert time.monotonic() - t0 < 1.0
+            console.send(console_frame("HelmOrder", RudderOrder=-4.0, Status=1, Counter=1))
+            got = []
+            wait_for(lambda: got, poll=lambda: got.extend(
+                [c for c in [tick(hub, STATE, time.monotonic()).controls.rudder] if c is not None]))
+            assert got[0] == pytest.approx(math.radians(-4.0))
+            heard = [m for m in iter(lambda: console.recv(timeout=0.5), None)]
+            assert heard and all(m.is_extended_id for m in heard)
+            assert hub.links[0].health().reconnects == 0
+        finally:
+            console.shutdown()
+            hub.close()

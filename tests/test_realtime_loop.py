@@ -151,7 +151,7 @@ def test_sigterm_ends_the_loop_after_the_tick_in_hand(tmp_path):
 def test_a_tick_over_two_periods_is_kept_with_where_its_time_went(tmp_path):
     """A listener that holds the tick three periods: the loop keeps that tick's record, with
     the time by phase (the orders, the world step, each listener) and the collector's, and
-    no record of the ticks within their period."""
+    no record of the ticks within their period; and every tick's phases in the run's summary."""
     cfg, model, data = _small_world(tmp_path)
     period = 1.0 / 30.0
 
@@ -167,6 +167,10 @@ def test_a_tick_over_two_periods_is_kept_with_where_its_time_went(tmp_path):
     assert {"orders", "world", "gc_ms"} <= set(slow[0])
     assert all(t["tick_ms"] > 2e3 * period for t in stats.slow_ticks)  # only ticks over two periods
     assert stats.summary()["slow_ticks"] == stats.slow_ticks
+    phases = stats.summary()["phase_ms"]  # every tick's phases, over the run
+    assert {"orders", "world", stall.__qualname__} <= set(phases)
+    assert phases["world"]["ticks"] == stats.ticks
+    assert phases[stall.__qualname__]["max"] >= 3e3 * period > phases[stall.__qualname__]["median"]
 
 
 def test_the_loop_thread_runs_in_the_real_time_class_where_allowed_and_says_what_it_got():

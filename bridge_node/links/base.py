@@ -231,8 +231,9 @@ class Link(ABC):
     def _poll_device(self, now: float) -> Iterable[ControlInput]:
         """The orders waiting on the open device; raises one of ``lost_errors`` if it failed."""
 
-    def _count_error(self, kind: str) -> None:
-        self._health.errors[kind] += 1
+    def _count_error(self, kind: str, n: int = 1) -> None:
+        if n:
+            self._health.errors[kind] += n
 
     def _report(self, direction: str, data: object, unix_time: float | None = None) -> None:
         """Hand raw traffic to the listeners (``unix_time`` default: now)."""

@@ -1,8 +1,10 @@
 """What a link's device needs around it: the back-off between reopenings, the worker thread
 that opens a device off the loop's thread, the queued writer for devices whose writes block,
-and the schedule of outputs due at their rates."""
+the queued reader for devices whose reads block, and the schedule of outputs due at their
+rates."""
 from __future__ import annotations
 
+import collections
 import logging
 import math
 import queue
@@ -117,10 +119,7 @@ class QueuedWriter:
 
     def failures(self) -> list[Exception]:
         """What the thread's writes raised since the last call (and why it ended, if it did)."""
-        out = []
-        while not self._failures.empty():
-            out.append(self._failures.get_nowait())
-        return out
+        return _drain(self._failures)
 
     def _run(self) -> None:
         try:
@@ -145,6 +144,70 @@ class QueuedWriter:
         self.closing.set()
         self._batch = []
         self._batches.put(None)
+
+
+class QueuedReader:
+    """Reads on a worker thread, so the loop never waits for a device whose reads block (the
+    serial-line CAN adapters of python-can wait up to their port's timeout in every receive,
+    however short the receive's own timeout): the thread calls ``read``, which waits up to
+    its own timeout and returns None when nothing came, and queues what it returns; the loop
+    takes what is queued (``take``) without waiting. Beyond ``size`` items waiting, an item
+    is dropped and counted (``dropped``). What ``read`` raises ends the thread and is handed
+    back (``failures``), unless the reader is closing.
+
+    python-can's ``Notifier`` and ``BufferedReader`` read on a thread too, but on a lost port
+    the notifier's thread either ends with a traceback on the console or, given an error
+    handler, calls the failing receive again at once, without end; and the buffer has no
+    bound. So this small reader, which ``QueuedWriter`` mirrors."""
+
+    def __init__(self, read: Callable[[], object | None], name: str, size: int) -> None:
+        self._read, self._size = read, size
+        self._items: collections.deque = collections.deque()  # thread appends, loop pops: both thread-safe
+        self._failures: queue.SimpleQueue = queue.SimpleQueue()
+        self.dropped = 0
+        self.closing = threading.Event()
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
+
+    def take(self, limit: int) -> list:
+        """Up to ``limit`` items read since the last call, oldest first."""
+        out = []
+        while self._items and len(out) < limit:
+            out.append(self._items.popleft())
+        return out
+
+    def failures(self) -> list[Exception]:
+        """Why the thread ended (a read raised), once; empty while it reads."""
+        return _drain(self._failures)
+
+    def _run(self) -> None:
+        while not self.closing.is_set():
+            try:
+                item = self._read()
+            except Exception as exc:  # noqa: BLE001 (handed to the loop, which decides what it means)
+                if not self.closing.is_set():
+                    self._failures.put(exc)
+                return
+            if item is None:
+                continue
+            if len(self._items) >= self._size:
+                self.dropped += 1
+            else:
+                self._items.append(item)
+
+    def close(self, wait: float = 0.0) -> None:
+        """Have the thread stop after the read in hand, waiting up to ``wait`` s for it."""
+        self.closing.set()
+        if wait > 0.0:
+            self._thread.join(wait)
+
+
+def _drain(items: queue.SimpleQueue) -> list:
+    """Everything in a queue now, without waiting."""
+    out = []
+    while not items.empty():
+        out.append(items.get_nowait())
+    return out
 
 
 class RateSchedule:

@@ -34,6 +34,7 @@ from bridge_node.exercise.fleet import Bridge, FleetOrders, fleet_listeners
 from bridge_node.control.queue import CommandSource
 from bridge_node.exercise.listeners import LinkOutputs, SaveWriter, WorldTraffic
 from bridge_node.exercise.pacer import Pacer
+from bridge_node.exercise.phase_times import PhaseTimes
 from bridge_node.exercise.tick import ExerciseTick, StepListener, TickOutcome
 from bridge_node.links.hub import LinkHub
 from bridge_node.node.c_heap import give_back_free_pages, heap_in_use_mib
@@ -120,6 +121,7 @@ class LoopStats:
     refusals: OrderRefusals = field(default_factory=OrderRefusals)
     input_to_outputs_ms: array = field(default_factory=lambda: array("f"))
     slow_ticks: list = field(default_factory=list)  # the first SLOW_TICKS_KEPT ticks over two periods: where time went
+    phases: PhaseTimes = field(default_factory=PhaseTimes)  # every tick's phases: where time goes over the run
     scheduling: str = "normal"  # the loop thread's CPU scheduling, as it got it (``thread_scheduling``)
 
     def summary(self) -> dict:
@@ -129,7 +131,7 @@ class LoopStats:
                 "tick_ms_median": round(float(np.median(ms)), 2), "tick_ms_p99": round(float(np.percentile(ms, 99)), 2),
                 "tick_ms_max": round(float(ms.max()), 2), "orders_rejected": dict(self.refusals.counts),
                 "input_to_outputs_ms": distribution(self.input_to_outputs_ms), "memory": self.memory_summary(),
-                "slow_ticks": self.slow_ticks, "scheduling": self.scheduling}
+                "slow_ticks": self.slow_ticks, "phase_ms": self.phases.summary(), "scheduling": self.scheduling}
 
     def memory_summary(self) -> dict:
         """Resident memory and the C heap's bytes in use at the start and end (MiB), and
@@ -250,6 +252,7 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
             tick_ms = (time.monotonic() - t0) * 1e3
             _note(stats, outcome, rate_hz, tick_ms)
             gc_ms = gc_clock.take()
+            stats.phases.add(tick.phase_ms)
             if tick_ms > 2e3 * period and len(stats.slow_ticks) < SLOW_TICKS_KEPT:
                 stats.slow_ticks.append({"sim_s": round(stats.sim_s, 3), "tick_ms": round(tick_ms, 2),
                                          "gc_ms": round(gc_ms, 2), **{k: round(v, 2) for k, v in tick.phase_ms.items()}})

@@ -3,8 +3,8 @@
 127245, 127488, 127489 (fast packet), 127250, 127251, 127257, 129025, 129026 at their rates and
 at the priorities of canboat's database. The node is an NMEA 2000 citizen: it claims and
 defends its address, answers ISO requests and sends its heartbeat (``n2k_network``). Over a
-serial line (slcan) the frames go out through a writer thread: the loop never waits for a
-far end that does not read."""
+serial line (slcan) the frames come in through a reader thread and go out through a writer
+thread: the loop never waits for a port that is silent, nor for a far end that does not read."""
 from __future__ import annotations
 
 import functools
@@ -17,7 +17,7 @@ import can
 import cantools
 
 from bridge_node.links.base import Link
-from bridge_node.links.device_io import QueuedWriter, RateSchedule
+from bridge_node.links.device_io import QueuedReader, QueuedWriter, RateSchedule
 from bridge_node.links.messages import ETL_POSITIONS, ControlInput, searchlight_order
 from bridge_node.links.can.n2k_frames import fast_packet_frames, identifier, parse_identifier
 from bridge_node.links.can.n2k_network import FAST_PACKET_PGNS, GLOBAL_ADDRESS, NETWORK_PGNS, Frame, NetworkManager
@@ -85,18 +85,50 @@ def _n2k_fields(name: str, s: ShipOutputs, sid: int) -> dict:
 
 SERIAL_INTERFACES = frozenset({"slcan", "serial", "robotell", "seeedstudio"})  # python-can over a serial line
 SEND_QUEUE = 256  # frames a serial-line bus's writer may hold; beyond this a frame is dropped (send_failed)
+RECEIVE_QUEUE = 4096  # frames a serial-line bus's reader may hold for the loop; beyond, one is dropped (rx_overflow)
+SERIAL_READ_WAIT = 0.05  # s: a serial-line bus's port timeout, and the longest its reader waits in one receive
 
 
 class _Bus:
-    """An open bus. Over a serial line (``SERIAL_INTERFACES``) python-can's send writes the
-    port and drains it, which waits for as long as the far end does not read: there a
-    ``QueuedWriter`` sends the frames and, last, shuts the bus down; the loop only queues
-    them (a full queue drops the frame). Other interfaces send at once."""
+    """An open bus. Over a serial line (``SERIAL_INTERFACES``) python-can's receive waits up to
+    the port's timeout even when asked not to wait (slcan's default 1 ms, serial's and
+    seeedstudio's 100 ms), and its send writes the port and drains it, which waits for as long
+    as the far end does not read: there a ``QueuedReader`` receives the frames and a
+    ``QueuedWriter`` sends them and, last, shuts the bus down once the reader has stopped; the
+    loop only takes and queues frames (a full queue drops the frame). Other interfaces receive
+    and send at once."""
 
     def __init__(self, bus: can.BusABC, threaded: bool, name: str) -> None:
         self.bus = bus
-        self._writer = QueuedWriter(lambda msg: bus.send(msg, timeout=0.1), bus.shutdown, (can.CanError, OSError),
-                                    f"can-send-{name}", SEND_QUEUE) if threaded else None
+        self._reader = QueuedReader(lambda: bus.recv(timeout=SERIAL_READ_WAIT), f"can-read-{name}",
+                                    RECEIVE_QUEUE) if threaded else None
+        self._writer = QueuedWriter(lambda msg: bus.send(_line_clock(msg), timeout=0.1), self._shut_down,
+                                    (can.CanError, OSError), f"can-send-{name}", SEND_QUEUE) if threaded else None
+        self._dropped = 0  # frames the reader dropped, as counted so far
+
+    def _shut_down(self) -> None:
+        """Shut the bus down once the reader has stopped (on the writer's thread)."""
+        self._reader.close(wait=2.0 * SERIAL_READ_WAIT + 1.0)
+        self.bus.shutdown()
+
+    def receive(self, limit: int) -> list[can.Message]:
+        """Frames received since the last call, up to ``limit``, without waiting. Raises what
+        python-can raised (over a serial line: what ended the reader)."""
+        if self._reader is None:
+            out = []
+            while len(out) < limit and (msg := self.bus.recv(timeout=0.0)) is not None:
+                out.append(msg)
+            return out
+        for exc in self._reader.failures():
+            raise exc
+        return self._reader.take(limit)
+
+    def newly_dropped(self) -> int:
+        """Frames the reader dropped since the last call, its queue full."""
+        if self._reader is None:
+            return 0
+        dropped, self._dropped = self._reader.dropped - self._dropped, self._reader.dropped
+        return dropped
 
     def send(self, msg: can.Message) -> bool:
         """Send ``msg`` (or queue it for the writer); False if the queue is full. Raises
@@ -120,7 +152,17 @@ class _Bus:
         if self._writer is None:
             self.bus.shutdown()
         else:
+            self._reader.close()
             self._writer.close()
+
+
+def _line_clock(msg: can.Message) -> can.Message:
+    """The frame with its timestamp (Unix s) as a serial line's device clock: 32-bit
+    milliseconds, which python-can's 'serial' adapter puts on the line (a Unix time in ms
+    overflows it: ValueError, which stopped the writer at its first frame)."""
+    ms = int(msg.timestamp * 1000.0) % 2**32
+    return can.Message(timestamp=ms / 1000.0, arbitration_id=msg.arbitration_id, data=msg.data,
+                       is_extended_id=msg.is_extended_id, is_rx=False)
 
 
 class CanLink(Link):
@@ -146,14 +188,16 @@ class CanLink(Link):
     def _open_device(self) -> _Bus:
         s = self.settings
         try:
-            bus = can.Bus(interface=s.interface, channel=s.channel, bitrate=s.bitrate)
+            serial_line = s.interface in SERIAL_INTERFACES
+            bus = can.Bus(interface=s.interface, channel=s.channel, bitrate=s.bitrate,
+                          **({"timeout": SERIAL_READ_WAIT} if serial_line else {}))
         except self.open_errors:
             raise
         except Exception as exc:  # a driver python-can cannot load fails in its own ways (NameError: kvaser)
             raise can.CanInitializationError(f"python-can cannot start interface {s.interface!r}: "
                                              f"{type(exc).__name__}: {exc}") from exc
         self.network.restart()  # a new bus: claim the address again
-        return _Bus(bus, s.interface in SERIAL_INTERFACES, self.name)
+        return _Bus(bus, serial_line, self.name)
 
     def _close_device(self, bus: _Bus) -> None:
         bus.close()
@@ -164,10 +208,8 @@ class CanLink(Link):
                 raise exc
             self._count_error("send_failed")
         self._transmit(self.network.tick(now))
-        for _ in range(MAX_FRAMES_PER_POLL):
-            msg = self.device.bus.recv(timeout=0.0)
-            if msg is None:
-                return
+        self._count_error("rx_overflow", self.device.newly_dropped())
+        for msg in self.device.receive(MAX_FRAMES_PER_POLL):
             self._report("rx", msg, msg.timestamp)
             yield from self._decode(msg, now)
 
