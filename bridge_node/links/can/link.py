@@ -111,17 +111,18 @@ class _Bus:
         self._reader.close(wait=2.0 * SERIAL_READ_WAIT + 1.0)
         self.bus.shutdown()
 
-    def receive(self, limit: int) -> list[can.Message]:
-        """Frames received since the last call, up to ``limit``, without waiting. Raises what
-        python-can raised (over a serial line: what ended the reader)."""
-        if self._reader is None:
-            out = []
-            while len(out) < limit and (msg := self.bus.recv(timeout=0.0)) is not None:
-                out.append(msg)
-            return out
-        for exc in self._reader.failures():
-            raise exc
-        return self._reader.take(limit)
+    def receive(self, limit: int) -> Iterator[can.Message]:
+        """Frames received since the last call, up to ``limit``, without waiting, each as it
+        is read. Raises what python-can raised (over a serial line: what ended the reader)."""
+        if self._reader is not None:
+            for exc in self._reader.failures():
+                raise exc
+            yield from self._reader.take(limit)
+            return
+        for _ in range(limit):
+            if (msg := self.bus.recv(timeout=0.0)) is None:
+                return
+            yield msg
 
     def newly_dropped(self) -> int:
         """Frames the reader dropped since the last call, its queue full."""
