@@ -163,7 +163,8 @@ def test_a_tick_over_two_periods_is_kept_with_where_its_time_went(tmp_path):
         stats = run_realtime(model, data, hub, 30.0, None, [stall], should_stop=lambda: data.time >= 0.3 - 1e-9)
     slow = [t for t in stats.slow_ticks if t["sim_s"] == pytest.approx(4 * period, abs=1e-3)]
     assert len(slow) == 1, stats.slow_ticks
-    assert slow[0]["tick_ms"] >= 3e3 * period and slow[0][stall.__qualname__] >= 3e3 * period  # the stalling listener's phase
+    assert slow[0]["tick_ms"] >= 3e3 * period
+    assert slow[0][stall.__qualname__] >= 3e3 * period  # the stalling listener's phase
     assert {"orders", "world", "gc_ms"} <= set(slow[0])
     assert all(t["tick_ms"] > 2e3 * period for t in stats.slow_ticks)  # only ticks over two periods
     assert stats.summary()["slow_ticks"] == stats.slow_ticks

@@ -116,7 +116,8 @@ class LoopStats:
     sim_s: float = 0.0
     step_ms: array = field(default_factory=lambda: array("f"))
     track: list = field(default_factory=list)  # (sim time s, north m, east m, speed m/s, live floes)
-    memory: list = field(default_factory=list)  # (sim time s, frozen floes, resident MiB, C heap in use MiB), once a second
+    # (sim time s, frozen floes, resident MiB, C heap in use MiB), once a second
+    memory: list = field(default_factory=list)
     trim_ms: array = field(default_factory=lambda: array("f"))  # wall times of the heap's page give-backs
     refusals: OrderRefusals = field(default_factory=OrderRefusals)
     input_to_outputs_ms: array = field(default_factory=lambda: array("f"))
@@ -255,7 +256,8 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
             stats.phases.add(tick.phase_ms)
             if tick_ms > 2e3 * period and len(stats.slow_ticks) < SLOW_TICKS_KEPT:
                 stats.slow_ticks.append({"sim_s": round(stats.sim_s, 3), "tick_ms": round(tick_ms, 2),
-                                         "gc_ms": round(gc_ms, 2), **{k: round(v, 2) for k, v in tick.phase_ms.items()}})
+                                         "gc_ms": round(gc_ms, 2),
+                                         **{k: round(v, 2) for k, v in tick.phase_ms.items()}})
             pacer.advance()
             if time.monotonic() - last_trim >= TRIM_EVERY_S and pacer.slack() >= TRIM_SLACK * period:
                 last_trim = time.monotonic()
