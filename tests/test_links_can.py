@@ -160,11 +160,10 @@ def test_a_far_end_that_does_not_read_never_holds_up_the_loop(tmp_path):
 
 def test_a_silent_serial_line_never_holds_up_the_poll(tmp_path):
     """python-can's 'serial' adapter waits for its port's timeout (100 ms by default) in every
-    receive, even one asked not to wait. The node receives on a reader thread, so the loop's
-    poll of a silent port returns at once: 20 ticks take less than half of the 2 s that 20
-    such waits would (a bound that only the defect can break, not a timing window), and an
-    order sent after them still comes in, and the node's frames go out on the line (their
-    timestamps as the line's 32-bit milliseconds)."""
+    receive, even one asked not to wait. The node receives on a reader thread: the loop's
+    ticks never call the bus's receive themselves (python-can's own bus, its calls noted by
+    thread), its reader does, and an order sent after them still comes in, and the node's
+    frames go out on the line (their timestamps as the line's 32-bit milliseconds)."""
     with pty_pair(tmp_path) as (node_end, console_end):
         cfg = node_config([{"type": "can", "name": "line", "interface": "serial", "channel": node_end,
                             "allowed_sources": [0x42]}], rudder=["line"], engine=["line"])
@@ -173,10 +172,18 @@ def test_a_silent_serial_line_never_holds_up_the_poll(tmp_path):
         console = can.Bus(interface="serial", channel=console_end)
         try:
             assert hub.links[0].health().connected
-            t0 = time.monotonic()
+            bus, receivers = hub.links[0].device.bus, set()
+            receive = bus.recv
+
+            def noted_recv(*args, **kwargs):
+                receivers.add(threading.current_thread().name)
+                return receive(*args, **kwargs)
+            bus.recv = noted_recv
             for _ in range(20):
                 tick(hub, STATE, time.monotonic())
-            assert time.monotonic() - t0 < 1.0
+            wait_for(lambda: receivers)  # the reader's receive in hand when noted_recv came ends
+            assert threading.current_thread().name not in receivers
+            assert receivers == {"can-read-line"}
             console.send(console_frame("HelmOrder", RudderOrder=-4.0, Status=1, Counter=1))
             got = []
             wait_for(lambda: got, poll=lambda: got.extend(
