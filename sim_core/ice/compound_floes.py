@@ -372,9 +372,8 @@ def warm_up() -> None:
                    np.zeros(0), f32,
                    np.zeros(0, np.float32))
     bond_rows(np.zeros((0, 3), np.uintp), np.zeros((0, 2)), none, none, status, flags, none.astype(np.int32), status,
-              none, np.zeros((0, 2)),
-              none, none, np.ones(1), none, none, np.zeros((0, 3)), none, none, none, np.ones(1), none, none,
-              np.zeros((0, 2)), none)
+              none, np.zeros((0, 2)), none, none, np.ones(1), none, none, np.zeros((0, 3)), none, none, none,
+              np.ones(1), none, none, np.zeros((0, 2)), none)
     hull_breaks(none, none, np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 2)), flags, f32, none.astype(np.int32),
                 none.astype(np.int32), np.ones(1), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros((1, 2)),
                 np.zeros((1, 2)), np.zeros(1))

@@ -355,7 +355,6 @@ class ContactSpace(FloeRest, CompoundFloes, CompoundRest, FloeParts, FloeRims, T
             c = self.compounds
             c.read_poses()
             bond_rows(ints, point, a, b, state.status, state.bonded, state.bond_slot, working, tiles.template,
-                      tiles.corner,
-                      tiles.quarter_turns, tiles.row_start, self._sides, c.placement, c.floe, c.pose,
+                      tiles.corner, tiles.quarter_turns, tiles.row_start, self._sides, c.placement, c.floe, c.pose,
                       self.model.wide.of_cell, *self._grid)
         return Contacts(a, b, f[:, 0:2].copy(), f[:, 2:4].copy(), point)
