@@ -310,6 +310,8 @@ def step(model: WorldModel, data: WorldData, dt: float,
     """Advance the world by dt seconds after the instructor's ``commands``, with the
     consoles' orders (one ``Controls``: the own ship's; a sequence: one per ship, None for
     none; a frozen exercise: take them, move nothing); returns what it publishes."""
+    timer = data.ice.timer
+    timer.start()
     applied = _apply_commands(model, data, commands)  # the events' commands and retiled
     orders = per_ship(controls, len(model.ships))
     rejected = _take_orders(model, data, orders)
@@ -319,22 +321,27 @@ def step(model: WorldModel, data: WorldData, dt: float,
     move_vessels(data.vessels, dt)
     impacts, touching = collisions(model, data, orders, dt)
     water = drift_ice(model, data, dt)
+    timer.lap("ships")
     contours, hulls = hulls_in_ice(model, data)
     contour = np.concatenate(contours)
     update = update_scene(model.scene, data.scene, contour, np.array([h.xy for h in hulls]))
     placed, thawed, frozen = apply_swaps(model, data, update, contours)
+    timer.lap("tile switches")
     report = ice_step(model.ice, data.ice, hulls, dt, water, fleet_wash(model, data))
     if data.moving_to is None:  # (a move's tiles are prepared first)
         prepare_ahead(model, data, contour, model.scene.settings.prepare_budget_ms * 1e-3)
+    timer.lap("tiles ahead")
     data.time += dt
     data.seq += 1
     loads = take_ice_loads(data, report, winds, impacts)
     rows = moved_rows(data, placed)
-    return _publish(model, data, rows, loads, rejected, collisions=touching, placed=placed, thawed=thawed,
-                    frozen=frozen, frozen_floes=frozen_floes_of(data.ice, frozen.tolist()),
-                    broken_by_hull=report.broken_by_hull, broken_by_contact=report.broken_by_contact,
-                    cracked=cracks_published(data, placed, report.cracked),
-                    frozen_cracks=frozen_cracks_of(data.ice, frozen.tolist()), **applied)
+    events = _publish(model, data, rows, loads, rejected, collisions=touching, placed=placed, thawed=thawed,
+                      frozen=frozen, frozen_floes=frozen_floes_of(data.ice, frozen.tolist()),
+                      broken_by_hull=report.broken_by_hull, broken_by_contact=report.broken_by_contact,
+                      cracked=cracks_published(data, placed, report.cracked),
+                      frozen_cracks=frozen_cracks_of(data.ice, frozen.tolist()), **applied)
+    timer.lap("publish")
+    return events
 
 
 def snapshot(model: WorldModel, data: WorldData) -> WorldEvents:

@@ -165,12 +165,18 @@ def test_a_tick_over_two_periods_is_kept_with_where_its_time_went(tmp_path):
     assert len(slow) == 1, stats.slow_ticks
     assert slow[0]["tick_ms"] >= 3e3 * period
     assert slow[0][stall.__qualname__] >= 3e3 * period  # the stalling listener's phase
-    assert {"orders", "world", "gc_ms"} <= set(slow[0])
+    assert {"orders", "world", "world_off_cpu", "gc_ms"} <= set(slow[0])
+    assert slow[0]["world_off_cpu"] <= slow[0]["world"]
+    assert set(slow[0]["world_waits"]) == {"waited", "preempted", "major_faults"}
+    stages = slow[0]["world_stages"]  # the slow tick's world step, by stage (the world's, the ice's)
+    assert {"ships", "tile switches", "ice: engine", "ice: contacts", "publish"} <= set(stages)
+    assert sum(stages.values()) <= slow[0]["world"] + 0.1
     assert all(t["tick_ms"] > 2e3 * period for t in stats.slow_ticks)  # only ticks over two periods
     assert stats.summary()["slow_ticks"] == stats.slow_ticks
     phases = stats.summary()["phase_ms"]  # every tick's phases, over the run
     assert {"orders", "world", stall.__qualname__} <= set(phases)
     assert phases["world"]["ticks"] == stats.ticks
+    assert stats.summary()["world_stage_ms"]["ice: engine"]["ticks"] == stats.ticks  # every step's stages
     assert phases[stall.__qualname__]["max"] >= 3e3 * period > phases[stall.__qualname__]["median"]
 
 

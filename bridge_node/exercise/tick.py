@@ -13,6 +13,7 @@ pacing (``bridge_node.exercise.pacer``).
 """
 from __future__ import annotations
 
+import resource
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -95,7 +96,11 @@ class ExerciseTick:
     (``StepListener`` objects or functions of the outcome) in the order given. A context
     manager: leaving it stops the listeners (once). ``phase_ms`` holds the last tick's wall
     time (ms) by phase: the orders (commands and polling), the world step, and each kind of
-    listener: where a slow tick's time went."""
+    listener: where a slow tick's time went; and ``world_off_cpu``, the part of the world
+    step's wall time that the loop's thread did not run (preempted, or waiting: for the
+    interpreter lock, for a page from disk). ``world_waits`` counts, in the last world step,
+    the thread's context switches (``waited``: it blocked; ``preempted``) and its major page
+    faults: a slow step that computed, or one that waited, and for what."""
 
     def __init__(self, model: WorldModel, data: WorldData, orders: OrderSource,
                  listeners: Iterable[StepListener | Callable[[TickOutcome], None]] = (),
@@ -104,6 +109,7 @@ class ExerciseTick:
         self.listeners = [as_listener(listener) for listener in listeners]
         self.refusals = OrderRefusals()
         self.phase_ms: dict[str, float] = {}
+        self.world_waits: dict[str, int] = {}
         self._stopped = False
 
     def __call__(self, dt: float, now: float, send: bool = True) -> TickOutcome:
@@ -117,14 +123,18 @@ class ExerciseTick:
         decision = self.orders.poll(now)
         for listener in self.listeners:
             listener.on_polled(self.data.seq, now)
-        t1 = time.perf_counter()
+        t1, cpu1, use1 = time.perf_counter(), time.thread_time(), resource.getrusage(resource.RUSAGE_THREAD)
         events = step(self.model, self.data, dt, decision.every_ships_controls(),
                       tuple(c for c in taken if not isinstance(c, NODE_COMMANDS)))
         alarms = (*decision.alarms, *self.refusals.note(events.rejected, now))
         outcome = TickOutcome(events, decision.controls, alarms, now, decision.input_time, send, node,
                               decision.others)
-        t2 = time.perf_counter()
-        phases = self.phase_ms = {"orders": (t1 - t0) * 1e3, "world": (t2 - t1) * 1e3}
+        # The thread's CPU time from its clock: getrusage's lags by up to a scheduler tick
+        t2, cpu2, use2 = time.perf_counter(), time.thread_time(), resource.getrusage(resource.RUSAGE_THREAD)
+        phases = self.phase_ms = {"orders": (t1 - t0) * 1e3, "world": (t2 - t1) * 1e3,
+                                  "world_off_cpu": max(0.0, t2 - t1 - (cpu2 - cpu1)) * 1e3}
+        self.world_waits = {"waited": use2.ru_nvcsw - use1.ru_nvcsw, "preempted": use2.ru_nivcsw - use1.ru_nivcsw,
+                            "major_faults": use2.ru_majflt - use1.ru_majflt}
         for listener in self.listeners:
             listener.on_step(outcome)
             t3 = time.perf_counter()

@@ -123,6 +123,7 @@ class LoopStats:
     input_to_outputs_ms: array = field(default_factory=lambda: array("f"))
     slow_ticks: list = field(default_factory=list)  # the first SLOW_TICKS_KEPT ticks over two periods: where time went
     phases: PhaseTimes = field(default_factory=PhaseTimes)  # every tick's phases: where time goes over the run
+    world_stages: PhaseTimes = field(default_factory=PhaseTimes)  # every world step's stages (``IceData.timer``)
     scheduling: str = "normal"  # the loop thread's CPU scheduling, as it got it (``thread_scheduling``)
 
     def summary(self) -> dict:
@@ -132,7 +133,8 @@ class LoopStats:
                 "tick_ms_median": round(float(np.median(ms)), 2), "tick_ms_p99": round(float(np.percentile(ms, 99)), 2),
                 "tick_ms_max": round(float(ms.max()), 2), "orders_rejected": dict(self.refusals.counts),
                 "input_to_outputs_ms": distribution(self.input_to_outputs_ms), "memory": self.memory_summary(),
-                "slow_ticks": self.slow_ticks, "phase_ms": self.phases.summary(), "scheduling": self.scheduling}
+                "slow_ticks": self.slow_ticks, "phase_ms": self.phases.summary(),
+                "world_stage_ms": self.world_stages.summary(), "scheduling": self.scheduling}
 
     def memory_summary(self) -> dict:
         """Resident memory and the C heap's bytes in use at the start and end (MiB), and
@@ -254,10 +256,13 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
             _note(stats, outcome, rate_hz, tick_ms)
             gc_ms = gc_clock.take()
             stats.phases.add(tick.phase_ms)
+            stats.world_stages.add(data.ice.timer.ms)
             if tick_ms > 2e3 * period and len(stats.slow_ticks) < SLOW_TICKS_KEPT:
                 stats.slow_ticks.append({"sim_s": round(stats.sim_s, 3), "tick_ms": round(tick_ms, 2),
                                          "gc_ms": round(gc_ms, 2),
-                                         **{k: round(v, 2) for k, v in tick.phase_ms.items()}})
+                                         **{k: round(v, 2) for k, v in tick.phase_ms.items()},
+                                         "world_waits": tick.world_waits,
+                                         "world_stages": {k: round(v, 2) for k, v in data.ice.timer.ms.items()}})
             pacer.advance()
             if time.monotonic() - last_trim >= TRIM_EVERY_S and pacer.slack() >= TRIM_SLACK * period:
                 last_trim = time.monotonic()

@@ -19,6 +19,7 @@ of 0.1-1.1 s. Every test here is a count or a threshold, so reruns stay the same
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numba
 import numpy as np
@@ -26,7 +27,7 @@ import numpy as np
 from sim_core.ice.chipmunk_bodies import LOWEST_ROW
 from sim_core.ice.contact_kernels import Contacts
 from sim_core.ice.model import IceModel
-from sim_core.ice.tiles import IceData
+from sim_core.ice.tiles import IceData, bond_floe
 from sim_core.ice.vertical import settled
 
 _WAKE_SHARE = 0.8  # the wake radius as a share of the rest radius
@@ -257,6 +258,29 @@ def rest_far(model: IceModel, data: IceData, moving: np.ndarray, hull_xy: np.nda
                       st.pitch_rate, st.xy, np.asarray(hull_xy, dtype=np.float64).reshape(-1, 2), radii(model, data)[0])
     if len(picks):
         data.contacts.rest(st, moving[picks[:min(s.rest_per_step, data.contacts.rest_share(picks))]])
+
+
+def wake_wide_floes(model: IceModel, data: IceData, hulls: Sequence) -> None:
+    """Wake the wide floes' bodies near each hull (``step.HullMotion``; after the hulls broke
+    what they lie on: a ship laid in the ice), their cells bonded."""
+    if not model.settings.wide_floes_move:
+        return
+    space = data.contacts
+    for k, hull in enumerate(hulls):
+        speed = float(np.hypot(*hull.velocity))
+        space.wake_resting(k, speed)
+        for placement, floe in space.wake_near(data.state, k, speed):
+            bond_floe(data, placement, floe)
+
+
+def after_step(model: IceModel, data: IceData, con: Contacts, vel_before: np.ndarray, moving: np.ndarray,
+               hulls_xy: np.ndarray, dt: float, settled_drift: bool) -> None:
+    """After the ice step: wake the resting floes struck hard (``wake_struck``), and put the
+    floes far from the hulls (``hulls_xy``, (h, 2) m) to rest (``rest_far``)."""
+    wake_struck(model, data, con, vel_before)
+    rest_far(model, data, moving, hulls_xy, dt, new=settled_drift)
+    if data.contacts.compounds.live:
+        data.contacts.rest_far(model.settings.rest_speed)
 
 
 def warm_up(model: IceModel) -> None:

@@ -33,7 +33,7 @@ from sim_core.ice.breaking import pushed_hard
 from sim_core.ice.contact_kernels import Contacts
 from sim_core.ice.floes import BreakCause, FloeState, FloeStatus
 from sim_core.ice.model import IceModel, vertical_substeps
-from sim_core.ice.tiles import IceData, bond_floe, break_cells
+from sim_core.ice.tiles import IceData, break_cells
 from sim_core.ice.vertical import settled, vertical_step
 from sim_core.ice.wash import drag_in_wash
 
@@ -330,20 +330,19 @@ def ice_step(model: IceModel, data: IceData, hulls: Sequence[HullMotion], dt: fl
     space.set_water_velocity(east, north, dt)
     resting_on = model.settings.rest_far_floes
     rest = resting_on and resting.drift_settled(model, data, (east, north))
+    timer = data.timer
     for k, hull in enumerate(hulls):
         space.set_hull(k, hull.xy, hull.angle, hull.velocity, hull.angular_velocity)
         if resting_on:
             resting.wake_near_hull(model, data, k, hull.xy)
     by_hull, cracked, broke = _hulls_break(model, data, hulls)
-    waking = hulls if model.settings.wide_floes_move else ()
-    for k, hull in enumerate(waking):  # after the hulls broke what they lie on (a ship laid in the ice)
-        speed = float(np.hypot(*hull.velocity))
-        space.wake_resting(k, speed)
-        for placement, floe in space.wake_near(st, k, speed):
-            bond_floe(data, placement, floe)
+    timer.lap("ice: hulls break")
+    resting.wake_wide_floes(model, data, hulls)
     for k, hull in enumerate(hulls):
         _advance_turns(model, data, k, hull, dt)
+    timer.lap("ice: waking, turns")
     space.step(dt)
+    timer.lap("ice: engine")
     con = space.read_contacts(st)
     by_contact, jammed = _contact_breaks(model, st, con, st.vel)  # st.vel still holds pre-step velocities
     struck_off, breaker = compound_floes.struck_off(space, st, con, *_hull_motions(hulls)) if space.compounds.live \
@@ -359,6 +358,7 @@ def ice_step(model: IceModel, data: IceData, hulls: Sequence[HullMotion], dt: fl
         break_cells(data, struck_off, BreakCause.HULL)
         by_hull = _union([by_hull, struck_off])
         broke += np.bincount(breaker, minlength=len(hulls))
+    timer.lap("ice: contacts")
     free = _unsettled(moving, st.submerged, st.gcell, model.z_equilibrium, st.heave, st.roll, st.pitch,
                       st.heave_rate, st.roll_rate, st.pitch_rate)
     if len(free):
@@ -368,12 +368,10 @@ def ice_step(model: IceModel, data: IceData, hulls: Sequence[HullMotion], dt: fl
                       st.heave, st.roll, st.pitch, st.heave_rate, st.roll_rate, st.pitch_rate,
                       dt, vertical_substeps(model, dt))
     force, moment = _hull_loads(model, data, con, hulls, jammed, dt)
+    timer.lap("ice: floating, loads")
     if resting_on:
-        resting.wake_struck(model, data, con, vel_before)
-        at = _hull_motions(hulls)[0]
-        resting.rest_far(model, data, moving, at, dt, new=rest)
-        if space.compounds.live:
-            space.rest_far(model.settings.rest_speed)
+        resting.after_step(model, data, con, vel_before, moving, _hull_motions(hulls)[0], dt, rest)
+        timer.lap("ice: resting")
     return IceStepReport(by_hull, by_contact, cracked, force, moment, broke)
 
 

@@ -27,6 +27,7 @@ from sim_core.ice.contact import ContactSpace
 from sim_core.ice.floes import BreakCause, FloeState, FloeStatus, FrozenFloes, TilePlacement
 from sim_core.ice.model import IceModel, placed_centroids
 from sim_core.ice.wide_floes import held_back
+from sim_core.stage_timer import StageTimer
 
 
 @dataclass
@@ -57,6 +58,7 @@ class IceData:
     hulls: list[HullRows] = field(default_factory=lambda: [HullRows()])  # by hull index, as contacts.hulls
     rest_water: tuple[float, float] = (0.0, 0.0)  # the drift (m/s, east, north) the resting floes came to rest in
     wash_turn: int = 0  # the share of the floes the propeller's wash drags this step (``wash.drag_in_wash``)
+    timer: StageTimer = field(default_factory=StageTimer)  # the last step's stages (the world's and the ice's)
 
 
 @dataclass
