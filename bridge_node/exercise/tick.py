@@ -98,9 +98,8 @@ class ExerciseTick:
     time (ms) by phase: the orders (commands and polling), the world step, and each kind of
     listener: where a slow tick's time went; and ``world_off_cpu``, the part of the world
     step's wall time that the loop's thread did not run (preempted, or waiting: for the
-    interpreter lock, for a page from disk). ``world_waits`` counts, in the last world step,
-    the thread's context switches (``waited``: it blocked; ``preempted``) and its major page
-    faults: a slow step that computed, or one that waited, and for what."""
+    interpreter lock, for a page from disk); ``world_waits`` says what it waited for: a slow
+    step that computed, or one that waited."""
 
     def __init__(self, model: WorldModel, data: WorldData, orders: OrderSource,
                  listeners: Iterable[StepListener | Callable[[TickOutcome], None]] = (),
@@ -109,7 +108,7 @@ class ExerciseTick:
         self.listeners = [as_listener(listener) for listener in listeners]
         self.refusals = OrderRefusals()
         self.phase_ms: dict[str, float] = {}
-        self.world_waits: dict[str, int] = {}
+        self._world_usage = (resource.getrusage(resource.RUSAGE_THREAD),) * 2  # the thread's, about the last step
         self._stopped = False
 
     def __call__(self, dt: float, now: float, send: bool = True) -> TickOutcome:
@@ -133,8 +132,7 @@ class ExerciseTick:
         t2, cpu2, use2 = time.perf_counter(), time.thread_time(), resource.getrusage(resource.RUSAGE_THREAD)
         phases = self.phase_ms = {"orders": (t1 - t0) * 1e3, "world": (t2 - t1) * 1e3,
                                   "world_off_cpu": max(0.0, t2 - t1 - (cpu2 - cpu1)) * 1e3}
-        self.world_waits = {"waited": use2.ru_nvcsw - use1.ru_nvcsw, "preempted": use2.ru_nivcsw - use1.ru_nivcsw,
-                            "major_faults": use2.ru_majflt - use1.ru_majflt}
+        self._world_usage = use1, use2
         for listener in self.listeners:
             listener.on_step(outcome)
             t3 = time.perf_counter()
@@ -142,6 +140,14 @@ class ExerciseTick:
             phases[name] = phases.get(name, 0.0) + (t3 - t2) * 1e3
             t2 = t3
         return outcome
+
+    @property
+    def world_waits(self) -> dict[str, int]:
+        """The loop thread's context switches in the last world step (``waited``: it blocked;
+        ``preempted``) and its major page faults."""
+        before, after = self._world_usage
+        return {"waited": after.ru_nvcsw - before.ru_nvcsw, "preempted": after.ru_nivcsw - before.ru_nivcsw,
+                "major_faults": after.ru_majflt - before.ru_majflt}
 
     def stop(self) -> None:
         """Stop every listener; safe to call twice."""

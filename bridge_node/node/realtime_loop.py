@@ -228,6 +228,11 @@ def _tick_record(hub: LinkHub, rate_hz: float) -> TickRecord:
     return ticks
 
 
+def _rounded(ms: dict[str, float]) -> dict[str, float]:
+    """Times (ms) to 0.01 ms, as the summary gives them."""
+    return {k: round(v, 2) for k, v in ms.items()}
+
+
 def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: float, duration: float | None,
                  listeners: Sequence[StepListener | Callable[[TickOutcome], None]] = (),
                  should_stop: Callable[[], bool] = lambda: False,
@@ -259,10 +264,8 @@ def run_realtime(model: WorldModel, data: WorldData, hub: LinkHub, rate_hz: floa
             stats.world_stages.add(data.ice.timer.ms)
             if tick_ms > 2e3 * period and len(stats.slow_ticks) < SLOW_TICKS_KEPT:
                 stats.slow_ticks.append({"sim_s": round(stats.sim_s, 3), "tick_ms": round(tick_ms, 2),
-                                         "gc_ms": round(gc_ms, 2),
-                                         **{k: round(v, 2) for k, v in tick.phase_ms.items()},
-                                         "world_waits": tick.world_waits,
-                                         "world_stages": {k: round(v, 2) for k, v in data.ice.timer.ms.items()}})
+                                         "gc_ms": round(gc_ms, 2), **_rounded(tick.phase_ms),
+                                         "world_waits": tick.world_waits, "world_stages": _rounded(data.ice.timer.ms)})
             pacer.advance()
             if time.monotonic() - last_trim >= TRIM_EVERY_S and pacer.slack() >= TRIM_SLACK * period:
                 last_trim = time.monotonic()

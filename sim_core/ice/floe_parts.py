@@ -110,6 +110,6 @@ class FloeParts:
 
 def warm_up() -> None:
     """Load the compiled kernel of this module (numba compiles or loads on first call)."""
-    cells = np.zeros(1, FloeState().gcell.dtype)  # as the rows hold them: another type would compile again
+    cells = np.zeros(1, FloeState.gcell.dtype)  # as the rows hold them: another type would compile again
     body_parts(cells, np.zeros(2, np.int64), np.zeros(0, np.int64))
 
