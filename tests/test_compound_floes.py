@@ -52,12 +52,20 @@ def _push(medium, speed, seconds=SECONDS):
     home = data.state.home[rows]
     x = float(np.median(home[:, 0]))
     y = float(home[np.abs(home[:, 0] - x) < 5.0, 1].min()) - 6.0 - STEM
+    hull, went_under = _drive(ice, data, np.array([x, y]), speed, seconds)
+    return data, rows, hull, went_under
+
+
+def _drive(ice, data, hull, speed, seconds):
+    """Drive the hull from its reference point (m) north at speed (m/s) for seconds: where it
+    went, and which rows of the ice (n,) it held under."""
+    x, y = hull
     went_under = np.zeros(data.state.n, bool)
     for _ in range(round(seconds / DT)):
         ice_step(ice, data, (HullMotion(np.array([x, y]), 0.5 * math.pi, np.array([0.0, speed]), 0.0),), DT)
         y += speed * DT
         went_under |= data.state.submerged[:data.state.n]
-    return data, rows, np.array([x, y]), went_under
+    return np.array([x, y]), went_under
 
 
 @pytest.fixture(scope="module")
@@ -185,18 +193,36 @@ def test_contacts_on_a_floe_name_its_cells_where_they_are(medium, monkeypatch):
 
 
 def test_a_frozen_tile_keeps_the_floe_where_it_was_pushed(medium):
-    """A tile frozen with a floe moved keeps its cells where they were (as floes of their
-    own: the body goes with the tile's engine objects) and thaws them there."""
-    data, rows, _, _ = _push(medium, 0.3, 20.0)
-    _freeze_and_thaw(medium[0], data, _moved(data, rows)[0])
+    """A tile frozen with a floe moved keeps its cells where they were (as frozen floes: the
+    body goes with the tile's engine objects) and thaws them there, one body again, at
+    rest; the hull pushing on moves it as a whole again, every cell with it."""
+    ice = medium[0]
+    unfrozen, rows, hull, _ = _push(medium, 0.3, 20.0)
+    data, _, _, _ = _push(medium, 0.3, 20.0)
+    again = _freeze_and_thaw(ice, data, _moved(data, rows)[0])
+    st = data.state
+    before, before_unfrozen = st.xy[again].copy(), unfrozen.state.xy[rows].copy()
+    _drive(ice, data, hull, 0.3, 10.0)
+    _drive(ice, unfrozen, hull, 0.3, 10.0)
+    on = st.bonded[again]  # a cell or two the hull breaks off, as it does with no thaw
+    kept, before = again[on], before[on]
+    assert len(kept) > 0.98 * len(again) and len(np.unique(st.bond_slot[kept])) == 1
+    moved = np.hypot(*(st.xy[kept] - before).T)
+    as_if_unfrozen = np.hypot(*(unfrozen.state.xy[rows] - before_unfrozen).T).mean()
+    assert moved.min() > 0.5 * as_if_unfrozen > 0.1  # m: pushed on, every cell, about as far as with no thaw
+    spread = np.hypot(*(st.xy[kept] - st.xy[kept[0]]).T) - np.hypot(*(before - before[0]).T)
+    assert np.abs(spread).max() < 1e-6  # rigidly: each cell as far from the first as before
 
 
 def _freeze_and_thaw(ice, data, bonded, leaving=None):
     """Freeze tile 0, its objects all out of the space (then call ``leaving``, if given),
-    thaw it, and check that the rows that were bonded (n,) are floes of their own where
-    they lay."""
-    st = data.state
-    cells, where = bonded - data.tiles.row_start[0], st.xy[bonded].copy()
+    thaw it, and check that the rows that were bonded (n,) are bonded again where they lay,
+    on as many bodies as before, each holding the same cells, of its cells' mass, posed so
+    that its cells lie where their rows say, and moving as it did. Returns the rows."""
+    st, c = data.state, data.contacts.compounds
+    cells, where, yaw = bonded - data.tiles.row_start[0], st.xy[bonded].copy(), st.yaw[bonded].copy()
+    slots, bodies = np.unique(st.bond_slot[bonded], return_inverse=True)
+    velocity = c.velocity[slots].copy()
     freeze_tile(data, 0)
     while data.contacts.swaps_pending:
         data.contacts.step(DT)
@@ -206,8 +232,21 @@ def _freeze_and_thaw(ice, data, bonded, leaving=None):
     thaw_tile(ice, data, 0)
     data.contacts.switch_in_now()
     again = data.tiles.row_start[0] + cells
-    assert np.array_equal(st.xy[again], where)
-    assert np.all(st.status[again] == FloeStatus.FREE) and not st.bonded[again].any()
+    assert np.array_equal(st.xy[again], where) and np.array_equal(st.yaw[again], yaw)
+    assert np.all(st.status[again] == FloeStatus.FREE) and st.bonded[again].all()
+    slots, bodies_again = np.unique(st.bond_slot[again], return_inverse=True)
+    assert np.array_equal(bodies_again, bodies)
+    for k, v in zip(slots.tolist(), velocity):
+        mine = again[st.bond_slot[again] == k]
+        body = body_at(int(c.body[k]))
+        assert k in c.live and lib.cpBodyGetType(body) == lib.CP_BODY_TYPE_DYNAMIC
+        assert lib.cpBodyGetMass(body) == pytest.approx(ice.mass[st.gcell[mine]].sum(), rel=1e-9)
+        at_cog = lib.cpBodyGetVelocity(body)
+        assert np.allclose([at_cog.x, at_cog.y, lib.cpBodyGetAngularVelocity(body)], v, rtol=0.0, atol=1e-5)
+        at, angle = lib.cpBodyGetPosition(body), lib.cpBodyGetAngle(body)
+        turn = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+        assert np.allclose(st.bond_xy[mine] @ turn.T + [at.x, at.y], st.xy[mine], rtol=0.0, atol=1e-6)
+    return again
 
 
 def _rested(medium):

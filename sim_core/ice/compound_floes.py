@@ -33,10 +33,11 @@ into it, shoving it the harder the longer it crushes. Where the cells left on th
 longer hang together (a channel right across the floe), it parts: each part a body of its
 own (``floe_parts``).
 
+A tile frozen keeps its bonded cells as frozen floes, with the body each was on, and a
+thaw makes them those bodies again (``sim_core.ice.compound_thaw``).
+
 Not modelled: a floe a tile edge cuts is a body per tile; the bonded cells take no
-conduction cracking (``bending``), so a floe parts only where its cells broke; a tile
-frozen keeps its bonded cells as separate floes, so such a floe thaws as its cells, held
-together by contact only.
+conduction cracking (``bending``), so a floe parts only where its cells broke.
 
 The attributes of ``ContactSpace`` are used as they are there (``_tiles``, ``_cp``,
 ``_entering``, ``model``, ``tiles``, ``hulls``, ``extent``, ``compounds``, ``_in_space``,

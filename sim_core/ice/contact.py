@@ -50,6 +50,7 @@ from sim_core.ice.chipmunk_bodies import (
 )
 from sim_core.ice.compound_floes import CompoundFloes, CompoundSlots, bond_rows, scatter_bonded
 from sim_core.ice.compound_rest import CompoundRest
+from sim_core.ice.compound_thaw import CompoundThaw
 from sim_core.ice.contact_kernels import Contacts, contact_rows, hull_overlaps, scatter_free, seed_grid
 from sim_core.ice.contact_resting import FloeRest
 from sim_core.ice.contact_swaps import TileSwaps
@@ -67,7 +68,7 @@ _ARB_FIELDS = (pb.ArbiterFields.BODY_A_ID | pb.ArbiterFields.BODY_B_ID | pb.Arbi
                | pb.ArbiterFields.POINT_A_2)  # a contact's points on body a only: its mean point is all we use
 
 
-class ContactSpace(FloeRest, CompoundFloes, CompoundRest, FloeParts, FloeRims, TileSwaps):
+class ContactSpace(FloeRest, CompoundFloes, CompoundRest, CompoundThaw, FloeParts, FloeRims, TileSwaps):
     """Chipmunk space holding the hulls and the floes of breakable tiles."""
 
     def __init__(self, model: IceModel, tiles: TilePlacement, hull_outline: np.ndarray,

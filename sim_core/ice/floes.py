@@ -221,6 +221,13 @@ FROZEN_FLOE = np.dtype([("cell", np.uint32), ("cause", np.uint8), ("xy", np.floa
 FROZEN_CRACK = np.dtype([("placement", "<i4"), ("cell", "<u4"), ("label", "u1")])
 NO_FROZEN_CRACKS = np.zeros(0, dtype=FROZEN_CRACK)
 NO_FROZEN_CRACKS.flags.writeable = False  # shared by every tile frozen without cracks
+# a frozen floe that was a cell of a woken wide floe's body: its offset in the tile, which of
+# the tile's bodies it was on (0, 1, ... in the order of their slots), and its place in that
+# body's frame (``FloeState.bond_xy``, ``bond_yaw``), so that the floe thaws as one body
+FROZEN_BOND = np.dtype([("cell", np.uint32), ("body", np.uint32), ("bond_xy", np.float64, 2),
+                        ("bond_yaw", np.float64)])
+NO_FROZEN_BONDS = np.zeros(0, dtype=FROZEN_BOND)
+NO_FROZEN_BONDS.flags.writeable = False
 
 
 def frozen_crack_records(parts: Iterable[np.ndarray]) -> np.ndarray:
@@ -230,12 +237,14 @@ _KEPT = FROZEN_FLOE.names[2:]  # the columns a frozen floe keeps
 
 
 class FrozenFloes:
-    """The broken cells of frozen tiles, by placement (``FROZEN_FLOE`` records, by cell).
-    A frozen tile's intact cells need no record: they lie where the placement put them."""
+    """The broken cells of frozen tiles, by placement (``FROZEN_FLOE`` records, by cell),
+    and which of them were cells of a woken wide floe's body (``FROZEN_BOND``). A frozen
+    tile's intact cells need no record: they lie where the placement put them."""
 
     def __init__(self) -> None:
         self._tiles: dict[int, np.ndarray] = {}
         self._cracks: dict[int, np.ndarray] = {}  # placement -> its cracked intact cells (FROZEN_CRACK)
+        self._bonds: dict[int, np.ndarray] = {}  # placement -> its floes that were on woken floes' bodies
         self.count = 0  # frozen floes held
 
     def keep_cracks(self, placement: int, state: FloeState, rows: np.ndarray) -> None:
@@ -249,6 +258,23 @@ class FrozenFloes:
     def cracks(self, placement: int) -> np.ndarray:
         """A frozen tile's cracked intact cells (``FROZEN_CRACK`` records, maybe none)."""
         return self._cracks.get(placement, NO_FROZEN_CRACKS)
+
+    def keep_bonds(self, placement: int, state: FloeState, rows: np.ndarray) -> None:
+        """Keep the freezing tile's rows (all of them, from its first) that are bonded to a
+        woken wide floe's body (``compound_floes``) as its ``FROZEN_BOND`` records."""
+        bonded = rows[(state.status[rows] == FloeStatus.FREE) & state.bonded[rows]]
+        if not len(bonded):
+            return
+        bonds = np.zeros(len(bonded), dtype=FROZEN_BOND)
+        bonds["cell"] = bonded - rows[0]
+        bonds["body"] = np.unique(state.bond_slot[bonded], return_inverse=True)[1].ravel()
+        bonds["bond_xy"], bonds["bond_yaw"] = state.bond_xy[bonded], state.bond_yaw[bonded]
+        self._bonds[placement] = bonds
+
+    def bonds(self, placement: int) -> np.ndarray:
+        """A frozen tile's floes that were bonded to woken floes' bodies (``FROZEN_BOND``
+        records, maybe none)."""
+        return self._bonds.get(placement, NO_FROZEN_BONDS)
 
     def freeze(self, placement: int, state: FloeState, rows: np.ndarray, cells: np.ndarray) -> None:
         """Keep the given rows (cells: their offsets in the tile) as the placement's record."""
@@ -275,6 +301,7 @@ class FrozenFloes:
         """Drop the placement's record (its tile has thawed)."""
         self.count -= len(self._tiles.pop(placement))
         self._cracks.pop(placement, None)
+        self._bonds.pop(placement, None)
 
     def __getitem__(self, placement: int) -> np.ndarray:
         return self._tiles[placement]
@@ -288,4 +315,4 @@ class FrozenFloes:
 
     def nbytes(self) -> int:
         """Bytes of the records (floes and cracked cells)."""
-        return sum(f.nbytes for f in self._tiles.values()) + sum(c.nbytes for c in self._cracks.values())
+        return sum(a.nbytes for kept in (self._tiles, self._cracks, self._bonds) for a in kept.values())

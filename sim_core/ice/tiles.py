@@ -120,12 +120,14 @@ def prepare_thaw(model: IceModel, data: IceData, placement: int) -> PreparedTile
     tiles = data.tiles
     template = int(tiles.template[placement])
     n = model.templates[template].n_cells
-    floes = data.frozen[placement]
+    floes, bonded = data.frozen[placement], data.frozen.bonds(placement)["cell"]
     intact = np.ones(n, dtype=bool)
     intact[floes["cell"]] = False
+    intact[bonded] = True  # built as its floe's cells, on the floe's body (``thaw_tile``)
     hold = held_back(model.wide, int(model.template_start[template]), intact)
     return PreparedTile(template, tuple(tiles.corner[placement].tolist()), int(tiles.quarter_turns[placement]),
-                        placement, TileBodies(n, hold), np.nonzero(intact)[0], np.arange(len(floes)))
+                        placement, TileBodies(n, hold), np.nonzero(intact)[0],
+                        np.flatnonzero(~np.isin(floes["cell"], bonded)))
 
 
 def _lay(model: IceModel, st: FloeState, rows: slice, template: int, corner: tuple[float, float] | np.ndarray,
@@ -222,6 +224,7 @@ def freeze_tile(data: IceData, placement: int) -> None:
     free = rows[st.status[rows] == FloeStatus.FREE]
     data.frozen.freeze(placement, st, free, free - rows[0])
     data.frozen.keep_cracks(placement, st, rows)
+    data.frozen.keep_bonds(placement, st, rows)
     data.contacts.drop_tile(placement)
     st.set_status(free, FloeStatus.FROZEN)
     st.submerged[rows] = st.resting[rows] = False  # a frozen floe thaws afloat, in the dynamic set
@@ -241,18 +244,22 @@ def reclaim_rows(data: IceData) -> None:
 
 def thaw_tile(model: IceModel, data: IceData, placement: int, prepared: PreparedTile | None = None) -> None:
     """Simulate a frozen tile again, in rows of its own: intact cells rejoin as a tile body,
-    frozen floes come back as free floes with the poses and velocities they froze with.
-    With a tile prepared for this thaw, only switch it in."""
+    frozen floes come back as free floes with the poses and velocities they froze with, and
+    those that were cells of a woken wide floe's body as that body again, at rest where it
+    froze (``CompoundFloes.rebond``). With a tile prepared for this thaw, only switch it in."""
     prepared = prepared or prepare_thaw(model, data, placement)
     _finish(data, prepared)
     tiles, st = data.tiles, data.state
     rows = st.add_rows(model.templates[prepared.template].n_cells, FloeStatus.INTACT)
     _lay(model, st, rows, prepared.template, prepared.corner, prepared.quarter_turns, placement)
     floes = data.frozen.restore(placement, st, rows.start)
-    data.contacts.name_floes(prepared.bodies, floes - rows.start, floes)
+    bonds = data.frozen.bonds(placement)
+    own = floes[~np.isin(floes - rows.start, bonds["cell"])]  # a body of their own each
+    data.contacts.name_floes(prepared.bodies, own - rows.start, own)
     tiles.row_start[placement], tiles.row_count[placement] = rows.start, rows.stop - rows.start
     data.contacts.insert_tile(prepared.bodies, placement)
     st.set_status(floes, FloeStatus.FREE)
+    data.contacts.rebond(st, placement, bonds)
     data.frozen.forget(placement)
 
 
