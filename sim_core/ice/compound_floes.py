@@ -49,7 +49,7 @@ import math
 
 import numba
 import numpy as np
-from pymunk._chipmunk import ffi, lib
+from pymunk._chipmunk import lib
 
 from sim_core.ice.breaking import pushed_hard
 from sim_core.ice.chipmunk_bodies import BOND0, HULL_ROW0, INTACT_IN, LOWEST_ROW, NOT_A_FLOE, TileBodies, body_at

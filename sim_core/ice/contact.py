@@ -40,7 +40,6 @@ from sim_core.ice.chipmunk_bodies import (
     FLOE_FILTER,
     NO_CONTACT,
     ROW0,
-    TILE0,
     TileBodies,
     body_at,
     free_all,
@@ -58,7 +57,7 @@ from sim_core.ice.floe_parts import FloeParts
 from sim_core.ice.floe_rims import FloeRims
 from sim_core.ice.floes import FloeState, TilePlacement
 from sim_core.ice.hull_bodies import HullBody, move_hull, new_hull
-from sim_core.ice.model import IceModel, placed_centroids, placed_outlines
+from sim_core.ice.model import IceModel, placed_outlines
 
 _ROW_BY_ROW = 16  # fewer rows than this have their engine objects looked up one by one
 _BODY_FIELDS = (pb.BodyFields.BODY_ID | pb.BodyFields.POSITION | pb.BodyFields.ANGLE
@@ -128,15 +127,13 @@ class ContactSpace(FloeRest, CompoundFloes, CompoundRest, CompoundThaw, FloePart
         return len(self.hulls) - 1
 
     # -- building -------------------------------------------------------------------------
-    def build_cells(self, bodies: TileBodies, template: int, corner: tuple[float, float] | np.ndarray,
-                    quarter_turns: int, cells: np.ndarray) -> None:
+    def build_cells(self, bodies: TileBodies, template: int, home: np.ndarray, yaw: float, cells: np.ndarray) -> None:
         """Make, outside the space, the intact-cell shapes of cells (offsets in the template)
-        of a template laid at corner (m) turned by quarter turns, on the tile's static
-        body (a wide floe's, on the floe's own); ``insert_tile`` switches them in."""
+        of a tile of the template that lays them at home (n, 2) m and yaw (rad,
+        ``placed_centroids``), on the tile's static body (a wide floe's, on the floe's own);
+        ``insert_tile`` switches them in."""
         m = self.model
         g = int(m.template_start[template]) + cells
-        home, yaw = placed_centroids(m, template, corner, quarter_turns)
-        home = home[cells]
         rings = self._rings(g, home, np.full(len(cells), yaw))
         friction = m.settings.ice_friction
         for j, gi, floe, centre, ring, sphere in zip(cells.tolist(), g.tolist(), m.wide.of_cell[g].tolist(),

@@ -64,12 +64,13 @@ class IceData:
 @dataclass
 class PreparedTile:
     """Engine objects of a tile built ahead of its switch: the template, corner (m) and
-    quarter turns it is laid with, the placement it thaws (-1 for a new one), and the cell
+    quarter turns it is laid with, the placement it thaws (-1 for a new one), the cell
     offsets (intact), frozen floes (their places in the tile's ``FrozenFloes`` record) and
     loose cells (a new floe-field tile's floes, at rest where the template lays them) still
-    to build. A preparation takes no rows: rows are taken at the switch, in step order, so
-    that the rows (and so the physics, which orders some sums by row) do not depend on how
-    much wall time preparing had."""
+    to build, and where the tile lays its cells (``placed_centroids``: home (n, 2) m,
+    yaw rad; worked out once, not for every chunk). A preparation takes no rows: rows are
+    taken at the switch, in step order, so that the rows (and so the physics, which orders
+    some sums by row) do not depend on how much wall time preparing had."""
 
     template: int
     corner: tuple[float, float]
@@ -78,6 +79,8 @@ class PreparedTile:
     bodies: TileBodies
     cells: np.ndarray
     floes: np.ndarray
+    home: np.ndarray
+    yaw: float
     loose: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @property
@@ -109,9 +112,10 @@ def prepare_place(model: IceModel, template: int, corner: tuple[float, float], q
     its cells intact, but those that start free (a floe field's floes) loose."""
     n, g0 = model.templates[template].n_cells, int(model.template_start[template])
     free = model.starts_free[g0:g0 + n]
-    return PreparedTile(template, (float(corner[0]), float(corner[1])), quarter_turns % 4, -1,
-                        TileBodies(n, held_back(model.wide, g0, ~free)), np.flatnonzero(~free),
-                        np.zeros(0, dtype=np.int64), np.flatnonzero(free))
+    corner = (float(corner[0]), float(corner[1]))
+    return PreparedTile(template, corner, quarter_turns % 4, -1, TileBodies(n, held_back(model.wide, g0, ~free)),
+                        np.flatnonzero(~free), np.zeros(0, dtype=np.int64),
+                        *placed_centroids(model, template, corner, quarter_turns), np.flatnonzero(free))
 
 
 def prepare_thaw(model: IceModel, data: IceData, placement: int) -> PreparedTile:
@@ -125,21 +129,20 @@ def prepare_thaw(model: IceModel, data: IceData, placement: int) -> PreparedTile
     intact[floes["cell"]] = False
     intact[bonded] = True  # built as its floe's cells, on the floe's body (``thaw_tile``)
     hold = held_back(model.wide, int(model.template_start[template]), intact)
-    return PreparedTile(template, tuple(tiles.corner[placement].tolist()), int(tiles.quarter_turns[placement]),
-                        placement, TileBodies(n, hold), np.nonzero(intact)[0],
-                        np.flatnonzero(~np.isin(floes["cell"], bonded)))
+    corner, turns = tuple(tiles.corner[placement].tolist()), int(tiles.quarter_turns[placement])
+    return PreparedTile(template, corner, turns, placement, TileBodies(n, hold), np.nonzero(intact)[0],
+                        np.flatnonzero(~np.isin(floes["cell"], bonded)),
+                        *placed_centroids(model, template, corner, turns))
 
 
-def _lay(model: IceModel, st: FloeState, rows: slice, template: int, corner: tuple[float, float] | np.ndarray,
-         quarter_turns: int, placement: int) -> None:
+def _lay(model: IceModel, st: FloeState, rows: slice, prepared: PreparedTile, placement: int) -> None:
     """Fill a tile's rows as level ice: its cells at their placed centroids and floating height."""
-    g0, n = int(model.template_start[template]), rows.stop - rows.start
-    home, yaw = placed_centroids(model, template, corner, quarter_turns)
+    g0, n = int(model.template_start[prepared.template]), rows.stop - rows.start
     st.gcell[rows] = np.arange(g0, g0 + n)
     st.tile[rows] = placement
-    st.home[rows] = home
-    st.xy[rows] = home
-    st.yaw[rows] = yaw
+    st.home[rows] = prepared.home
+    st.xy[rows] = prepared.home
+    st.yaw[rows] = prepared.yaw
     st.heave[rows] = model.z_equilibrium[g0:g0 + n]
 
 
@@ -147,7 +150,7 @@ def advance(data: IceData, prepared: PreparedTile, max_items: int) -> int:
     """Build up to max_items more cells or floes of a prepared tile; returns how many."""
     cells, prepared.cells = prepared.cells[:max_items], prepared.cells[max_items:]
     if len(cells):
-        data.contacts.build_cells(prepared.bodies, prepared.template, prepared.corner, prepared.quarter_turns, cells)
+        data.contacts.build_cells(prepared.bodies, prepared.template, prepared.home[cells], prepared.yaw, cells)
     floes, prepared.floes = prepared.floes[:max_items - len(cells)], prepared.floes[max_items - len(cells):]
     if len(floes):
         f = data.frozen[prepared.placement][floes]
@@ -157,11 +160,9 @@ def advance(data: IceData, prepared: PreparedTile, max_items: int) -> int:
     budget = max_items - len(cells) - len(floes)
     loose, prepared.loose = prepared.loose[:budget], prepared.loose[budget:]
     if len(loose):
-        model = data.contacts.model
-        home, yaw = placed_centroids(model, prepared.template, prepared.corner, prepared.quarter_turns)
-        data.contacts.build_floes(prepared.bodies, loose, int(model.template_start[prepared.template]) + loose,
-                                  home[loose], np.full(len(loose), yaw), np.zeros((len(loose), 2)),
-                                  np.zeros(len(loose)))
+        g0 = int(data.contacts.model.template_start[prepared.template])
+        data.contacts.build_floes(prepared.bodies, loose, g0 + loose, prepared.home[loose],
+                                  np.full(len(loose), prepared.yaw), np.zeros((len(loose), 2)), np.zeros(len(loose)))
     return len(cells) + len(floes) + len(loose)
 
 
@@ -186,7 +187,7 @@ def place_tile(model: IceModel, data: IceData, template: int, corner: tuple[floa
     _finish(data, prepared)
     rows = data.state.add_rows(model.templates[template].n_cells, FloeStatus.INTACT)
     index = data.tiles.add(template, prepared.corner, prepared.quarter_turns, rows)
-    _lay(model, data.state, rows, template, prepared.corner, prepared.quarter_turns, index)
+    _lay(model, data.state, rows, prepared, index)
     if model.floe_field[template]:  # its floes of their own from the start, broken by nothing
         g0 = int(model.template_start[template])
         loose = rows.start + np.flatnonzero(model.starts_free[g0:g0 + rows.stop - rows.start])
@@ -251,7 +252,7 @@ def thaw_tile(model: IceModel, data: IceData, placement: int, prepared: Prepared
     _finish(data, prepared)
     tiles, st = data.tiles, data.state
     rows = st.add_rows(model.templates[prepared.template].n_cells, FloeStatus.INTACT)
-    _lay(model, st, rows, prepared.template, prepared.corner, prepared.quarter_turns, placement)
+    _lay(model, st, rows, prepared, placement)
     floes = data.frozen.restore(placement, st, rows.start)
     bonds = data.frozen.bonds(placement)
     own = floes[~np.isin(floes - rows.start, bonds["cell"])]  # a body of their own each
