@@ -52,8 +52,8 @@ class CompoundThaw:
         """Make the bonded rows (one body's when it froze) of a wide floe one body again:
         the floe's own body, or, where another part of the floe took that, a body of the
         part's own (as ``floe_parts`` makes one) in a new slot. The body is posed so that
-        its cells lie where the rows say, their shapes (built on the floe's body where the
-        tile lays them) go into the space on it now, and it moves as the rows did."""
+        its cells lie where the rows say, it moves as the rows did, and their shapes (built
+        on the floe's body where the tile lays them) go into the space on it now."""
         c = self.compounds
         slot, ptr = bodies.wide[floe]
         j = rows - int(self.tiles.row_start[placement])
@@ -71,9 +71,6 @@ class CompoundThaw:
         body = body_at(ptr)
         lib.cpBodySetAngle(body, float(c.pose[slot, 2]))
         lib.cpBodySetPosition(body, tuple(c.pose[slot, :2].tolist()))
-        for p in shapes[shapes != 0].tolist():
-            lib.cpSpaceAddShape(self._cp, shape_at(p))
-        bodies.bond_shape[j], bodies.intact[j] = shapes, 0
         state.bond_slot[rows] = slot
         c.live[slot] = ptr
         c.resting.add(slot)  # static while ``_reweigh`` gives it its cells' mass properties
@@ -83,6 +80,13 @@ class CompoundThaw:
         c.velocity[slot] = _velocity(state, rows[0], c.pose[slot], c.cog[slot])
         lib.cpBodySetVelocity(body, tuple(c.velocity[slot, :2].tolist()))
         lib.cpBodySetAngularVelocity(body, float(c.velocity[slot, 2]))
+        # The shapes go in onto the moving body, into the engine's dynamic index. Put on the
+        # static body before it turned dynamic (moved from one index to the other), reruns
+        # of a turn back into thawed floes differed in the last bits from the fourth step
+        # after the thaw (tests/test_thawed_floe_reruns.py); so they are the same.
+        for p in shapes[shapes != 0].tolist():
+            lib.cpSpaceAddShape(self._cp, shape_at(p))
+        bodies.bond_shape[j], bodies.intact[j] = shapes, 0
 
 
 def _pose(state: FloeState, row: int) -> np.ndarray:
