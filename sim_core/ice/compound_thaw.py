@@ -35,9 +35,9 @@ class CompoundThaw:
 
     def rebond(self, state: FloeState, placement: int, bonds: np.ndarray) -> None:
         """Bond a thawed tile's rows (its ``FROZEN_BOND`` records, bonds) to their floes'
-        bodies again, each body at rest where it froze. Call after the tile's switch-in
-        (``insert_tile``: the floes' static bodies are in the space, the cells' shapes not
-        yet) and after the rows got back their frozen poses."""
+        bodies again, each body where it froze, moving as it froze. Call after the tile's
+        switch-in (``insert_tile``: the floes' static bodies are in the space, the cells'
+        shapes not yet) and after the rows got back their frozen poses."""
         if not len(bonds):
             return
         start = int(self.tiles.row_start[placement])

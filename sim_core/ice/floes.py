@@ -314,5 +314,5 @@ class FrozenFloes:
         return np.concatenate([np.zeros(0, dtype=FROZEN_FLOE), *self._tiles.values()])
 
     def nbytes(self) -> int:
-        """Bytes of the records (floes and cracked cells)."""
+        """Bytes of the records (floes, cracked cells and the bonds of woken floes' cells)."""
         return sum(a.nbytes for kept in (self._tiles, self._cracks, self._bonds) for a in kept.values())
