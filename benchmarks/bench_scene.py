@@ -6,7 +6,8 @@
    10x field side. Baseline in the same process: the brute-force scan of every tile centre.
 2. Swap cost in the ice world: placing a breakable tile, freezing it, thawing it.
 3. The default exercise's world step (live floes, swaps) on a straight transit, stepped as the
-   node's loop steps (kernels warmed up, the collector's walk frozen): median and p99, and a plot of live fragments and step time against distance (paper Fig. 18, 19).
+   node's loop steps (kernels warmed up, the collector's walk frozen): median and p99, and a
+   plot of live fragments and step time against distance (paper Fig. 18, 19).
 Run: .venv/bin/python benchmarks/bench_scene.py [--distance M]
 """
 from __future__ import annotations

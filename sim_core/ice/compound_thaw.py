@@ -17,16 +17,16 @@ others by contact only. In the issue's field (7/10 small and medium floes), the 
 bonded cells came back bonded; with this, all of them did, on their 17 bodies.
 
 The attributes of ``ContactSpace`` are used as they are there (``_tiles``, ``_cp``,
-``tiles``, ``model``, ``compounds``, ``_reweigh``).
+``tiles``, ``model``, ``compounds``, ``_reweigh``, ``_set_dynamic``, ``_new_part``).
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
-from pymunk._chipmunk import ffi, lib
+from pymunk._chipmunk import lib
 
-from sim_core.ice.chipmunk_bodies import BOND0, TileBodies, body_at, ptr_of, shape_at
+from sim_core.ice.chipmunk_bodies import TileBodies, body_at, shape_at
 from sim_core.ice.floes import FloeState
 
 
@@ -43,10 +43,10 @@ class CompoundThaw:
         start = int(self.tiles.row_start[placement])
         rows = start + bonds["cell"].astype(np.int64)
         state.bond_xy[rows], state.bond_yaw[rows], state.bonded[rows] = bonds["bond_xy"], bonds["bond_yaw"], True
-        floes = self.model.wide.of_cell[state.gcell[rows]]
+        floes, bodies = self.model.wide.of_cell[state.gcell[rows]], self._tiles[placement]
         for k in np.unique(bonds["body"]).tolist():
             mine = bonds["body"] == k
-            self._thaw_body(state, self._tiles[placement], placement, int(floes[mine][0]), rows[mine])
+            self._thaw_body(state, bodies, placement, int(floes[mine][0]), rows[mine])
 
     def _thaw_body(self, state: FloeState, bodies: TileBodies, placement: int, floe: int, rows: np.ndarray) -> None:
         """Make the bonded rows (one body's when it froze) of a wide floe one body again:
@@ -60,11 +60,8 @@ class CompoundThaw:
         shapes, held = bodies.intact[j], bodies.held[j]
         if slot in c.live:  # an earlier part has the floe's body
             body = lib.cpBodyNewStatic()
-            ptr = ptr_of(body)
-            slot = c.add(placement, floe, ptr)
-            lib.cpBodySetUserData(body, ffi.cast("void *", BOND0 + slot))
+            slot, ptr = self._new_part(bodies, placement, floe, body)
             lib.cpSpaceAddBody(self._cp, body)
-            bodies.parts[slot] = ptr
             for p in [*shapes[shapes != 0].tolist(), *held[held != 0].tolist()]:
                 lib.cpShapeSetBody(shape_at(p), body)
         c.pose[slot] = _pose(state, rows[0])

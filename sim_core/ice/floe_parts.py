@@ -88,9 +88,7 @@ class FloeParts:
         the parent rests."""
         c = self.compounds
         body = lib.cpBodyNew(1.0, 1.0)  # its mass properties: ``_reweigh`` below
-        ptr = ptr_of(body)
-        slot = c.add(int(c.placement[parent]), int(c.floe[parent]), ptr)
-        lib.cpBodySetUserData(body, ffi.cast("void *", BOND0 + slot))
+        slot, ptr = self._new_part(bodies, int(c.placement[parent]), int(c.floe[parent]), body)
         c.pose[slot], c.velocity[slot], c.cog[slot] = c.pose[parent], c.velocity[parent], c.cog[parent]
         old = body_at(int(c.body[parent]))
         lib.cpBodySetCenterOfGravity(body, tuple(c.cog[parent].tolist()))
@@ -99,13 +97,24 @@ class FloeParts:
         lib.cpBodySetVelocity(body, lib.cpBodyGetVelocity(old))
         lib.cpBodySetAngularVelocity(body, lib.cpBodyGetAngularVelocity(old))
         lib.cpSpaceAddBody(self._cp, body)
-        c.live[slot], bodies.parts[slot] = ptr, ptr
+        c.live[slot] = ptr
         if parent in c.resting:
             lib.cpBodySetType(body, lib.CP_BODY_TYPE_STATIC)
             c.resting.add(slot)
         bodies.move_shapes(self._cp, rows - int(self.tiles.row_start[c.placement[slot]]), body)
         state.bond_slot[rows] = slot
         self._reweigh(state, slot, rows)  # from the parent's centre of mass to its own, velocity field kept
+
+
+    def _new_part(self, bodies: TileBodies, placement: int, floe: int, body) -> tuple[int, int]:
+        """Give a new body (C object) of a part of a wide floe of the placement a slot, and
+        name it by the slot (its user data); the tile's objects hold it. Returns the slot and
+        the body's pointer."""
+        ptr = ptr_of(body)
+        slot = self.compounds.add(placement, floe, ptr)
+        lib.cpBodySetUserData(body, ffi.cast("void *", BOND0 + slot))
+        bodies.parts[slot] = ptr
+        return slot, ptr
 
 
 def warm_up() -> None:
