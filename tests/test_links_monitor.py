@@ -31,9 +31,12 @@ def start_monitor(cfg: str, record, *extra) -> subprocess.Popen:
 
 
 def wait_ready(record, proc, timeout: float = 30.0) -> None:
-    """The node has opened its links once its session record exists."""
+    """The node has opened its console port once its record holds a sentence it sent. The
+    record's file exists before the port is open, and opening a serial port drops what
+    waits on it (pyserial flushes its input), so a sentence written earlier may be lost."""
     t0 = time.monotonic()
-    while not (record / "nmea.log").exists():
+    log = record / "nmea.log"
+    while not (log.exists() and " tx " in log.read_text()):
         assert proc.poll() is None, proc.stderr.read()
         assert time.monotonic() - t0 < timeout
         time.sleep(0.05)
