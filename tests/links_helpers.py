@@ -83,6 +83,16 @@ def bare_pty():
         os.close(console)
 
 
+def open_hub(hub: LinkHub) -> LinkHub:
+    """Open the hub and wait until every link's device is open or has failed. The hub waits
+    5 s at most; a loaded machine may take longer, and what a console writes before its
+    port opens is lost (pyserial flushes a port's input as it opens it)."""
+    hub.open()
+    for link in hub.links:
+        link.await_open(None)
+    return hub
+
+
 def node_config(links: list[dict], **arbitration) -> NodeConfig:
     return NodeConfig.model_validate({"ship": {"name": "polar_cargo"}, "ice_field": {"thickness": 0.5},
                                       "links": links, "arbitration": arbitration})

@@ -6,7 +6,7 @@ import time
 
 import can
 import pytest
-from links_helpers import CONSOLE, STATE, console_frame, node_config, pty_pair, rudder_order_pgn, tick, wait_for
+from links_helpers import CONSOLE, STATE, console_frame, node_config, open_hub, pty_pair, rudder_order_pgn, tick, wait_for
 from nmea2000.decoder import NMEA2000Decoder
 
 from bridge_node.links.hub import LinkHub
@@ -168,7 +168,7 @@ def test_a_silent_serial_line_never_holds_up_the_poll(tmp_path):
         cfg = node_config([{"type": "can", "name": "line", "interface": "serial", "channel": node_end,
                             "allowed_sources": [0x42]}], rudder=["line"], engine=["line"])
         hub = LinkHub(cfg.links, cfg.arbitration)
-        hub.open()
+        open_hub(hub)
         console = can.Bus(interface="serial", channel=console_end)
         try:
             assert hub.links[0].health().connected

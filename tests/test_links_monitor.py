@@ -1,6 +1,7 @@
 """``icebridge links monitor`` as a user runs it, and the session record surviving a kill."""
 import json
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -30,16 +31,23 @@ def start_monitor(cfg: str, record, *extra) -> subprocess.Popen:
                             stderr=subprocess.PIPE, text=True)
 
 
-def wait_ready(record, proc, timeout: float = 30.0) -> None:
-    """The node has opened its console port once its record holds a sentence it sent. The
-    record's file exists before the port is open, and opening a serial port drops what
-    waits on it (pyserial flushes its input), so a sentence written earlier may be lost."""
-    t0 = time.monotonic()
-    log = record / "nmea.log"
-    while not (log.exists() and " tx " in log.read_text()):
+def wait_ready(proc, read, timeout: float = 30.0) -> None:
+    """Wait until the node's console port is open: until the console hears a sentence from
+    it (``read()``: the bytes waiting at the console, at once). Only an open port writes,
+    and pyserial flushes a port's input as it opens it, before any write, so what the
+    console writes from then on reaches the node. (The session record's files exist
+    before the port opens, and it records what the node sends even then.)"""
+    t0, heard = time.monotonic(), b""
+    while b"$" not in heard:
         assert proc.poll() is None, proc.stderr.read()
         assert time.monotonic() - t0 < timeout
         time.sleep(0.05)
+        heard += read()
+
+
+def pty_read(fd: int) -> bytes:
+    """What waits at a pty's end (b"" if nothing)."""
+    return os.read(fd, 4096) if select.select([fd], [], [], 0)[0] else b""
 
 
 def monitor_summary(tmp_path, duration: str, lines: list[bytes], times: int, extra: str = "") -> dict:
@@ -52,7 +60,7 @@ def monitor_summary(tmp_path, duration: str, lines: list[bytes], times: int, ext
         cfg.write_text(open(write_config(tmp_path, node_end)).read() + extra)
         record = tmp_path / "rec"
         proc = start_monitor(str(cfg), record, "--duration", duration, "--json")
-        wait_ready(record, proc)
+        wait_ready(proc, lambda: pty_read(console))
         for _ in range(times):
             for line in lines:
                 os.write(console, line)
@@ -96,8 +104,8 @@ def test_session_record_readable_after_kill(tmp_path):
     with pty_pair(tmp_path) as (node_end, console_end):
         record = tmp_path / "rec"
         proc = start_monitor(write_config(tmp_path, node_end), record)
-        wait_ready(record, proc)
         port = serial.Serial(console_end, 38400, timeout=0)
+        wait_ready(proc, port.read_all)
         t_end = time.time() + 3.0
         sent = 0
         while time.time() < t_end:

@@ -11,7 +11,7 @@ import pytest
 import serial
 from conftest import free_port
 from gpsd_client import gpsd, gpsd_version
-from links_helpers import STATE, node_config, paced_write, pty_pair, tick, wait_for
+from links_helpers import STATE, node_config, open_hub, paced_write, pty_pair, tick, wait_for
 from modbus_console import ModbusConsole
 from pydantic import ValidationError
 
@@ -99,7 +99,7 @@ def test_twin_engine_console_over_a_pty_drives_the_configured_engine_only(tmp_pa
                                                      "XDR")}}],
                           engine=["nmea"])
         hub = LinkHub(cfg.links, cfg.arbitration)
-        hub.open()
+        open_hub(hub)
         console = serial.Serial(console_end, 38400, timeout=0)
         telegraphs, levers = [], []
         try:
@@ -125,7 +125,7 @@ def test_non_order_traffic_on_the_line_is_ignored_not_malformed(tmp_path):
     with pty_pair(tmp_path) as (node_end, console_end):
         cfg = node_config([{"type": "nmea0183", "name": "nmea", "port": node_end}], rudder=["nmea"])
         hub = LinkHub(cfg.links, cfg.arbitration)
-        hub.open()
+        open_hub(hub)
         console = serial.Serial(console_end, 38400, timeout=0)
         got = []
         try:

@@ -8,7 +8,7 @@ import time
 import pynmea2
 import pytest
 import serial
-from links_helpers import STATE, bare_pty, node_config, order_collector, paced_write, pty_pair, tick, wait_for
+from links_helpers import STATE, bare_pty, node_config, open_hub, order_collector, paced_write, pty_pair, tick, wait_for
 
 from bridge_node.links.hub import LinkHub
 from bridge_node.links.nmea0183.sentences import ETL, PRC, ROR
@@ -32,7 +32,7 @@ def test_console_orders_and_instrument_outputs_over_a_pty(tmp_path, baud):
                             "HDT": 5, "ROT": 1, "RSA": 1, "RPM": 1, "VBW": 0, "XDR": 0}}],
                           rudder=["nmea"], engine=["nmea"])
         hub = LinkHub(cfg.links, cfg.arbitration)
-        hub.open()
+        open_hub(hub)
         console = serial.Serial(console_end, baud, timeout=0)
         try:
             paced_write(console, [str(ROR("RC", "ROR", ("-22.0", "A", "", "V", "B"))),
@@ -83,7 +83,7 @@ def test_bad_sentences_on_the_line_are_counted_not_fatal(tmp_path):
         cfg = node_config([{"type": "nmea0183", "name": "nmea", "port": node_end,
                             "allowed_talkers": ["RC"]}], rudder=["nmea"])
         hub = LinkHub(cfg.links, cfg.arbitration)
-        hub.open()
+        open_hub(hub)
         console = serial.Serial(console_end, 38400, timeout=0)
         try:
             good = str(ROR("RC", "ROR", ("5.0", "A", "", "V", "B")))
@@ -112,7 +112,7 @@ def test_a_far_end_that_never_reads_does_not_block_the_loop():
         cfg = node_config([{"type": "nmea0183", "name": "nmea", "port": node_end, "baudrate": 38400}],
                           rudder=["nmea"])
         hub = LinkHub(cfg.links, cfg.arbitration)
-        hub.open()
+        open_hub(hub)
         try:
             now = time.monotonic()
             for _ in range(2000):  # 2000 s of output on a simulated clock: about 1 MB, never read

@@ -96,8 +96,10 @@ def test_late_joiner_and_lost_messages_end_with_the_published_state(exercise):
             assert late.view.seq == 200 and late.view.take_changes().broken.size > 100
             for _ in range(150):
                 publisher.publish(step(model, data, 0.1))
-                late.poll(2)
-                lossy.poll(2, drop=lambda seq: seq % 17 == 0 or 280 <= seq < 290)  # every 17th and a burst
+                # each waits for the step just published, so a resync's snapshot does not jump
+                # past the next drop (on a loaded machine the sender may run ahead of a short wait)
+                late.poll(50)
+                lossy.poll(50, drop=lambda seq: seq % 17 == 0 or 280 <= seq < 290)  # every 17th and a burst
             deadline = time.monotonic() + 10.0
             while min(late.view.seq, lossy.view.seq) < data.seq and time.monotonic() < deadline:
                 late.poll(50)
