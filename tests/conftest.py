@@ -1,10 +1,12 @@
 import os
 import sys
+import time
 from pathlib import Path
 
 import pytest
 from hypothesis import settings as hypothesis_settings
 
+from bridge_node.common.errors import UserError
 from bridge_node.node.config import NodeConfig, load_config
 from bridge_node.common.network import free_port
 from sim_core.fracture.tile_template import FractureSettings, build_tile
@@ -36,6 +38,23 @@ def prism_tile():
 def voronoi3d_tile():
     # a 40 m tile keeps the per-cell Qhull loop short; counts scale by area (~137..242 cells)
     return build_tile(1.0, seed=7, settings=FractureSettings(cells="voronoi3d", tile_side=40.0))
+
+
+def until_answered(what, timeout: float = 60.0, poll: float = 0.2, node=None):
+    """Call ``what()`` every ``poll`` s until it returns something true, and return that; a
+    UserError (a node not answering yet) counts as nothing. AssertionError after ``timeout``
+    s, or at once when ``node`` (its process) has exited."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        try:
+            got = what()
+        except UserError:
+            got = None
+        if got:
+            return got
+        assert node is None or node.poll() is None, node.communicate()[1]
+        time.sleep(poll)
+    raise AssertionError("timed out")
 
 
 def run_cli(*args, cwd=None):

@@ -15,11 +15,10 @@ import pynmea2
 import pytest
 from pyais import decode
 import serial
-from conftest import REPO, exercise_toml, run_cli
+from conftest import REPO, exercise_toml, run_cli, until_answered
 from links_helpers import pty_pair
 
 from bridge_node.control.client import request
-from bridge_node.common.errors import UserError
 from bridge_node.common.network import free_port
 
 
@@ -46,19 +45,6 @@ class _Instruments:
                         self.last[msg.sentence_type] = msg
             except (socket.timeout, pynmea2.ParseError):
                 pass
-
-
-def _wait_for(what, timeout: float = 60.0, poll: float = 0.2):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        try:
-            got = what()
-        except UserError:
-            got = None
-        if got:
-            return got
-        time.sleep(poll)
-    raise AssertionError("timed out")
 
 
 def _order(helm: serial.Serial, instruments: _Instruments, deg: float, until=None, seconds: float = 60.0) -> None:
@@ -105,16 +91,16 @@ def test_freeze_reposition_and_steering_failure_from_the_command_line(tmp_path):
         helm = serial.Serial(console_end, 38400, timeout=0)
         try:
             status = lambda: request(endpoint, {"request": "status"}, None, 1.0)["status"]  # noqa: E731
-            _wait_for(status)
+            until_answered(status)
 
             # freeze: the clock stops and the outputs go on; resume: it runs again
             r = run_cli("ctl", "--config", str(config), "freeze")
             assert r.returncode == 0 and "freeze: queued" in r.stdout
-            t0 = _wait_for(lambda: status()["frozen"] and status()["time_s"])
+            t0 = until_answered(lambda: status()["frozen"] and status()["time_s"])
             instruments.read(1.0)
             assert status()["time_s"] == t0 and "RMC" in instruments.last  # held, still reporting
             assert run_cli("ctl", "--config", str(config), "resume").returncode == 0
-            _wait_for(lambda: status()["time_s"] > t0 + 0.5)
+            until_answered(lambda: status()["time_s"] > t0 + 0.5)
 
             _steering_failure(endpoint, helm, instruments)
 
@@ -122,7 +108,7 @@ def test_freeze_reposition_and_steering_failure_from_the_command_line(tmp_path):
             r = run_cli("ctl", "--config", str(config), "reposition", "--lat", "74.002", "--lon", "20.004",
                         "--heading", "90", "--speed", "0")
             assert r.returncode == 0, r.stderr
-            _wait_for(lambda: abs(status()["latitude_deg"] - 74.002) < 1e-4, timeout=30.0)
+            until_answered(lambda: abs(status()["latitude_deg"] - 74.002) < 1e-4, timeout=30.0)
             instruments.read(2.0)
             rmc = instruments.last["RMC"]
             assert rmc.latitude == pytest.approx(74.002, abs=2e-4) and rmc.longitude == pytest.approx(20.004, abs=5e-4)
@@ -131,7 +117,7 @@ def test_freeze_reposition_and_steering_failure_from_the_command_line(tmp_path):
             vessel = {"command": "add_vessel", "mmsi": 230000001, "name": "ODEN", "length_m": 108.0, "beam_m": 31.0,
                       "latitude_deg": 74.003, "longitude_deg": 20.004, "course_deg": 0.0, "speed_kn": 0.0}
             assert request(endpoint, {"command": vessel}, None)["ok"]
-            _wait_for(lambda: instruments.read(0.5) or any(decode(m).asdict()["mmsi"] == 230000001
+            until_answered(lambda: instruments.read(0.5) or any(decode(m).asdict()["mmsi"] == 230000001
                                                            for m in instruments.ais if m.startswith("!AIVDM,1,1")))
             report = next(decode(m).asdict() for m in instruments.ais if m.startswith("!AIVDM,1,1"))
             assert report["lat"] == pytest.approx(74.003, abs=1e-4) and report["lon"] == pytest.approx(20.004, abs=1e-4)
@@ -163,7 +149,7 @@ def test_run_starts_the_instructor_station_and_names_its_address(tmp_path):
                     return r.status == 200 and b"<canvas" in r.read()
             except OSError:
                 return False
-        _wait_for(page, timeout=120.0, poll=0.5)
+        until_answered(page, timeout=120.0, poll=0.5)
         station = [p for p in psutil.Process(node.pid).children() if "instructor" in p.cmdline()]
         niceness = [p.nice() - psutil.Process(node.pid).nice() for p in station]
     finally:

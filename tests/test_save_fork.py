@@ -5,12 +5,11 @@ starts where it forked; a record that does not reach the saved state is a clean 
 import json
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import REPO, exercise_config, exercise_toml, run_cli
+from conftest import REPO, exercise_config, exercise_toml, run_cli, until_answered
 
 from bridge_node.control.client import request
 from bridge_node.control.commands import parse_command
@@ -105,27 +104,16 @@ def _run(config, out, *extra: str) -> subprocess.Popen:
                             text=True, cwd=REPO)
 
 
-def _seq(endpoint: str, node: subprocess.Popen, timeout: float = 120.0) -> int:
-    """The running node's last step, asked for until it answers: it answers once its
-    exercise is loaded (its own tile cache, built cold: seconds, more on a loaded machine)."""
-    end = time.monotonic() + timeout
-    while True:
-        try:
-            return request(endpoint, {"request": "status"}, None, 10.0)["status"]["seq"]
-        except UserError:
-            assert node.poll() is None, node.communicate()[1]
-            if time.monotonic() > end:
-                raise
-
-
 def test_a_forked_run_replays_from_where_it_forked(tmp_path):
     """``icebridge run --fork SAVE`` re-simulates to the save point and goes on live; its
     record names the point, and ``icebridge replay`` of it ends where the forked run ended."""
     endpoint = f"tcp://127.0.0.1:{free_port()}"
     config = exercise_toml(tmp_path, control=f'endpoint = "{endpoint}"')
     first = _run(config, tmp_path / "out1", "--duration", "6")
-    while _seq(endpoint, first) < 60:
-        time.sleep(0.2)
+    # asked until the node answers: once its exercise is loaded (its own tile cache, built
+    # cold: seconds, more on a loaded machine)
+    until_answered(lambda: request(endpoint, {"request": "status"}, None, 10.0)["status"]["seq"] >= 60, 120.0,
+                   node=first)
     reply = request(endpoint, {"command": {"command": "save", "name": "early"}}, None, 5.0)
     again = request(endpoint, {"command": {"command": "save", "name": "early"}}, None, 5.0)
     fault = request(endpoint, {"command": {"command": "link_fault", "link": "nope", "fault": "drop"}}, None, 5.0)

@@ -105,7 +105,6 @@ class FloeParts:
         state.bond_slot[rows] = slot
         self._reweigh(state, slot, rows)  # from the parent's centre of mass to its own, velocity field kept
 
-
     def _new_part(self, bodies: TileBodies, placement: int, floe: int, body) -> tuple[int, int]:
         """Give a new body (C object) of a part of a wide floe of the placement a slot, and
         name it by the slot (its user data); the tile's objects hold it. Returns the slot and
